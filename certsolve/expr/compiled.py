@@ -1,0 +1,121 @@
+"""A :class:`~certsolve.expr.system.System` compiled for batched interval work.
+
+:class:`CompiledSystem` builds one shared DAG holding the equations, the extra
+constraints and the symbolic Jacobian, and three level-grouped programs over it:
+
+* ``hc4``  -- equations and constraints, for forward-backward contraction;
+* ``f``    -- equations only, for rigorous evaluation at points (``f(c)`` in Newton);
+* ``fj``   -- equations and Jacobian entries, for ``J(X)`` over boxes.
+
+All methods take batches: boxes as ``(B, n)`` arrays of bounds, points as ``(B, n)``.
+Everything in it is plain data (arrays, lists), so it pickles to worker processes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .graph import Graph
+from .program import Program
+from .system import System
+
+__all__ = ["CompiledSystem"]
+
+
+class CompiledSystem:
+    def __init__(self, system: System):
+        self.system = system
+        self.n = n = system.n
+        g = Graph(system.variables)
+        self.eq_roots = [g.add_expr(e) for e in system.equations]
+        self.cons_roots = [g.add_expr(c.expr) for c in system.constraints]
+        jac = g.jacobian(self.eq_roots)
+        self.graph = g
+        self.jac_structure = np.array([[d is not None for d in row] for row in jac])
+
+        hc4_out = self.eq_roots + self.cons_roots
+        self.hc4 = Program(g, hc4_out)
+        self.hc4_target_lo = np.array(
+            [0.0] * n + [c.lo for c in system.constraints], dtype=np.float64
+        )[:, None]
+        self.hc4_target_hi = np.array(
+            [0.0] * n + [c.hi for c in system.constraints], dtype=np.float64
+        )[:, None]
+        self._hc4_out_unique = len(np.unique(self.hc4.outputs)) == len(self.hc4.outputs)
+
+        self.f = Program(g, self.eq_roots)
+        jac_nodes = [d for row in jac for d in row if d is not None]
+        self.fj = Program(g, self.eq_roots + jac_nodes)
+        self._fj_f = self.fj.outputs[:n]
+        self._fj_jac = self.fj.outputs[n:]
+        self._jac_flat = np.flatnonzero(self.jac_structure.ravel())
+
+    # -- interval evaluation --------------------------------------------------------------
+    def eval_f(self, lo, hi):
+        """Enclosures of ``f`` over boxes: two ``(B, n)`` arrays."""
+        LO, HI = self.f.eval_interval(lo, hi)
+        return LO[self.f.outputs].T, HI[self.f.outputs].T
+
+    def eval_f_at(self, x):
+        """Rigorous enclosures of ``f`` at points ``x`` (degenerate boxes)."""
+        return self.eval_f(x, x)
+
+    def eval_fj(self, lo, hi, check_domain: bool = False):
+        """Enclosures of ``f`` and of the Jacobian over boxes.
+
+        Returns ``flo, fhi`` of shape ``(B, n)`` and ``jlo, jhi`` of shape ``(B, n, n)``;
+        with ``check_domain`` also a ``(B,)`` mask of boxes on which ``f`` and ``J`` are
+        defined everywhere (:meth:`Program.defined_mask`).
+        """
+        B = lo.shape[0]
+        LO, HI = self.fj.eval_interval(lo, hi)
+        n = self.n
+        jlo = np.zeros((B, n * n))
+        jhi = np.zeros((B, n * n))
+        jlo[:, self._jac_flat] = LO[self._fj_jac].T
+        jhi[:, self._jac_flat] = HI[self._fj_jac].T
+        out = (LO[self._fj_f].T, HI[self._fj_f].T, jlo.reshape(B, n, n), jhi.reshape(B, n, n))
+        if check_domain:
+            return (*out, self.fj.defined_mask(LO, HI))
+        return out
+
+    def eval_constraints(self, lo, hi):
+        """Enclosures of the constraint expressions over boxes: two ``(B, m)`` arrays."""
+        LO, HI = self.hc4.eval_interval(lo, hi)
+        out = self.hc4.outputs[self.n :]
+        return LO[out].T, HI[out].T
+
+    # -- float evaluation (approximate, for Newton iterations) ----------------------------
+    def eval_f_float(self, x):
+        V = self.f.eval_float(x)
+        return V[self.f.outputs].T
+
+    def eval_fj_float(self, x):
+        """Approximate ``f(x)`` ``(B, n)`` and ``J(x)`` ``(B, n, n)`` in floating point."""
+        B = x.shape[0]
+        V = self.fj.eval_float(x)
+        J = np.zeros((B, self.n * self.n))
+        J[:, self._jac_flat] = V[self._fj_jac].T
+        return V[self._fj_f].T, J.reshape(B, self.n, self.n)
+
+    # -- HC4 -------------------------------------------------------------------------------
+    def hc4_revise(self, lo, hi):
+        """One forward-backward pass over all equations and constraints.
+
+        Returns the narrowed boxes ``(lo, hi)`` and a mask of boxes proven empty.
+        """
+        p = self.hc4
+        LO, HI = p.eval_interval(lo, hi)
+        out = p.outputs
+        if self._hc4_out_unique:
+            LO[out] = np.fmax(LO[out], self.hc4_target_lo)
+            HI[out] = np.fmin(HI[out], self.hc4_target_hi)
+        else:
+            np.fmax.at(LO, out, np.broadcast_to(self.hc4_target_lo, LO[out].shape))
+            np.fmin.at(HI, out, np.broadcast_to(self.hc4_target_hi, HI[out].shape))
+        p.revise(LO, HI)
+        empty = np.any(~(LO <= HI), axis=0)
+        n = self.n
+        new_lo = np.fmax(LO[:n].T, lo)
+        new_hi = np.fmin(HI[:n].T, hi)
+        return new_lo, new_hi, empty

@@ -1,0 +1,305 @@
+"""A hash-consed expression DAG: shared sub-expressions, constant folding, derivatives.
+
+:class:`Graph` stores nodes in creation order (children always before parents), each as
+``(op, args, param)``.  Creating a node that already exists returns the existing id, so
+structurally equal sub-expressions are shared across all equations of a system and across
+their derivatives.  A few rewrites keep the DAG small and the interval evaluation tight:
+
+* constant sub-expressions are folded with outward-rounded interval arithmetic;
+* ``x + c`` and ``c * x`` with a point constant ``c`` become ``cadd`` / ``cmul``;
+* ``x + 0``, ``x * 1``, ``x * 0``, ``-(-x)`` are removed; ``x * x`` becomes ``sqr(x)``;
+* arguments of commutative operations are put in a canonical order.
+
+Derivatives are symbolic (:meth:`Graph.derivative`) and land in the same DAG, so the
+Jacobian and the functions share their common sub-expressions.  For the non-smooth
+``abs``, ``min`` and ``max`` the "derivative" is an enclosure of the generalised gradient
+(``sign`` and the hull of the branch derivatives), which is what the mean-value form used by
+interval Newton and Krawczyk needs for Lipschitz functions.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..interval import arith, elementary
+from .node import OPS, Expr
+
+__all__ = ["Graph"]
+
+_COMMUTATIVE = {"add", "mul", "min", "max", "hull"}
+
+# interval implementations used for constant folding: op -> f(lo, hi[, lo, hi], param)
+_FOLD = {
+    "add": lambda a, b, p: arith.add(*a, *b),
+    "sub": lambda a, b, p: arith.sub(*a, *b),
+    "mul": lambda a, b, p: arith.mul(*a, *b),
+    "div": lambda a, b, p: arith.div(*a, *b),
+    "min": lambda a, b, p: arith.imin(*a, *b),
+    "max": lambda a, b, p: arith.imax(*a, *b),
+    "hull": lambda a, b, p: (np.minimum(a[0], b[0]), np.maximum(a[1], b[1])),
+    "neg": lambda a, b, p: arith.neg(*a),
+    "sqr": lambda a, b, p: arith.sqr(*a),
+    "sqrt": lambda a, b, p: arith.sqrt(*a),
+    "pow": lambda a, b, p: arith.pow_int(*a, p),
+    "exp": lambda a, b, p: elementary.exp(*a),
+    "log": lambda a, b, p: elementary.log(*a),
+    "sin": lambda a, b, p: elementary.sin(*a),
+    "cos": lambda a, b, p: elementary.cos(*a),
+    "abs": lambda a, b, p: arith.iabs(*a),
+    "sign": lambda a, b, p: (np.sign(a[0]), np.sign(a[1])),
+    "cadd": lambda a, b, p: arith.shift(*a, p),
+    "cmul": lambda a, b, p: arith.scale(*a, p),
+}
+
+
+class Graph:
+    """Node table of an expression DAG over a fixed, ordered list of variables.
+
+    Nodes ``0 .. n-1`` are the variables, in order.
+    """
+
+    def __init__(self, variables: Sequence[str]):
+        self.variables = list(variables)
+        self.var_index = {name: i for i, name in enumerate(self.variables)}
+        if len(self.var_index) != len(self.variables):
+            raise ValueError("duplicate variable names")
+        self.op: list[str] = []
+        self.args: list[tuple[int, ...]] = []
+        self.param: list = []
+        self.depends: list[int] = []  # bitmask of variables each node depends on
+        self._key: dict = {}
+        self._deriv: dict[tuple[int, int], int | None] = {}
+        for i in range(len(self.variables)):
+            self._make("var", (), i)
+
+    def __len__(self) -> int:
+        return len(self.op)
+
+    # -- node creation ------------------------------------------------------------------
+    def _make(self, op: str, args: tuple[int, ...], param) -> int:
+        key = (op, args, param)
+        nid = self._key.get(key)
+        if nid is None:
+            nid = len(self.op)
+            self.op.append(op)
+            self.args.append(args)
+            self.param.append(param)
+            dep = (1 << param) if op == "var" else 0
+            for a in args:
+                dep |= self.depends[a]
+            self.depends.append(dep)
+            self._key[key] = nid
+        return nid
+
+    def const(self, lo: float, hi: float | None = None) -> int:
+        lo = float(lo)
+        hi = lo if hi is None else float(hi)
+        return self._make("const", (), (lo, hi))
+
+    def point_value(self, nid: int) -> float | None:
+        """The value of a point constant node, else None."""
+        if self.op[nid] == "const":
+            lo, hi = self.param[nid]
+            if lo == hi:
+                return lo
+        return None
+
+    def node(self, op: str, args: Sequence[int] = (), param=None) -> int:
+        """Create (or find) a node, applying the simplifications listed in the module doc."""
+        args = tuple(int(a) for a in args)
+        if op in ("var", "const"):
+            raise ValueError("use the variable index or Graph.const")
+        if len(args) != OPS[op]:
+            raise ValueError(f"{op} takes {OPS[op]} arguments")
+        if all(self.op[a] == "const" for a in args):
+            return self._fold(op, args, param)
+        pv = [self.point_value(a) for a in args]
+        if op == "add":
+            if pv[0] is not None:
+                return args[1] if pv[0] == 0.0 else self.node("cadd", (args[1],), pv[0])
+            if pv[1] is not None:
+                return args[0] if pv[1] == 0.0 else self.node("cadd", (args[0],), pv[1])
+        elif op == "sub":
+            if pv[1] is not None:
+                return args[0] if pv[1] == 0.0 else self.node("cadd", (args[0],), -pv[1])
+            if pv[0] is not None:
+                n = self.node("neg", (args[1],))
+                return n if pv[0] == 0.0 else self.node("cadd", (n,), pv[0])
+            if args[0] == args[1]:
+                return self.const(0.0)
+        elif op == "mul":
+            for k in (0, 1):
+                c, other = pv[k], args[1 - k]
+                if c is not None:
+                    if c == 0.0:
+                        return self.const(0.0)
+                    if c == 1.0:
+                        return other
+                    if c == -1.0:
+                        return self.node("neg", (other,))
+                    return self.node("cmul", (other,), c)
+            if args[0] == args[1]:
+                return self.node("sqr", (args[0],))
+        elif op == "div":
+            c = pv[1]
+            if c is not None and c != 0.0:
+                inv = 1.0 / c
+                if inv * c == 1.0 and np.frexp(c)[0] in (0.5, -0.5):  # power of two: exact
+                    return self.node("cmul", (args[0],), inv)
+            if pv[0] == 0.0:
+                return self.const(0.0)
+        elif op == "neg":
+            a = args[0]
+            if self.op[a] == "neg":
+                return self.args[a][0]
+            if self.op[a] == "cmul":
+                return self.node("cmul", self.args[a], -self.param[a])
+        elif op == "cmul":
+            if param == 1.0:
+                return args[0]
+            if param == 0.0:
+                return self.const(0.0)
+        elif op == "cadd":
+            if param == 0.0:
+                return args[0]
+        elif op == "pow":
+            param = int(param)
+            if param == 1:
+                return args[0]
+            if param == 2:
+                return self.node("sqr", args)
+            if param == 0:
+                return self.const(1.0)
+        if op in _COMMUTATIVE and args[0] > args[1]:
+            args = (args[1], args[0])
+        if param is not None and op in ("cadd", "cmul"):
+            param = float(param)
+        return self._make(op, args, param)
+
+    def _fold(self, op: str, args: tuple[int, ...], param) -> int:
+        vals = [tuple(np.float64(v) for v in self.param[a]) for a in args]
+        lo, hi = _FOLD[op](vals[0], vals[1] if len(vals) > 1 else None, param)
+        lo, hi = float(lo), float(hi)
+        if not lo <= hi:
+            raise ValueError(f"constant expression {op} is undefined (empty)")
+        return self.const(lo, hi)
+
+    def add_expr(self, e: Expr) -> int:
+        """Insert an :class:`Expr` tree (iteratively, no recursion limit); return its node id."""
+        memo: dict[int, int] = {}
+        stack: list[tuple[Expr, bool]] = [(e, False)]
+        while stack:
+            x, ready = stack.pop()
+            if id(x) in memo:
+                continue
+            if x.op == "var":
+                if x.param not in self.var_index:
+                    raise KeyError(f"unknown variable {x.param!r}")
+                memo[id(x)] = self.var_index[x.param]
+            elif x.op == "const":
+                memo[id(x)] = self.const(*x.param)
+            elif ready:
+                memo[id(x)] = self.node(x.op, [memo[id(a)] for a in x.args], x.param)
+            else:
+                stack.append((x, True))
+                stack.extend((a, False) for a in x.args if id(a) not in memo)
+        return memo[id(e)]
+
+    # -- derivatives -----------------------------------------------------------------------
+    def derivative(self, nid: int, k: int) -> int | None:
+        """Node id of ``∂node/∂x_k`` (``None`` when it is identically zero)."""
+        if not (self.depends[nid] >> k) & 1:
+            return None
+        key = (nid, k)
+        if key in self._deriv:
+            return self._deriv[key]
+        # iterative post-order over the nodes that depend on x_k
+        order: list[int] = []
+        stack = [(nid, False)]
+        seen: set[int] = set()
+        while stack:
+            x, ready = stack.pop()
+            if ready:
+                order.append(x)
+                continue
+            if x in seen or (x, k) in self._deriv or not (self.depends[x] >> k) & 1:
+                continue
+            seen.add(x)
+            stack.append((x, True))
+            stack.extend((a, False) for a in self.args[x])
+        for x in order:
+            self._deriv[(x, k)] = self._d(x, k)
+        return self._deriv[key]
+
+    def _dk(self, x: int, k: int) -> int | None:
+        if not (self.depends[x] >> k) & 1:
+            return None
+        return self._deriv[(x, k)]
+
+    def _d(self, x: int, k: int) -> int | None:
+        op, args, p = self.op[x], self.args[x], self.param[x]
+        N = self.node
+        if op == "var":
+            return self.const(1.0) if p == k else None
+        da = self._dk(args[0], k)
+        db = self._dk(args[1], k) if len(args) == 2 else None
+        zero = self.const(0.0)
+
+        def mul(u, v):
+            return N("mul", (u, v))
+
+        if op in ("add", "sub"):
+            if db is None:
+                return da
+            if da is None:
+                return db if op == "add" else N("neg", (db,))
+            return N(op, (da, db))
+        if op == "neg":
+            return N("neg", (da,))
+        if op == "cadd":
+            return da
+        if op == "cmul":
+            return N("cmul", (da,), p)
+        a = args[0]
+        if op == "mul":
+            b = args[1]
+            terms = []
+            if da is not None:
+                terms.append(mul(da, b))
+            if db is not None:
+                terms.append(mul(a, db))
+            return terms[0] if len(terms) == 1 else N("add", tuple(terms))
+        if op == "div":
+            b = args[1]
+            # d(a/b) = (da - (a/b) db) / b
+            num = da if da is not None else zero
+            if db is not None:
+                num = N("sub", (num, mul(x, db)))
+            return N("div", (num, b))
+        if op == "sqr":
+            return N("cmul", (mul(a, da),), 2.0)
+        if op == "pow":
+            return N("cmul", (mul(N("pow", (a,), p - 1), da),), float(p))
+        if op == "sqrt":
+            return N("div", (da, N("cmul", (x,), 2.0)))
+        if op == "exp":
+            return mul(x, da)
+        if op == "log":
+            return N("div", (da, a))
+        if op == "sin":
+            return mul(N("cos", (a,)), da)
+        if op == "cos":
+            return N("neg", (mul(N("sin", (a,)), da),))
+        if op == "abs":
+            return mul(N("sign", (a,)), da)
+        if op == "sign":
+            return None  # zero almost everywhere
+        if op in ("min", "max", "hull"):
+            return N("hull", (da if da is not None else zero, db if db is not None else zero))
+        raise NotImplementedError(op)  # pragma: no cover
+
+    def jacobian(self, roots: Sequence[int]) -> list[list[int | None]]:
+        """``J[i][k] = ∂roots[i]/∂x_k`` as node ids (``None`` for structural zeros)."""
+        return [[self.derivative(r, k) for k in range(len(self.variables))] for r in roots]

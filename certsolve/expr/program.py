@@ -1,0 +1,268 @@
+"""Level-grouped, batched evaluation of a DAG: interval values, float values, HC4-revise.
+
+A :class:`Program` compiles the sub-DAG needed for some output nodes into *groups*: all
+nodes with the same depth ("level", longest path from a leaf) and the same operation.
+Nodes are renumbered so that every group writes one contiguous slice of the value arrays.
+Evaluating a batch of ``B`` boxes then costs a handful of numpy calls per group, whatever
+the batch size, and each call works on ``(group size, B)`` arrays.  This is what makes a
+pure-Python solver fast: the number of Python-level steps depends on the depth of the
+expressions, not on the number of nodes or boxes.
+
+Value arrays have shape ``(n_nodes, B)``: row ``i`` holds node ``i`` (local numbering) for
+every box.  Variables occupy rows ``0 .. n_vars-1``.
+
+:meth:`Program.revise` is the backward half of HC4 (Benhamou et al. 1999): given the
+forward values with the outputs intersected with their targets, it walks the groups from
+the top down and narrows every child with the inverse image of its parent
+(:mod:`certsolve.interval.projections`).  A node shared by several parents is intersected
+with the projection from each (``ufunc.at`` when a group touches the same child twice).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..interval import arith, elementary
+from ..interval import projections as P
+from .graph import Graph
+
+__all__ = ["Program"]
+
+
+def _sign(lo, hi):
+    return np.sign(lo), np.sign(hi)
+
+
+def _hull(alo, ahi, blo, bhi):
+    return np.minimum(alo, blo), np.maximum(ahi, bhi)
+
+
+# forward interval ops: (xlo, xhi, ylo, yhi, param) -> (lo, hi)
+_FWD = {
+    "add": lambda a, b, c, d, p: arith.add(a, b, c, d),
+    "sub": lambda a, b, c, d, p: arith.sub(a, b, c, d),
+    "mul": lambda a, b, c, d, p: arith.mul(a, b, c, d),
+    "div": lambda a, b, c, d, p: arith.div(a, b, c, d),
+    "min": lambda a, b, c, d, p: arith.imin(a, b, c, d),
+    "max": lambda a, b, c, d, p: arith.imax(a, b, c, d),
+    "hull": lambda a, b, c, d, p: _hull(a, b, c, d),
+    "neg": lambda a, b, c, d, p: (-b, -a),
+    "sqr": lambda a, b, c, d, p: arith.sqr(a, b),
+    "sqrt": lambda a, b, c, d, p: arith.sqrt(a, b),
+    "pow": lambda a, b, c, d, p: arith.pow_int(a, b, p),
+    "exp": lambda a, b, c, d, p: elementary.exp(a, b),
+    "log": lambda a, b, c, d, p: elementary.log(a, b),
+    "sin": lambda a, b, c, d, p: elementary.sin(a, b),
+    "cos": lambda a, b, c, d, p: elementary.cos(a, b),
+    "abs": lambda a, b, c, d, p: arith.iabs(a, b),
+    "sign": lambda a, b, c, d, p: _sign(a, b),
+    "cadd": lambda a, b, c, d, p: arith.shift(a, b, p),
+    "cmul": lambda a, b, c, d, p: arith.scale(a, b, p),
+}
+
+# backward projections: (zlo, zhi, xlo, xhi, ylo, yhi, param) -> narrowed (x[, y]) bounds
+_BWD = {
+    "add": lambda z0, z1, a, b, c, d, p: P.bwd_add(z0, z1, a, b, c, d),
+    "sub": lambda z0, z1, a, b, c, d, p: P.bwd_sub(z0, z1, a, b, c, d),
+    "mul": lambda z0, z1, a, b, c, d, p: P.bwd_mul(z0, z1, a, b, c, d),
+    "div": lambda z0, z1, a, b, c, d, p: P.bwd_div(z0, z1, a, b, c, d),
+    "min": lambda z0, z1, a, b, c, d, p: P.bwd_min(z0, z1, a, b, c, d),
+    "max": lambda z0, z1, a, b, c, d, p: P.bwd_max(z0, z1, a, b, c, d),
+    "neg": lambda z0, z1, a, b, c, d, p: P.bwd_neg(z0, z1, a, b),
+    "sqr": lambda z0, z1, a, b, c, d, p: P.bwd_sqr(z0, z1, a, b),
+    "sqrt": lambda z0, z1, a, b, c, d, p: P.bwd_sqrt(z0, z1, a, b),
+    "pow": lambda z0, z1, a, b, c, d, p: P.bwd_pow(z0, z1, a, b, p),
+    "exp": lambda z0, z1, a, b, c, d, p: P.bwd_exp(z0, z1, a, b),
+    "log": lambda z0, z1, a, b, c, d, p: P.bwd_log(z0, z1, a, b),
+    "abs": lambda z0, z1, a, b, c, d, p: P.bwd_abs(z0, z1, a, b),
+    "cadd": lambda z0, z1, a, b, c, d, p: P.bwd_shift(z0, z1, a, b, p),
+    "cmul": lambda z0, z1, a, b, c, d, p: P.bwd_scale(z0, z1, a, b, p),
+    # sin, cos, sign, hull: no contraction of the argument (sound)
+}
+
+# float ops for point evaluation (Newton iterations)
+_FLT = {
+    "add": lambda x, y, p: x + y,
+    "sub": lambda x, y, p: x - y,
+    "mul": lambda x, y, p: x * y,
+    "div": lambda x, y, p: x / y,
+    "min": lambda x, y, p: np.minimum(x, y),
+    "max": lambda x, y, p: np.maximum(x, y),
+    "hull": lambda x, y, p: 0.5 * (x + y),
+    "neg": lambda x, y, p: -x,
+    "sqr": lambda x, y, p: x * x,
+    "sqrt": lambda x, y, p: np.sqrt(x),
+    "pow": lambda x, y, p: x**p,
+    "exp": lambda x, y, p: np.exp(x),
+    "log": lambda x, y, p: np.log(x),
+    "sin": lambda x, y, p: np.sin(x),
+    "cos": lambda x, y, p: np.cos(x),
+    "abs": lambda x, y, p: np.abs(x),
+    "sign": lambda x, y, p: np.sign(x),
+    "cadd": lambda x, y, p: x + p,
+    "cmul": lambda x, y, p: x * p,
+}
+
+
+@dataclass(frozen=True)
+class Group:
+    """Nodes ``start:stop`` (local numbering) computed by one ``op`` from children ``a``, ``b``."""
+
+    op: str
+    start: int
+    stop: int
+    a: np.ndarray
+    b: np.ndarray | None
+    param: object  # column array (k, 1) for cadd/cmul, int for pow, else None
+    unique_children: bool  # no child index repeated within the group (direct write-back)
+
+
+class Program:
+    """Batched evaluator for the sub-DAG of ``graph`` that computes ``outputs``."""
+
+    def __init__(self, graph: Graph, outputs: Sequence[int]):
+        n = len(graph.variables)
+        self.n_vars = n
+        outputs = [int(o) for o in outputs]
+        needed = set(range(n))
+        stack = list(outputs)
+        while stack:
+            x = stack.pop()
+            if x in needed:
+                continue
+            needed.add(x)
+            stack.extend(graph.args[x])
+        level: dict[int, int] = {}
+        for x in sorted(needed):  # ids are topologically ordered
+            args = graph.args[x]
+            level[x] = 0 if not args else 1 + max(level[a] for a in args)
+        consts = sorted(x for x in needed if graph.op[x] == "const")
+
+        def gkey(x):
+            op = graph.op[x]
+            p = graph.param[x] if op == "pow" else None
+            return (level[x], op, p if p is not None else 0)
+
+        inner = sorted((x for x in needed if level[x] > 0), key=lambda x: (gkey(x), x))
+        order = list(range(n)) + consts + inner
+        local = {g: i for i, g in enumerate(order)}
+        self.global_ids = np.array(order, dtype=np.int64)
+        self.n_nodes = len(order)
+        self.const_slice = slice(n, n + len(consts))
+        self.const_lo = np.array([graph.param[c][0] for c in consts], dtype=np.float64)[:, None]
+        self.const_hi = np.array([graph.param[c][1] for c in consts], dtype=np.float64)[:, None]
+        self.const_mid = 0.5 * self.const_lo + 0.5 * self.const_hi
+        self.outputs = np.array([local[o] for o in outputs], dtype=np.int64)
+
+        groups: list[Group] = []
+        i = n + len(consts)
+        while i < len(order):
+            key = gkey(order[i])
+            j = i
+            while j < len(order) and gkey(order[j]) == key:
+                j += 1
+            members = order[i:j]
+            op = graph.op[members[0]]
+            a = np.array([local[graph.args[m][0]] for m in members], dtype=np.int64)
+            b = None
+            if len(graph.args[members[0]]) == 2:
+                b = np.array([local[graph.args[m][1]] for m in members], dtype=np.int64)
+            if op in ("cadd", "cmul"):
+                param = np.array([graph.param[m] for m in members], dtype=np.float64)[:, None]
+            elif op == "pow":
+                param = int(graph.param[members[0]])
+            else:
+                param = None
+            kids = a if b is None else np.concatenate([a, b])
+            groups.append(Group(op, i, j, a, b, param, len(np.unique(kids)) == len(kids)))
+            i = j
+        self.groups = groups
+        # groups whose operation is only partially defined (domain restriction)
+        self._restricted = [
+            g for g in groups if g.op in ("sqrt", "log", "div") or (g.op == "pow" and g.param < 0)
+        ]
+        self.n_levels = 1 + max([level[x] for x in needed], default=0)
+
+    # -- evaluation ------------------------------------------------------------------------
+    def eval_interval(self, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Interval values of every node for a batch of boxes ``lo, hi`` of shape ``(B, n)``.
+
+        Returns ``(LO, HI)`` of shape ``(n_nodes, B)``.
+        """
+        B = lo.shape[0]
+        LO = np.empty((self.n_nodes, B))
+        HI = np.empty((self.n_nodes, B))
+        n = self.n_vars
+        LO[:n] = lo.T
+        HI[:n] = hi.T
+        LO[self.const_slice] = self.const_lo
+        HI[self.const_slice] = self.const_hi
+        with np.errstate(all="ignore"):
+            for g in self.groups:
+                if g.b is None:
+                    rlo, rhi = _FWD[g.op](LO[g.a], HI[g.a], None, None, g.param)
+                else:
+                    rlo, rhi = _FWD[g.op](LO[g.a], HI[g.a], LO[g.b], HI[g.b], g.param)
+                LO[g.start : g.stop] = rlo
+                HI[g.start : g.stop] = rhi
+        return LO, HI
+
+    def defined_mask(self, LO: np.ndarray, HI: np.ndarray) -> np.ndarray:
+        """Boxes on which every node is defined everywhere (no domain restriction applied).
+
+        ``sqrt`` needs its argument ``>= 0``, ``log`` ``> 0``, division and negative powers a
+        divisor without 0.  Certification requires this: the Krawczyk and Newton theorems
+        need ``f`` continuous on the whole box.
+        """
+        ok = np.ones(LO.shape[1], dtype=bool)
+        for g in self._restricted:
+            if g.op == "sqrt":
+                ok &= np.all(LO[g.a] >= 0.0, axis=0)
+            elif g.op == "log":
+                ok &= np.all(LO[g.a] > 0.0, axis=0)
+            else:
+                d = g.b if g.op == "div" else g.a
+                ok &= np.all((LO[d] > 0.0) | (HI[d] < 0.0), axis=0)
+        return ok
+
+    def eval_float(self, x: np.ndarray) -> np.ndarray:
+        """Float values of every node at points ``x`` of shape ``(B, n)``; ``(n_nodes, B)``."""
+        V = np.empty((self.n_nodes, x.shape[0]))
+        V[: self.n_vars] = x.T
+        V[self.const_slice] = self.const_mid
+        with np.errstate(all="ignore"):
+            for g in self.groups:
+                V[g.start : g.stop] = _FLT[g.op](V[g.a], None if g.b is None else V[g.b], g.param)
+        return V
+
+    def revise(self, LO: np.ndarray, HI: np.ndarray) -> None:
+        """Backward pass of HC4, in place, on forward values whose outputs were narrowed."""
+        with np.errstate(all="ignore"):
+            for g in reversed(self.groups):
+                bwd = _BWD.get(g.op)
+                if bwd is None:
+                    continue
+                zlo = LO[g.start : g.stop]
+                zhi = HI[g.start : g.stop]
+                if g.b is None:
+                    nxlo, nxhi = bwd(zlo, zhi, LO[g.a], HI[g.a], None, None, g.param)
+                    self._write(LO, HI, g.a, nxlo, nxhi, g.unique_children)
+                else:
+                    nxlo, nxhi, nylo, nyhi = bwd(
+                        zlo, zhi, LO[g.a], HI[g.a], LO[g.b], HI[g.b], g.param
+                    )
+                    self._write(LO, HI, g.a, nxlo, nxhi, g.unique_children)
+                    self._write(LO, HI, g.b, nylo, nyhi, g.unique_children)
+
+    @staticmethod
+    def _write(LO, HI, idx, lo, hi, unique: bool) -> None:
+        if unique:
+            LO[idx] = lo
+            HI[idx] = hi
+        else:
+            # nan-safe: a NaN projection bound (only from empty operands) is ignored by fmax/fmin
+            np.fmax.at(LO, idx, lo)
+            np.fmin.at(HI, idx, hi)

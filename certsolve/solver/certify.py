@@ -1,0 +1,240 @@
+"""Certification of solutions: Krawczyk proofs, existence boxes, de-duplication.
+
+A certified solution is a pair of boxes ``E ⊆ U``: ``K(U) ⊂ int U`` proves that ``U``
+holds exactly one solution, and that solution lies in the tight existence box ``E``.
+
+* :meth:`Certifier.inflate` -- for boxes where ``K(X) ⊂ int X`` failed (the solution sits
+  near a face, or ``X`` is too wide for the Jacobian to contract), run float Newton from the
+  midpoint to an approximate solution ``x*`` and try ``U = x* ± s·r`` for decreasing
+  scales ``s``, where ``r`` is the radius that makes ``U`` cover ``X``.  The largest ``U`` that
+  passes is kept, so the part of ``X`` left outside it (:func:`box_difference`) is thin.
+  This is IBEX's "inflating Newton" turned around: shrink from large instead of growing
+  from a point, because a large ``U`` leaves less of ``X`` to search.
+* :meth:`Certifier.tighten` -- iterate ``E ← K(E) ∩ E``; every zero in ``E`` stays in
+  ``K(E)``, so ``E`` keeps the solution and shrinks to a few ulps.
+* :class:`SolutionSet` -- the solutions found so far.  A new pair ``(E', U')`` is the same
+  solution as a known ``(E, U)`` when ``E' ⊆ U`` or ``E ⊆ U'`` (each ``U`` holds only one).
+  Boxes inside a known ``U`` need no further search (:meth:`SolutionSet.prune`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..expr.compiled import CompiledSystem
+from ..interval.core import is_subset
+from .newton import batched_inverse, krawczyk, linearize
+
+__all__ = ["Certifier", "SolutionSet", "box_difference"]
+
+
+def box_difference(lo, hi, ulo, uhi) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Closed boxes covering ``X \\ int(U)`` (at most ``2n`` pieces, none meeting ``int U``)."""
+    pieces = []
+    clo, chi = lo.copy(), hi.copy()
+    for i in range(lo.shape[0]):
+        if clo[i] < ulo[i]:
+            plo, phi = clo.copy(), chi.copy()
+            phi[i] = min(ulo[i], chi[i])
+            pieces.append((plo, phi))
+            clo[i] = ulo[i]
+        if chi[i] > uhi[i]:
+            plo, phi = clo.copy(), chi.copy()
+            plo[i] = max(uhi[i], clo[i])
+            pieces.append((plo, phi))
+            chi[i] = uhi[i]
+        if clo[i] > chi[i]:  # X and U disjoint along i: X itself is the remainder
+            return [(lo.copy(), hi.copy())]
+    return pieces
+
+
+class SolutionSet:
+    """Certified solutions ``(E, U, kind)``; ``kind`` is ``"ok"``, ``"boundary"``,
+    ``"constraint"`` or ``"rejected"`` (proven, but outside the domain or violating a
+    constraint: kept only to prune its unicity box)."""
+
+    def __init__(self, n: int):
+        self.n = n
+        self.E_lo: list[np.ndarray] = []
+        self.E_hi: list[np.ndarray] = []
+        self.U_lo: list[np.ndarray] = []
+        self.U_hi: list[np.ndarray] = []
+        self.kind: list[str] = []
+        self._ulo = np.empty((0, n))
+        self._uhi = np.empty((0, n))
+
+    def __len__(self) -> int:
+        return len(self.kind)
+
+    def count(self, kind: str = "ok") -> int:
+        return sum(k == kind for k in self.kind)
+
+    def find(self, elo, ehi, ulo, uhi) -> int:
+        """Index of a known solution equal to ``(E, U)``, or -1."""
+        if not self.kind:
+            return -1
+        Elo, Ehi = np.array(self.E_lo), np.array(self.E_hi)
+        same = is_subset(elo, ehi, self._ulo, self._uhi).all(axis=1)
+        same |= is_subset(Elo, Ehi, ulo, uhi).all(axis=1)
+        idx = np.flatnonzero(same)
+        return int(idx[0]) if idx.size else -1
+
+    def add(self, elo, ehi, ulo, uhi, kind: str) -> bool:
+        """Record a proven solution; returns False if it was already known."""
+        k = self.find(elo, ehi, ulo, uhi)
+        if k >= 0:
+            # keep the larger unicity box for pruning
+            self._ulo = np.vstack([self._ulo, ulo[None]])
+            self._uhi = np.vstack([self._uhi, uhi[None]])
+            self.E_lo.append(self.E_lo[k])
+            self.E_hi.append(self.E_hi[k])
+            self.U_lo.append(ulo)
+            self.U_hi.append(uhi)
+            self.kind.append("alias")
+            return False
+        self.E_lo.append(elo)
+        self.E_hi.append(ehi)
+        self.U_lo.append(ulo)
+        self.U_hi.append(uhi)
+        self.kind.append(kind)
+        self._ulo = np.vstack([self._ulo, ulo[None]])
+        self._uhi = np.vstack([self._uhi, uhi[None]])
+        return True
+
+    def prune(self, lo, hi) -> np.ndarray:
+        """Mask of boxes contained in a known unicity box (nothing left to find there)."""
+        if not len(self.kind) or lo.shape[0] == 0:
+            return np.zeros(lo.shape[0], dtype=bool)
+        inside = (lo[:, None, :] >= self._ulo[None]) & (hi[:, None, :] <= self._uhi[None])
+        return np.any(np.all(inside, axis=2), axis=1)
+
+    def merge(self, other: SolutionSet) -> int:
+        """Add another set's solutions (e.g. from a worker); returns how many were new."""
+        new = 0
+        for i, kind in enumerate(other.kind):
+            if kind == "alias":
+                continue
+            new += self.add(other.E_lo[i], other.E_hi[i], other.U_lo[i], other.U_hi[i], kind)
+        return new
+
+    def items(self, kind: str):
+        for i, k in enumerate(self.kind):
+            if k == kind:
+                yield self.E_lo[i], self.E_hi[i], self.U_lo[i], self.U_hi[i]
+
+
+class Certifier:
+    """Krawczyk-based proofs and the classification of proven solutions."""
+
+    def __init__(
+        self,
+        csys: CompiledSystem,
+        newton_iterations: int = 8,
+        scales: tuple[float, ...] = (1.0, 0.2, 0.04, 0.008, 1e-3, 1e-4, 1e-6),
+        tighten_steps: int = 4,
+    ):
+        self.csys = csys
+        self.dom_lo = csys.system.domain[:, 0]
+        self.dom_hi = csys.system.domain[:, 1]
+        self.newton_iterations = newton_iterations
+        self.scales = scales
+        self.tighten_steps = tighten_steps
+        checked = [i for i, c in enumerate(csys.system.constraints) if not c.redundant]
+        self._checked = np.array(checked, dtype=np.int64)
+        cons = csys.system.constraints
+        self._clo = np.array([cons[i].lo for i in checked], dtype=np.float64)
+        self._chi = np.array([cons[i].hi for i in checked], dtype=np.float64)
+
+    # -- float Newton -----------------------------------------------------------------------
+    def newton_point(self, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Float Newton iterations from ``x0`` (B, n); returns points and a converged mask."""
+        x = x0.copy()
+        conv = np.zeros(x.shape[0], dtype=bool)
+        alive = np.ones(x.shape[0], dtype=bool)
+        for _ in range(self.newton_iterations):
+            idx = np.flatnonzero(alive & ~conv)
+            if idx.size == 0:
+                break
+            f, J = self.csys.eval_fj_float(x[idx])
+            Y, ok = batched_inverse(J)
+            with np.errstate(all="ignore"):
+                step = -np.einsum("bij,bj->bi", np.where(ok[:, None, None], Y, 0.0), f)
+                xn = x[idx] + step
+            good = ok & np.all(np.isfinite(xn), axis=1)
+            x[idx[good]] = xn[good]
+            alive[idx[~good]] = False
+            small = np.all(np.abs(step) <= 1e-12 * (1.0 + np.abs(xn)), axis=1) & good
+            conv[idx[small]] = True
+        return x, conv & alive
+
+    # -- proofs -------------------------------------------------------------------------------
+    def inflate(self, lo, hi):
+        """Try to prove a solution near each box; returns ``(index, E_lo, E_hi, U_lo, U_hi)``.
+
+        ``index`` lists the boxes (rows of ``lo``) for which a unicity box was proven.
+        """
+        B, n = lo.shape
+        empty = (np.empty(0, dtype=np.int64),) + (np.empty((0, n)),) * 4
+        if B == 0:
+            return empty
+        c = 0.5 * lo + 0.5 * hi
+        x, conv = self.newton_point(c)
+        w = hi - lo
+        near = conv & np.all((x >= lo - 0.25 * w) & (x <= hi + 0.25 * w), axis=1)
+        todo = np.flatnonzero(near)
+        if todo.size == 0:
+            return empty
+        xs = x[todo]
+        r = np.maximum(np.maximum(xs - lo[todo], hi[todo] - xs), 0.0)
+        r = r * (1.0 + 1e-9) + 1e-13 * (1.0 + np.abs(xs))
+        found_idx, found_U = [], []
+        remaining = np.arange(todo.size)
+        for s in self.scales:
+            if remaining.size == 0:
+                break
+            ulo = xs[remaining] - s * r[remaining]
+            uhi = xs[remaining] + s * r[remaining]
+            lin = linearize(self.csys, ulo, uhi)
+            _, _, proven = krawczyk(lin)
+            if np.any(proven):
+                found_idx.append(remaining[proven])
+                found_U.append((ulo[proven], uhi[proven]))
+                remaining = remaining[~proven]
+        if not found_idx:
+            return empty
+        sel = np.concatenate(found_idx)
+        Ulo = np.concatenate([u[0] for u in found_U])
+        Uhi = np.concatenate([u[1] for u in found_U])
+        Elo, Ehi = self.tighten(Ulo, Uhi)
+        return todo[sel], Elo, Ehi, Ulo, Uhi
+
+    def tighten(self, lo, hi):
+        """``E ← K(E) ∩ E`` a few times, starting from boxes proven to hold one zero each."""
+        lo, hi = lo.copy(), hi.copy()
+        for _ in range(self.tighten_steps):
+            if lo.shape[0] == 0:
+                break
+            lin = linearize(self.csys, lo, hi)
+            klo, khi, _ = krawczyk(lin)
+            use = lin.ok[:, None]
+            nlo = np.where(use, np.fmax(lo, klo), lo)
+            nhi = np.where(use, np.fmin(hi, khi), hi)
+            # the solution is in both; a numerically empty meet would be a bug: keep old box
+            bad = np.any(nlo > nhi, axis=1)
+            lo = np.where(bad[:, None], lo, nlo)
+            hi = np.where(bad[:, None], hi, nhi)
+        return lo, hi
+
+    def classify(self, elo, ehi) -> list[str]:
+        """``ok`` / ``boundary`` / ``constraint`` / ``rejected`` for proven existence boxes."""
+        B = elo.shape[0]
+        inside = np.all((elo >= self.dom_lo) & (ehi <= self.dom_hi), axis=1)
+        outside = np.any((ehi < self.dom_lo) | (elo > self.dom_hi), axis=1)
+        kinds = np.where(inside, "ok", np.where(outside, "rejected", "boundary")).astype(object)
+        if self._checked.size and B:
+            glo, ghi = self.csys.eval_constraints(elo, ehi)
+            glo, ghi = glo[:, self._checked], ghi[:, self._checked]
+            sat = np.all((glo >= self._clo) & (ghi <= self._chi), axis=1)
+            viol = np.any((ghi < self._clo) | (glo > self._chi), axis=1)
+            kinds = np.where(viol, "rejected", np.where(sat, kinds, "constraint"))
+        return [str(k) for k in kinds]

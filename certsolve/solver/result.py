@@ -1,0 +1,114 @@
+"""Solver results as plain data that serialise to JSON.
+
+A :class:`SolveResult` answers "where are the solutions of the system in the domain?":
+
+* ``solutions``: boxes each proven (Krawczyk) to contain exactly one solution, inside the
+  domain and satisfying every constraint.  ``box`` is a tight *existence* box; the
+  solution is also the only one in the larger ``unicity_box``.
+* ``undecided``: boxes that may contain solutions but could not be decided -- narrower
+  than ``eps`` without a proof (singular or tangent solutions, reason ``"eps"``), a proven
+  solution whose box straddles the domain boundary (``"boundary"``), or one whose extra
+  constraints could not be decided (``"constraint"``).
+* ``pending``: boxes not explored because a limit (time, boxes) stopped the search.
+
+``status == "complete"`` means nothing is pending: every solution of the system in the
+domain lies in a solution box or an undecided box.  Nothing is ever silently dropped.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+__all__ = ["Solution", "Undecided", "Stats", "SolveResult"]
+
+
+def _box_list(lo: np.ndarray, hi: np.ndarray) -> list[list[float]]:
+    return [[float(a), float(b)] for a, b in zip(lo, hi, strict=True)]
+
+
+@dataclass
+class Solution:
+    lo: np.ndarray  # existence box: exactly one solution inside
+    hi: np.ndarray
+    ulo: np.ndarray  # unicity box: that solution is the only one in it
+    uhi: np.ndarray
+    certificate: str = "unique"
+    verified: bool | None = None  # independent mpmath re-proof (None: not run)
+
+    @property
+    def midpoint(self) -> np.ndarray:
+        return 0.5 * self.lo + 0.5 * self.hi
+
+    @property
+    def box(self) -> list[list[float]]:
+        return _box_list(self.lo, self.hi)
+
+    def to_dict(self) -> dict:
+        return {
+            "box": self.box,
+            "midpoint": [float(v) for v in self.midpoint],
+            "unicity_box": _box_list(self.ulo, self.uhi),
+            "certificate": self.certificate,
+            "verified": self.verified,
+        }
+
+
+@dataclass
+class Undecided:
+    lo: np.ndarray
+    hi: np.ndarray
+    reason: str  # "eps" | "boundary" | "constraint"
+
+    @property
+    def box(self) -> list[list[float]]:
+        return _box_list(self.lo, self.hi)
+
+    def to_dict(self) -> dict:
+        return {"box": self.box, "reason": self.reason}
+
+
+@dataclass
+class Stats:
+    boxes: int = 0  # boxes contracted
+    rounds: int = 0  # batched rounds
+    bisections: int = 0
+    certified: int = 0  # Krawczyk proofs (before removing duplicates)
+    duplicates: int = 0
+    max_pending: int = 0
+    time: float = 0.0  # wall seconds
+    workers: int = 1
+    stopped_by: str | None = None  # "timeout" | "max_boxes" | "cancelled" | None
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass
+class SolveResult:
+    variables: list[str]
+    status: str  # "complete" | "incomplete"
+    solutions: list[Solution] = field(default_factory=list)
+    undecided: list[Undecided] = field(default_factory=list)
+    pending_lo: np.ndarray | None = None
+    pending_hi: np.ndarray | None = None
+    stats: Stats = field(default_factory=Stats)
+    eps: float = 0.0
+
+    @property
+    def pending(self) -> list[list[list[float]]]:
+        if self.pending_lo is None:
+            return []
+        return [_box_list(a, b) for a, b in zip(self.pending_lo, self.pending_hi, strict=True)]
+
+    def to_dict(self) -> dict:
+        return {
+            "status": self.status,
+            "variables": list(self.variables),
+            "solutions": [s.to_dict() for s in self.solutions],
+            "undecided": [u.to_dict() for u in self.undecided],
+            "pending": self.pending,
+            "stats": self.stats.to_dict(),
+            "eps": self.eps,
+        }
