@@ -96,8 +96,13 @@ class Solver:
         progress: Callable[[Progress], bool | None] | None = None,
         workers: int = 1,
         verify: bool = False,
+        max_solutions: int | None = None,
     ) -> SolveResult:
-        """Run the search over the whole domain (see the module docstring)."""
+        """Run the search over the whole domain (see the module docstring).
+
+        ``max_solutions`` stops the search once that many solutions are certified (the
+        status is then ``incomplete`` unless nothing was left to explore).
+        """
         if workers > 1:
             from .parallel import solve_parallel
 
@@ -106,7 +111,13 @@ class Solver:
             )
         else:
             state = SearchState.start(self.system.domain, self.n)
-            self.run(state, timeout=timeout, max_boxes=max_boxes, progress=progress)
+            self.run(
+                state,
+                timeout=timeout,
+                max_boxes=max_boxes,
+                progress=progress,
+                max_solutions=max_solutions,
+            )
             result = self.result(state)
         if verify:
             from .verify import verify_solutions
@@ -123,6 +134,7 @@ class Solver:
         max_boxes: int | None = None,
         max_rounds: int | None = None,
         progress: Callable[[Progress], bool | None] | None = None,
+        max_solutions: int | None = None,
     ) -> None:
         """Process rounds until the buffer is empty or a limit is hit (updates ``state``)."""
         t0 = time.perf_counter()
@@ -137,6 +149,9 @@ class Solver:
                     stats.stopped_by = "max_boxes"
                     break
                 if max_rounds is not None and rounds >= max_rounds:
+                    break
+                if max_solutions is not None and state.solutions.count("ok") >= max_solutions:
+                    stats.stopped_by = "max_solutions"
                     break
                 self.round(state)
                 rounds += 1
@@ -276,10 +291,16 @@ def solve(
     workers: int = 1,
     verify: bool = False,
     progress: Callable[[Progress], bool | None] | None = None,
+    max_solutions: int | None = None,
     **options,
 ) -> SolveResult:
     """Find every solution of ``system`` in its domain (see :class:`Solver`)."""
     solver = Solver(system, eps=eps, **options)
     return solver.solve(
-        timeout=timeout, max_boxes=max_boxes, workers=workers, verify=verify, progress=progress
+        timeout=timeout,
+        max_boxes=max_boxes,
+        workers=workers,
+        verify=verify,
+        progress=progress,
+        max_solutions=max_solutions,
     )

@@ -36,7 +36,15 @@ from ..interval.core import midpoint
 from ..interval.linalg import gamma, mr_from_bounds, mr_matmul
 from ..interval.rounding import down, up
 
-__all__ = ["Linearization", "linearize", "krawczyk", "hansen_sengupta", "batched_inverse"]
+__all__ = [
+    "Linearization",
+    "linearize",
+    "linearization_from_bounds",
+    "krawczyk",
+    "krawczyk_box",
+    "hansen_sengupta",
+    "batched_inverse",
+]
 
 _U = 2.0**-53
 
@@ -89,6 +97,18 @@ def linearize(csys: CompiledSystem, lo: np.ndarray, hi: np.ndarray) -> Lineariza
     c = midpoint(lo, hi)
     _, _, jlo, jhi, defined = csys.eval_fj(lo, hi, check_domain=True)
     flo, fhi = csys.eval_f_at(c)
+    return linearization_from_bounds(lo, hi, c, flo, fhi, jlo, jhi, defined)
+
+
+def linearization_from_bounds(lo, hi, c, flo, fhi, jlo, jhi, defined=None) -> Linearization:
+    """Build a :class:`Linearization` from raw enclosures (any source of ``f`` and ``J``).
+
+    ``flo, fhi`` must enclose ``f(c)`` rigorously and ``jlo, jhi`` the Jacobian over the box
+    (shapes ``(B, n)`` and ``(B, n, n)``); ``defined`` (default all true) marks boxes on which
+    ``f`` is defined and continuous everywhere.
+    """
+    if defined is None:
+        defined = np.ones(lo.shape[0], dtype=bool)
     Jc, Jr = mr_from_bounds(jlo, jhi)
     Y, ok = batched_inverse(Jc)
     ok &= defined & np.all(np.isfinite(flo) & np.isfinite(fhi), axis=1)
@@ -121,6 +141,17 @@ def krawczyk(lin: Linearization) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         khi = up(up(centre) + rr)
     proven = lin.ok & np.all((klo > lin.lo) & (khi < lin.hi), axis=1)
     return klo, khi, proven
+
+
+def krawczyk_box(lo, hi, flo, fhi, jlo, jhi, c=None):
+    """Krawczyk test from raw enclosures: ``(klo, khi, proven)`` for a batch of boxes.
+
+    ``proven[k]`` means box ``k`` contains exactly one zero of ``f``, inside ``K(X)``.  Used by
+    callers that evaluate ``f`` and ``J`` with their own interval code (IK, tracking).
+    """
+    if c is None:
+        c = midpoint(lo, hi)
+    return krawczyk(linearization_from_bounds(lo, hi, c, flo, fhi, jlo, jhi))
 
 
 def hansen_sengupta(lin: Linearization) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -79,7 +79,7 @@ class Stats:
     max_pending: int = 0
     time: float = 0.0  # wall seconds
     workers: int = 1
-    stopped_by: str | None = None  # "timeout" | "max_boxes" | "cancelled" | None
+    stopped_by: str | None = None  # "timeout" | "max_boxes" | "max_solutions" | "cancelled"
 
     def to_dict(self) -> dict:
         return asdict(self)
