@@ -10,7 +10,23 @@
 
 from .compiled import CompiledSystem
 from .graph import Graph
-from .node import Expr, abs_, const, cos, esum, exp, log, max_, min_, pow, sin, sqr, sqrt, var
+from .node import (
+    Expr,
+    abs_,
+    const,
+    cos,
+    esum,
+    exp,
+    log,
+    max_,
+    min_,
+    param,
+    pow,
+    sin,
+    sqr,
+    sqrt,
+    var,
+)
 from .program import Program
 from .system import Constraint, System
 
@@ -29,6 +45,7 @@ __all__ = [
     "log",
     "max_",
     "min_",
+    "param",
     "pow",
     "sin",
     "sqr",

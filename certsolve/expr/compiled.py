@@ -26,7 +26,8 @@ class CompiledSystem:
     def __init__(self, system: System):
         self.system = system
         self.n = n = system.n
-        g = Graph(system.variables)
+        self.param_names = list(system.parameters)
+        g = Graph(system.variables, self.param_names)
         self.eq_roots = [g.add_expr(e) for e in system.equations]
         self.cons_roots = [g.add_expr(c.expr) for c in system.constraints]
         jac = g.jacobian(self.eq_roots)
@@ -49,11 +50,29 @@ class CompiledSystem:
         self._fj_f = self.fj.outputs[:n]
         self._fj_jac = self.fj.outputs[n:]
         self._jac_flat = np.flatnonzero(self.jac_structure.ravel())
+        self.set_parameters(system.parameters)
+
+    # -- parameters -------------------------------------------------------------------------
+    def set_parameters(self, values) -> None:
+        """New parameter values: ``{name: value or (lo, hi)}`` (all names required)."""
+        lo = np.empty(len(self.param_names))
+        hi = np.empty(len(self.param_names))
+        for i, name in enumerate(self.param_names):
+            if name not in values:
+                raise KeyError(f"missing value for parameter {name!r}")
+            v = values[name]
+            a, b = (v, v) if np.isscalar(v) else v
+            if not (np.isfinite(a) and np.isfinite(b) and a <= b):
+                raise ValueError(f"parameter {name!r} must be finite with lo <= hi")
+            lo[i], hi[i] = float(a), float(b)
+        self.param_lo, self.param_hi = lo, hi
+        self.param_mid = 0.5 * lo + 0.5 * hi
+        self.system.parameters = {n: (float(a), float(b)) for n, a, b in zip(self.param_names, lo, hi)}
 
     # -- interval evaluation --------------------------------------------------------------
     def eval_f(self, lo, hi):
         """Enclosures of ``f`` over boxes: two ``(B, n)`` arrays."""
-        LO, HI = self.f.eval_interval(lo, hi)
+        LO, HI = self.f.eval_interval(lo, hi, self.param_lo, self.param_hi)
         return LO[self.f.outputs].T, HI[self.f.outputs].T
 
     def eval_f_at(self, x):
@@ -68,7 +87,7 @@ class CompiledSystem:
         defined everywhere (:meth:`Program.defined_mask`).
         """
         B = lo.shape[0]
-        LO, HI = self.fj.eval_interval(lo, hi)
+        LO, HI = self.fj.eval_interval(lo, hi, self.param_lo, self.param_hi)
         n = self.n
         jlo = np.zeros((B, n * n))
         jhi = np.zeros((B, n * n))
@@ -81,19 +100,19 @@ class CompiledSystem:
 
     def eval_constraints(self, lo, hi):
         """Enclosures of the constraint expressions over boxes: two ``(B, m)`` arrays."""
-        LO, HI = self.hc4.eval_interval(lo, hi)
+        LO, HI = self.hc4.eval_interval(lo, hi, self.param_lo, self.param_hi)
         out = self.hc4.outputs[self.n :]
         return LO[out].T, HI[out].T
 
     # -- float evaluation (approximate, for Newton iterations) ----------------------------
     def eval_f_float(self, x):
-        V = self.f.eval_float(x)
+        V = self.f.eval_float(x, self.param_mid)
         return V[self.f.outputs].T
 
     def eval_fj_float(self, x):
         """Approximate ``f(x)`` ``(B, n)`` and ``J(x)`` ``(B, n, n)`` in floating point."""
         B = x.shape[0]
-        V = self.fj.eval_float(x)
+        V = self.fj.eval_float(x, self.param_mid)
         J = np.zeros((B, self.n * self.n))
         J[:, self._jac_flat] = V[self._fj_jac].T
         return V[self._fj_f].T, J.reshape(B, self.n, self.n)
@@ -105,7 +124,7 @@ class CompiledSystem:
         Returns the narrowed boxes ``(lo, hi)`` and a mask of boxes proven empty.
         """
         p = self.hc4
-        LO, HI = p.eval_interval(lo, hi)
+        LO, HI = p.eval_interval(lo, hi, self.param_lo, self.param_hi)
         out = p.outputs
         if self._hc4_out_unique:
             LO[out] = np.fmax(LO[out], self.hc4_target_lo)

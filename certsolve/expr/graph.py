@@ -55,16 +55,22 @@ _FOLD = {
 
 
 class Graph:
-    """Node table of an expression DAG over a fixed, ordered list of variables.
+    """Node table of an expression DAG over fixed, ordered variables and parameters.
 
-    Nodes ``0 .. n-1`` are the variables, in order.
+    Nodes ``0 .. n-1`` are the variables, nodes ``n .. n+p-1`` the parameters, in order.
     """
 
-    def __init__(self, variables: Sequence[str]):
+    def __init__(self, variables: Sequence[str], parameters: Sequence[str] = ()):
         self.variables = list(variables)
+        self.parameters = list(parameters)
         self.var_index = {name: i for i, name in enumerate(self.variables)}
+        self.param_index = {name: i for i, name in enumerate(self.parameters)}
         if len(self.var_index) != len(self.variables):
             raise ValueError("duplicate variable names")
+        if len(self.param_index) != len(self.parameters) or set(self.var_index) & set(
+            self.param_index
+        ):
+            raise ValueError("parameter names must be distinct from each other and the variables")
         self.op: list[str] = []
         self.args: list[tuple[int, ...]] = []
         self.param: list = []
@@ -73,6 +79,8 @@ class Graph:
         self._deriv: dict[tuple[int, int], int | None] = {}
         for i in range(len(self.variables)):
             self._make("var", (), i)
+        for i in range(len(self.parameters)):
+            self._make("param", (), i)
 
     def __len__(self) -> int:
         return len(self.op)
@@ -109,8 +117,8 @@ class Graph:
     def node(self, op: str, args: Sequence[int] = (), param=None) -> int:
         """Create (or find) a node, applying the simplifications listed in the module doc."""
         args = tuple(int(a) for a in args)
-        if op in ("var", "const"):
-            raise ValueError("use the variable index or Graph.const")
+        if op in ("var", "param", "const"):
+            raise ValueError("use the variable / parameter index or Graph.const")
         if len(args) != OPS[op]:
             raise ValueError(f"{op} takes {OPS[op]} arguments")
         if all(self.op[a] == "const" for a in args):
@@ -198,6 +206,10 @@ class Graph:
                 if x.param not in self.var_index:
                     raise KeyError(f"unknown variable {x.param!r}")
                 memo[id(x)] = self.var_index[x.param]
+            elif x.op == "param":
+                if x.param not in self.param_index:
+                    raise KeyError(f"unknown parameter {x.param!r}")
+                memo[id(x)] = len(self.variables) + self.param_index[x.param]
             elif x.op == "const":
                 memo[id(x)] = self.const(*x.param)
             elif ready:

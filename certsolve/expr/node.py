@@ -2,7 +2,8 @@
 
 An :class:`Expr` is an immutable tree node; the same Python object used twice, or two
 structurally equal sub-trees, become one node of the compiled DAG (:mod:`.graph`).  Leaves
-are variables (:func:`var`) and constants; a constant is an interval ``[lo, hi]`` so that a
+are variables (:func:`var`), parameters (:func:`param`, values supplied at evaluation time)
+and constants; a constant is an interval ``[lo, hi]`` so that a
 decimal like ``0.1``, which no binary float equals, can be enclosed exactly
 (:func:`const`).  Python numbers mixed into expressions are taken as exact binary values.
 """
@@ -14,6 +15,7 @@ from numbers import Real
 __all__ = [
     "Expr",
     "var",
+    "param",
     "const",
     "sqr",
     "sqrt",
@@ -32,6 +34,7 @@ __all__ = [
 #: operation name -> arity (params: 'var' name, 'const' (lo, hi), 'pow' exponent)
 OPS: dict[str, int] = {
     "var": 0,
+    "param": 0,
     "const": 0,
     "add": 2,
     "sub": 2,
@@ -127,6 +130,21 @@ class Expr:
             stack.extend(e.args)
         return out
 
+    def parameters(self) -> set[str]:
+        """Names of the parameters this expression depends on."""
+        out: set[str] = set()
+        stack = [self]
+        seen: set[int] = set()
+        while stack:
+            e = stack.pop()
+            if id(e) in seen:
+                continue
+            seen.add(id(e))
+            if e.op == "param":
+                out.add(e.param)
+            stack.extend(e.args)
+        return out
+
     def __repr__(self) -> str:
         return to_string(self)
 
@@ -136,6 +154,12 @@ class Expr:
 
 def var(name: str) -> Expr:
     return Expr("var", (), str(name))
+
+
+def param(name: str) -> Expr:
+    """A parameter: a constant whose (interval) value is given when the system is evaluated,
+    so one compiled system serves many values (e.g. the control vector of forward kinematics)."""
+    return Expr("param", (), str(name))
 
 
 def const(lo: float, hi: float | None = None) -> Expr:
@@ -213,7 +237,7 @@ _INFIX = {"add": "+", "sub": "-", "mul": "*", "div": "/"}
 
 def to_string(e: Expr) -> str:
     """Readable infix form (Minibex syntax)."""
-    if e.op == "var":
+    if e.op in ("var", "param"):
         return e.param
     if e.op == "const":
         lo, hi = e.param

@@ -9,7 +9,7 @@ pure-Python solver fast: the number of Python-level steps depends on the depth o
 expressions, not on the number of nodes or boxes.
 
 Value arrays have shape ``(n_nodes, B)``: row ``i`` holds node ``i`` (local numbering) for
-every box.  Variables occupy rows ``0 .. n_vars-1``.
+every box.  Variables occupy rows ``0 .. n_vars-1``, parameters the next ``n_params`` rows.
 
 :meth:`Program.revise` is the backward half of HC4 (Benhamou et al. 1999): given the
 forward values with the outputs intersected with their targets, it walks the groups from
@@ -125,9 +125,11 @@ class Program:
 
     def __init__(self, graph: Graph, outputs: Sequence[int]):
         n = len(graph.variables)
+        npar = len(graph.parameters)
         self.n_vars = n
+        self.n_params = npar
         outputs = [int(o) for o in outputs]
-        needed = set(range(n))
+        needed = set(range(n + npar))
         stack = list(outputs)
         while stack:
             x = stack.pop()
@@ -147,18 +149,19 @@ class Program:
             return (level[x], op, p if p is not None else 0)
 
         inner = sorted((x for x in needed if level[x] > 0), key=lambda x: (gkey(x), x))
-        order = list(range(n)) + consts + inner
+        order = list(range(n + npar)) + consts + inner
         local = {g: i for i, g in enumerate(order)}
         self.global_ids = np.array(order, dtype=np.int64)
         self.n_nodes = len(order)
-        self.const_slice = slice(n, n + len(consts))
+        self.param_slice = slice(n, n + npar)
+        self.const_slice = slice(n + npar, n + npar + len(consts))
         self.const_lo = np.array([graph.param[c][0] for c in consts], dtype=np.float64)[:, None]
         self.const_hi = np.array([graph.param[c][1] for c in consts], dtype=np.float64)[:, None]
         self.const_mid = 0.5 * self.const_lo + 0.5 * self.const_hi
         self.outputs = np.array([local[o] for o in outputs], dtype=np.int64)
 
         groups: list[Group] = []
-        i = n + len(consts)
+        i = n + npar + len(consts)
         while i < len(order):
             key = gkey(order[i])
             j = i
@@ -187,9 +190,12 @@ class Program:
         self.n_levels = 1 + max([level[x] for x in needed], default=0)
 
     # -- evaluation ------------------------------------------------------------------------
-    def eval_interval(self, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def eval_interval(
+        self, lo: np.ndarray, hi: np.ndarray, plo=None, phi=None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Interval values of every node for a batch of boxes ``lo, hi`` of shape ``(B, n)``.
 
+        ``plo, phi`` are the parameter values (shape ``(p,)``, same for every box).
         Returns ``(LO, HI)`` of shape ``(n_nodes, B)``.
         """
         B = lo.shape[0]
@@ -198,6 +204,9 @@ class Program:
         n = self.n_vars
         LO[:n] = lo.T
         HI[:n] = hi.T
+        if self.n_params:
+            LO[self.param_slice] = np.asarray(plo, dtype=float)[:, None]
+            HI[self.param_slice] = np.asarray(phi, dtype=float)[:, None]
         LO[self.const_slice] = self.const_lo
         HI[self.const_slice] = self.const_hi
         with np.errstate(all="ignore"):
@@ -228,10 +237,15 @@ class Program:
                 ok &= np.all((LO[d] > 0.0) | (HI[d] < 0.0), axis=0)
         return ok
 
-    def eval_float(self, x: np.ndarray) -> np.ndarray:
-        """Float values of every node at points ``x`` of shape ``(B, n)``; ``(n_nodes, B)``."""
+    def eval_float(self, x: np.ndarray, pv=None) -> np.ndarray:
+        """Float values of every node at points ``x`` of shape ``(B, n)``; ``(n_nodes, B)``.
+
+        ``pv`` holds (approximate) parameter values, shape ``(p,)``.
+        """
         V = np.empty((self.n_nodes, x.shape[0]))
         V[: self.n_vars] = x.T
+        if self.n_params:
+            V[self.param_slice] = np.asarray(pv, dtype=float)[:, None]
         V[self.const_slice] = self.const_mid
         with np.errstate(all="ignore"):
             for g in self.groups:

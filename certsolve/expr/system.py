@@ -42,13 +42,19 @@ class Constraint:
 
 @dataclass
 class System:
-    """``len(equations) == len(variables)`` equations ``f_i(x) = 0`` in the box ``domain``."""
+    """``len(equations) == len(variables)`` equations ``f_i(x) = 0`` in the box ``domain``.
+
+    ``parameters`` give the values of :func:`~certsolve.expr.node.param` leaves; a compiled
+    system can be re-used with new values (:meth:`CompiledSystem.set_parameters`).
+    """
 
     variables: list[str]
     domain: np.ndarray  # shape (n, 2): [lo, hi] per variable
     equations: list[Expr]
     constraints: list[Constraint] = field(default_factory=list)
     name: str = ""
+    #: parameter name -> value (a float, or ``(lo, hi)`` for an uncertain value)
+    parameters: dict = field(default_factory=dict)
 
     def __post_init__(self):
         self.variables = [str(v) for v in self.variables]
@@ -69,11 +75,23 @@ class System:
                 f"the system must be square: {len(self.equations)} equations, {n} variables"
             )
         known = set(self.variables)
+        params = {}
+        for name, v in dict(self.parameters).items():
+            lo, hi = (v, v) if np.isscalar(v) else v
+            if name in known:
+                raise ValueError(f"parameter {name!r} has the name of a variable")
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
+                raise ValueError(f"parameter {name!r} must be finite with lo <= hi")
+            params[str(name)] = (float(lo), float(hi))
+        self.parameters = params
         exprs = list(self.equations) + [c.expr for c in self.constraints]
         for k, e in enumerate(exprs):
             unknown = e.variables() - known
             if unknown:
                 raise ValueError(f"expression {k} uses undeclared variables {sorted(unknown)}")
+            missing = e.parameters() - set(params)
+            if missing:
+                raise ValueError(f"expression {k} uses parameters without values {sorted(missing)}")
 
     @property
     def n(self) -> int:
@@ -86,8 +104,9 @@ class System:
         equations: Sequence[Expr],
         constraints: Sequence[Constraint] = (),
         name: str = "",
+        parameters: dict | None = None,
     ) -> System:
         """Convenience constructor from ``{name: (lo, hi)}`` (insertion order = variable order)."""
         names = list(domain)
         dom = np.array([[float(domain[v][0]), float(domain[v][1])] for v in names])
-        return cls(names, dom, list(equations), list(constraints), name)
+        return cls(names, dom, list(equations), list(constraints), name, dict(parameters or {}))

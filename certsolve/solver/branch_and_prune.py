@@ -190,8 +190,7 @@ class Solver:
             p = step.proven
             elo = np.fmax(step.klo[p], step.lo[p])
             ehi = np.fmin(step.khi[p], step.hi[p])
-            elo, ehi = self.certifier.tighten(elo, ehi)
-            self._record(state, elo, ehi, lo[p], hi[p])
+            self._record(state, elo, ehi, lo[p], hi[p], tight=False)
         rest = ~step.proven & ~step.empty
         regular = step.regular[rest]
         lo1, hi1 = step.lo[rest], step.hi[rest]
@@ -213,11 +212,17 @@ class Solver:
             idx, Elo, Ehi, Ulo, Uhi = self.certifier.inflate(lo1[try_inflate], hi1[try_inflate])
             if idx.size:
                 rows = try_inflate[idx]
-                self._record(state, Elo, Ehi, Ulo, Uhi)
+                self._record(state, Elo, Ehi, Ulo, Uhi, tight=False)
                 for k, r in enumerate(rows):
+                    # progress only if U overlaps X with positive volume: otherwise the
+                    # remainder would be X itself; leave X to bisection instead
+                    ilo = np.maximum(lo1[r], Ulo[k])
+                    ihi = np.minimum(hi1[r], Uhi[k])
+                    if not np.all(ilo < ihi):
+                        continue
                     for plo, phi in box_difference(lo1[r], hi1[r], Ulo[k], Uhi[k]):
                         state.stack.push(plo[None], phi[None])
-                done[rows] = True
+                    done[r] = True
 
         # 5. undecided or bisect
         todo = stalled & ~done
@@ -235,10 +240,23 @@ class Solver:
             stats.bisections += lo3.shape[0]
             state.stack.push(np.concatenate([alo, blo]), np.concatenate([ahi, bhi]))
 
-    def _record(self, state: SearchState, elo, ehi, ulo, uhi) -> None:
+    def _record(self, state: SearchState, elo, ehi, ulo, uhi, tight: bool = True) -> None:
+        """Record proven solutions; existence boxes are tightened only for new ones."""
+        state.stats.certified += elo.shape[0]
+        new = np.array(
+            [state.solutions.find(elo[k], ehi[k], ulo[k], uhi[k]) < 0 for k in range(len(elo))],
+            dtype=bool,
+        )
+        for k in np.flatnonzero(~new):  # known solution: keep its unicity box for pruning
+            state.solutions.add(elo[k], ehi[k], ulo[k], uhi[k], "alias")
+            state.stats.duplicates += 1
+        if not np.any(new):
+            return
+        elo, ehi, ulo, uhi = elo[new], ehi[new], ulo[new], uhi[new]
+        if not tight:
+            elo, ehi = self.certifier.tighten(elo, ehi)
         kinds = self.certifier.classify(elo, ehi)
         for k, kind in enumerate(kinds):
-            state.stats.certified += 1
             if not state.solutions.add(elo[k], ehi[k], ulo[k], uhi[k], kind):
                 state.stats.duplicates += 1
 

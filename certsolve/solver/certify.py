@@ -80,14 +80,17 @@ class SolutionSet:
         return int(idx[0]) if idx.size else -1
 
     def add(self, elo, ehi, ulo, uhi, kind: str) -> bool:
-        """Record a proven solution; returns False if it was already known."""
+        """Record a proven solution; returns False if it was already known.
+
+        ``kind="alias"`` records only another unicity box of a known solution.
+        """
         k = self.find(elo, ehi, ulo, uhi)
-        if k >= 0:
+        if k >= 0 or kind == "alias":
             # keep the larger unicity box for pruning
             self._ulo = np.vstack([self._ulo, ulo[None]])
             self._uhi = np.vstack([self._uhi, uhi[None]])
-            self.E_lo.append(self.E_lo[k])
-            self.E_hi.append(self.E_hi[k])
+            self.E_lo.append(self.E_lo[k] if k >= 0 else elo)
+            self.E_hi.append(self.E_hi[k] if k >= 0 else ehi)
             self.U_lo.append(ulo)
             self.U_hi.append(uhi)
             self.kind.append("alias")
@@ -205,7 +208,10 @@ class Certifier:
         sel = np.concatenate(found_idx)
         Ulo = np.concatenate([u[0] for u in found_U])
         Uhi = np.concatenate([u[1] for u in found_U])
-        Elo, Ehi = self.tighten(Ulo, Uhi)
+        # existence boxes: one Krawczyk step (tightened later, only for new solutions)
+        lin = linearize(self.csys, Ulo, Uhi)
+        klo, khi, _ = krawczyk(lin)
+        Elo, Ehi = np.fmax(klo, Ulo), np.fmin(khi, Uhi)
         return todo[sel], Elo, Ehi, Ulo, Uhi
 
     def tighten(self, lo, hi):

@@ -1,0 +1,407 @@
+"""Forward-kinematics equation systems of Merlet (2007), built from a robot description.
+
+Unknowns are world coordinates of ``k`` platform points ``P_1..P_k`` and the wire lengths
+``ρ_1..ρ_m``; the control vector ``u`` enters as *parameters* (:func:`certsolve.expr.param`)
+so one compiled system serves every ``u``.  Every attachment and the centre of mass are
+affine combinations of the chosen points (eq. 8): ``B_i = Σ_j l_ij P_j`` with ``Σ_j l_ij = 1``.
+
+Equations (all formulations):
+
+* length, one per wire: ``|A_i - B_i|² - ρ_i² = 0``;
+* rigidity: ``|P_a - P_b|² - d_ab² = 0`` for every pair of chosen points;
+* equilibrium (eq. 3), with ``w_i = τ_i / ρ_i`` and ``τ_i = k(1 - L0 / (ρ_i + V + K u_i))``
+  (eqs. 1-2): forces ``Σ_i w_i (A_i - B_i) + m g = 0`` and moments about the domain centre
+  ``O``: ``Σ_i w_i (B_i - O) × (A_i - O) + (G - O) × m g = 0`` (``(B - O) × (B - O) = 0``
+  makes the moment linear in the points).
+
+Formulations (sizes for MARIONET's 7 wires):
+
+* ``general-19``: 4 non-coplanar points (12 coordinates) + 7 ρ: 7 + 6 + 6 equations.  Four
+  points with fixed distances also fit the platform's *mirror image*; the signed volume
+  ``(P2-P1)·((P3-P1)×(P4-P1))`` must have the sign it has on the platform (a checked
+  constraint: an improper pose is never reported), and the redundant equality
+  ``signed volume = 6V`` contracts boxes.
+* ``T-16``: the T-platform has only 3 distinct attachment points (9 coordinates + 7 ρ);
+  ``almost-planar-13``: 4 wires on a planar platform, 3 points (9 + 4).  A platform whose
+  attachments and centre of mass are coplanar is its own mirror image, so no sign is needed.
+* ``planar-10``: planar robots (dof 3), 3 points in the plane (6 + 4); the signed area
+  fixes the orientation as for ``general-19``.
+* ``pose``: position and Z-Y-X Euler angles of the platform + ρ (6 + m unknowns), the
+  classical parameterisation, for comparison.
+
+Search domain: every platform point lies in the robot's ``domain`` box (the non-chosen
+attachments through checked constraints), and ``ρ_i`` in the range allowed by the tension
+limits through eq. (7), intersected with the distances from ``A_i`` to that box.  Wires
+sharing an attachment point also get the redundant linear equation obtained by subtracting
+their length equations (section III-B of the paper).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..expr import Constraint, System, const, cos, esum, param, sin, sqr, var
+from ..expr.node import Expr
+from ..robot.geometry import rotation_2d, rotation_zyx
+from ..robot.model import Robot
+
+__all__ = ["FKFormulation", "build_formulation", "FORMULATIONS", "choose_formulation"]
+
+FORMULATIONS = ("auto", "general-19", "T-16", "almost-planar-13", "planar-10", "points", "pose")
+
+
+@dataclass
+class FKFormulation:
+    """A forward-kinematics system and how to read a robot pose back from its solutions."""
+
+    name: str
+    robot: Robot
+    system: System
+    kind: str  # "points" | "pose"
+    Q: np.ndarray | None = None  # (k, d) chosen points, platform frame
+    L: np.ndarray | None = None  # (m, k) affine coefficients of the attachments
+    lG: np.ndarray | None = None  # (k,) affine coefficients of the centre of mass
+    info: dict = field(default_factory=dict)
+
+    @property
+    def n_points(self) -> int:
+        return 0 if self.Q is None else self.Q.shape[0]
+
+    def parameters_for(self, u) -> dict[str, float]:
+        u = np.asarray(u, dtype=float)
+        return {f"u{i + 1}": float(v) for i, v in enumerate(u)}
+
+
+# -- helpers ----------------------------------------------------------------------------------
+
+
+def _affine_coordinates(Q: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """Coefficients ``l`` with ``X_i = Σ_j l_ij Q_j``, ``Σ_j l_ij = 1`` (exact fit required)."""
+    k = Q.shape[0]
+    M = np.vstack([Q.T, np.ones((1, k))])  # (d+1, k)
+    rhs = np.vstack([X.T, np.ones((1, X.shape[0]))])
+    coef, *_ = np.linalg.lstsq(M, rhs, rcond=None)
+    if np.max(np.abs(M @ coef - rhs)) > 1e-9 * (1.0 + np.max(np.abs(X))):
+        raise ValueError("a platform point is not an affine combination of the chosen points")
+    coef = coef.T
+    coef[np.abs(coef) < 1e-14] = 0.0
+    return coef
+
+
+def _choose_points(points: np.ndarray, k: int) -> list[int]:
+    """The ``k`` points spanning the largest simplex (best conditioned affine frame)."""
+    best, best_vol = None, -1.0
+    for combo in itertools.combinations(range(points.shape[0]), k):
+        P = points[list(combo)]
+        E = P[1:] - P[0]
+        vol = abs(np.linalg.det(E @ E.T)) if E.shape[0] else 0.0
+        if vol > best_vol + 1e-12:
+            best, best_vol = list(combo), vol
+    if best is None or best_vol <= 1e-12:
+        raise ValueError(f"the platform has no {k} affinely independent attachment points")
+    return best
+
+
+def _is_coplanar(points: np.ndarray) -> bool:
+    if points.shape[0] <= 3:
+        return True
+    E = points[1:] - points[0]
+    s = np.linalg.svd(E, compute_uv=False)
+    return bool(s[-1] <= 1e-9 * max(1.0, s[0])) if s.size >= 3 else True
+
+
+def choose_formulation(robot: Robot) -> str:
+    """The paper's formulation for this robot (``auto``)."""
+    if robot.dof == 2:
+        raise ValueError("point robots (dof 2) have no rigid platform: forward kinematics of the "
+                         "elastic model needs dof 3 or 6")
+    if robot.dof == 3:
+        return "planar-10"
+    pts, _ = robot.attachment_groups()
+    allpts = np.vstack([pts, robot.com[None]])
+    if _is_coplanar(allpts) and pts.shape[0] >= 3:
+        if robot.m == 4:
+            return "almost-planar-13"
+        if pts.shape[0] == 3:
+            return "T-16"
+        return "points"
+    return "general-19"
+
+
+def _rho_domain(robot: Robot, u: np.ndarray, domain: np.ndarray):
+    """Per-wire [ρ_min, ρ_max]: tension limits through eq. (7), intersected with geometry."""
+    c = robot.V + robot.K * u
+    lo_t = robot.k * robot.L0 / (robot.k - robot.tau_min) - c
+    hi_t = robot.k * robot.L0 / (robot.k - robot.tau_max) - c
+    near = np.clip(robot.A, domain[:, 0], domain[:, 1])
+    dmin = np.linalg.norm(robot.A - near, axis=1)
+    far = np.where(np.abs(robot.A - domain[:, 0]) > np.abs(robot.A - domain[:, 1]),
+                   domain[:, 0], domain[:, 1])
+    dmax = np.linalg.norm(robot.A - far, axis=1)
+    lo = np.maximum(np.maximum(lo_t, dmin), 0.0)
+    hi = np.minimum(hi_t, dmax)
+    return lo, hi
+
+
+def _wire_weights(robot: Robot, rho: list[Expr]) -> list[Expr]:
+    """``w_i = τ_i / ρ_i`` with ``τ_i = k (1 - L0 / (ρ_i + V + K u_i))`` (eqs. 1, 2)."""
+    out = []
+    for i in range(robot.m):
+        c = robot.V[i] + robot.K[i] * param(f"u{i + 1}")
+        tau = robot.k[i] * (1.0 - robot.L0[i] / (rho[i] + c))
+        out.append(tau / rho[i])
+    return out
+
+
+def _cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def _lin(coefs: np.ndarray, P: list[list[Expr]], c: int) -> Expr:
+    """``Σ_j coefs_j P_j[c]`` (a single point when coefs is a unit vector)."""
+    nz = np.flatnonzero(coefs)
+    if len(nz) == 1 and coefs[nz[0]] == 1.0:
+        return P[nz[0]][c]
+    return esum(float(coefs[j]) * P[j][c] for j in nz)
+
+
+# -- the point formulations --------------------------------------------------------------------
+
+
+def _points_formulation(robot: Robot, name: str, k: int) -> FKFormulation:
+    robot.require_elastic("forward kinematics")
+    d = robot.dim
+    pts, _ = robot.attachment_groups()
+    candidates = pts
+    if k > pts.shape[0]:
+        raise ValueError(f"{name} needs {k} distinct attachment points, the robot has "
+                         f"{pts.shape[0]}")
+    sel = _choose_points(candidates, k)
+    Q = candidates[sel]
+    L = _affine_coordinates(Q, robot.B)
+    lG = _affine_coordinates(Q, robot.com[None])[0]
+    axes = "xyz"[:d]
+    P = [[var(f"{a}{j + 1}") for a in axes] for j in range(k)]
+    rho = [var(f"rho{i + 1}") for i in range(robot.m)]
+    dom = robot.domain
+    O = dom.mean(axis=1)
+
+    eqs: list[Expr] = []
+    B = [[_lin(L[i], P, c) for c in range(d)] for i in range(robot.m)]
+    for i in range(robot.m):  # lengths
+        eqs.append(esum(sqr(B[i][c] - float(robot.A[i, c])) for c in range(d)) - sqr(rho[i]))
+    for a, b in itertools.combinations(range(k), 2):  # rigidity
+        dab = float(np.sum((Q[a] - Q[b]) ** 2))
+        eqs.append(esum(sqr(P[a][c] - P[b][c]) for c in range(d)) - dab)
+    w = _wire_weights(robot, rho)
+    W = robot.weight
+    G = [_lin(lG, P, c) for c in range(d)]
+    for c in range(d):  # forces
+        terms = [w[i] * (float(robot.A[i, c]) - B[i][c]) for i in range(robot.m)]
+        if W[c] != 0.0:
+            terms.append(const(float(W[c])))
+        eqs.append(esum(terms))
+    rel = [[B[i][c] - float(O[c]) for c in range(d)] for i in range(robot.m)]
+    arel = robot.A - O
+    g_rel = [G[c] - float(O[c]) for c in range(d)]
+    if d == 3:
+        mom_terms = [[] for _ in range(3)]
+        for i in range(robot.m):
+            m_i = _cross(rel[i], [float(v) for v in arel[i]])
+            for c in range(3):
+                mom_terms[c].append(w[i] * m_i[c])
+        if np.any(W != 0.0):
+            mg = _cross(g_rel, [float(v) for v in W])
+            for c in range(3):
+                mom_terms[c].append(mg[c])
+        eqs.extend(esum(t) for t in mom_terms)
+    else:
+        terms = [w[i] * (rel[i][0] * float(arel[i, 1]) - rel[i][1] * float(arel[i, 0]))
+                 for i in range(robot.m)]
+        eqs.append(esum(terms))
+
+    constraints: list[Constraint] = []
+    # orientation: the signed area / volume of the chosen points keeps its sign
+    if k == d + 1:
+        E = [[P[j][c] - P[0][c] for c in range(d)] for j in range(1, k)]
+        Eq = Q[1:] - Q[0]
+        if d == 3:
+            cr = _cross(E[1], E[2])
+            signed = esum(E[0][c] * cr[c] for c in range(3))
+        else:
+            signed = E[0][0] * E[1][1] - E[0][1] * E[1][0]
+        s0 = float(np.linalg.det(Eq))
+        constraints.append(Constraint(signed, s0, s0, redundant=True))
+        constraints.append(Constraint(signed, 0.0, np.inf) if s0 > 0 else
+                           Constraint(signed, -np.inf, 0.0))
+    # other platform points (attachments, centre of mass) inside the domain
+    extra = [L[i] for i in range(robot.m)] + [lG]
+    seen = {tuple(np.eye(k)[j]) for j in range(k)}
+    for coefs in extra:
+        key = tuple(np.round(coefs, 15))
+        if key in seen:
+            continue
+        seen.add(key)
+        for c in range(d):
+            constraints.append(Constraint(_lin(coefs, P, c), float(dom[c, 0]), float(dom[c, 1])))
+    # wires sharing an attachment: the difference of their length equations is linear
+    groups: dict[tuple, list[int]] = {}
+    for i in range(robot.m):
+        groups.setdefault(tuple(np.round(L[i], 15)), []).append(i)
+    for members in groups.values():
+        for a, b in zip(members, members[1:]):
+            Aa, Ab = robot.A[a], robot.A[b]
+            lhs = esum(2.0 * float(Aa[c] - Ab[c]) * B[a][c] for c in range(d))
+            const_term = float(np.dot(Aa, Aa) - np.dot(Ab, Ab))
+            constraints.append(
+                Constraint(sqr(rho[a]) - sqr(rho[b]) + lhs - const_term, 0.0, 0.0, redundant=True)
+            )
+
+    names = [f"{a}{j + 1}" for j in range(k) for a in axes] + [f"rho{i + 1}" for i in
+                                                               range(robot.m)]
+    domain = np.vstack([np.tile(dom, (k, 1)), np.zeros((robot.m, 2))])
+    u0 = np.zeros(robot.m)
+    system = System(names, _with_rho(domain, robot, u0, d, k), eqs, constraints, name=name,
+                    parameters={f"u{i + 1}": 0.0 for i in range(robot.m)})
+    return FKFormulation(name, robot, system, "points", Q=Q, L=L, lG=lG,
+                         info={"points": [int(i) for i in sel]})
+
+
+def _with_rho(domain, robot, u, d, k):
+    lo, hi = _rho_domain(robot, np.asarray(u, dtype=float), robot.domain)
+    out = domain.copy()
+    out[k * d:, 0] = lo
+    out[k * d:, 1] = np.maximum(hi, lo)  # an empty range is handled by the caller
+    return out
+
+
+def search_domain(form: FKFormulation, u) -> tuple[np.ndarray, bool]:
+    """The FK search box for control ``u`` and whether it is non-empty."""
+    robot = form.robot
+    u = np.asarray(u, dtype=float)
+    lo, hi = _rho_domain(robot, u, robot.domain)
+    dom = form.system.domain.copy()
+    nr = robot.m
+    dom[-nr:, 0] = lo
+    dom[-nr:, 1] = np.maximum(hi, lo)
+    return dom, bool(np.all(lo <= hi))
+
+
+# -- pose-parameter formulation ------------------------------------------------------------------
+
+
+def _pose_formulation(robot: Robot) -> FKFormulation:
+    robot.require_elastic("forward kinematics")
+    d = robot.dim
+    rho = [var(f"rho{i + 1}") for i in range(robot.m)]
+    dom = robot.domain
+    if d == 3:
+        p = [var("x"), var("y"), var("z")]
+        ang = [var("yaw"), var("pitch"), var("roll")]
+        cz, sz, cy, sy, cx, sx = (cos(ang[0]), sin(ang[0]), cos(ang[1]), sin(ang[1]),
+                                  cos(ang[2]), sin(ang[2]))
+        R = [[cz * cy, cz * sy * sx - sz * cx, cz * sy * cx + sz * sx],
+             [sz * cy, sz * sy * sx + cz * cx, sz * sy * cx - cz * sx],
+             [-sy, cy * sx, cy * cx]]
+        names = ["x", "y", "z", "yaw", "pitch", "roll"]
+        ang_dom = [[-np.pi, np.pi], [-np.pi / 2, np.pi / 2], [-np.pi, np.pi]]
+    else:
+        p = [var("x"), var("y")]
+        th = var("theta")
+        R = [[cos(th), -sin(th)], [sin(th), cos(th)]]
+        names = ["x", "y", "theta"]
+        ang_dom = [[-np.pi, np.pi]]
+
+    def world(b):
+        return [p[r] + esum(float(b[c]) * R[r][c] for c in range(d) if b[c] != 0.0)
+                if np.any(b != 0) else p[r] for r in range(d)]
+
+    B = [world(robot.B[i]) for i in range(robot.m)]
+    G = world(robot.com)
+    eqs = [esum(sqr(B[i][c] - float(robot.A[i, c])) for c in range(d)) - sqr(rho[i])
+           for i in range(robot.m)]
+    w = _wire_weights(robot, rho)
+    W = robot.weight
+    O = dom.mean(axis=1)
+    for c in range(d):
+        terms = [w[i] * (float(robot.A[i, c]) - B[i][c]) for i in range(robot.m)]
+        if W[c] != 0.0:
+            terms.append(const(float(W[c])))
+        eqs.append(esum(terms))
+    rel = [[B[i][c] - float(O[c]) for c in range(d)] for i in range(robot.m)]
+    arel = robot.A - O
+    if d == 3:
+        mom = [[], [], []]
+        for i in range(robot.m):
+            m_i = _cross(rel[i], [float(v) for v in arel[i]])
+            for c in range(3):
+                mom[c].append(w[i] * m_i[c])
+        if np.any(W != 0.0):
+            mg = _cross([G[c] - float(O[c]) for c in range(3)], [float(v) for v in W])
+            for c in range(3):
+                mom[c].append(mg[c])
+        eqs.extend(esum(t) for t in mom)
+    else:
+        eqs.append(esum(w[i] * (rel[i][0] * float(arel[i, 1]) - rel[i][1] * float(arel[i, 0]))
+                        for i in range(robot.m)))
+    constraints = []
+    for i in range(robot.m):
+        for c in range(d):
+            constraints.append(Constraint(B[i][c], float(dom[c, 0]), float(dom[c, 1])))
+    names = names + [f"rho{i + 1}" for i in range(robot.m)]
+    domain = np.vstack([dom, np.array(ang_dom), np.zeros((robot.m, 2))])
+    k = (len(names) - robot.m) // d  # unused by _with_rho beyond the offset
+    offset = len(names) - robot.m
+    lo, hi = _rho_domain(robot, np.zeros(robot.m), dom)
+    domain[offset:, 0] = lo
+    domain[offset:, 1] = np.maximum(hi, lo)
+    del k
+    system = System(names, domain, eqs, constraints, name="pose",
+                    parameters={f"u{i + 1}": 0.0 for i in range(robot.m)})
+    return FKFormulation("pose", robot, system, "pose")
+
+
+def build_formulation(robot: Robot, name: str = "auto") -> FKFormulation:
+    """Build the named formulation (``auto``: the paper's choice for this robot)."""
+    if name not in FORMULATIONS:
+        raise ValueError(f"unknown formulation {name!r}; choose from {', '.join(FORMULATIONS)}")
+    if name == "auto":
+        name = choose_formulation(robot)
+    if name == "pose":
+        return _pose_formulation(robot)
+    if name == "planar-10":
+        if robot.dof != 3:
+            raise ValueError("planar-10 is for planar robots (dof 3)")
+        return _points_formulation(robot, name, 3)
+    if robot.dof != 6:
+        raise ValueError(f"{name} is for spatial robots (dof 6)")
+    if name == "general-19":
+        return _points_formulation(robot, name, 4)
+    pts, _ = robot.attachment_groups()
+    if not _is_coplanar(np.vstack([pts, robot.com[None]])):
+        raise ValueError(f"{name} needs a planar platform (attachments and centre of mass "
+                         "coplanar); use general-19")
+    return _points_formulation(robot, name, 3)
+
+
+def rotation_from_points(form: FKFormulation, P: np.ndarray):
+    """Rigid transform ``P_j = p + R Q_j`` fitted to the chosen points (Kabsch)."""
+    Q = form.Q
+    qc = Q.mean(axis=0)
+    pc = P.mean(axis=0)
+    Hm = (Q - qc).T @ (P - pc)
+    U, _, Vt = np.linalg.svd(Hm)
+    D = np.eye(Q.shape[1])
+    D[-1, -1] = np.sign(np.linalg.det(Vt.T @ U.T)) or 1.0
+    R = Vt.T @ D @ U.T
+    return pc - R @ qc, R
+
+
+def pose_from_angles(form: FKFormulation, x: np.ndarray):
+    d = form.robot.dim
+    if d == 3:
+        return x[:3].copy(), rotation_zyx(x[3], x[4], x[5])
+    return x[:2].copy(), rotation_2d(x[2])
