@@ -118,6 +118,24 @@ class Group:
     b: np.ndarray | None
     param: object  # column array (k, 1) for cadd/cmul, int for pow, else None
     unique_children: bool  # no child index repeated within the group (direct write-back)
+    #: when children repeat: for each operand, layers (positions, node ids) in which every
+    #: node id occurs at most once, so the intersection is written with plain fancy indexing
+    layers_a: tuple = ()
+    layers_b: tuple = ()
+
+
+def _layers(idx: np.ndarray) -> tuple:
+    """Split positions of ``idx`` into layers where each node id occurs at most once."""
+    count: dict[int, int] = {}
+    rank = np.empty(len(idx), dtype=np.int64)
+    for p, v in enumerate(idx.tolist()):
+        rank[p] = count.get(v, 0)
+        count[v] = rank[p] + 1
+    out = []
+    for r in range(int(rank.max()) + 1 if len(idx) else 0):
+        pos = np.flatnonzero(rank == r)
+        out.append((pos, idx[pos]))
+    return tuple(out)
 
 
 class Program:
@@ -180,7 +198,10 @@ class Program:
             else:
                 param = None
             kids = a if b is None else np.concatenate([a, b])
-            groups.append(Group(op, i, j, a, b, param, len(np.unique(kids)) == len(kids)))
+            unique = len(np.unique(kids)) == len(kids)
+            la = () if unique else _layers(a)
+            lb = () if unique or b is None else _layers(b)
+            groups.append(Group(op, i, j, a, b, param, unique, la, lb))
             i = j
         self.groups = groups
         # groups whose operation is only partially defined (domain restriction)
@@ -263,20 +284,23 @@ class Program:
                 zhi = HI[g.start : g.stop]
                 if g.b is None:
                     nxlo, nxhi = bwd(zlo, zhi, LO[g.a], HI[g.a], None, None, g.param)
-                    self._write(LO, HI, g.a, nxlo, nxhi, g.unique_children)
+                    self._write(LO, HI, g.a, nxlo, nxhi, g.unique_children, g.layers_a)
                 else:
                     nxlo, nxhi, nylo, nyhi = bwd(
                         zlo, zhi, LO[g.a], HI[g.a], LO[g.b], HI[g.b], g.param
                     )
-                    self._write(LO, HI, g.a, nxlo, nxhi, g.unique_children)
-                    self._write(LO, HI, g.b, nylo, nyhi, g.unique_children)
+                    self._write(LO, HI, g.a, nxlo, nxhi, g.unique_children, g.layers_a)
+                    self._write(LO, HI, g.b, nylo, nyhi, g.unique_children, g.layers_b)
 
     @staticmethod
-    def _write(LO, HI, idx, lo, hi, unique: bool) -> None:
+    def _write(LO, HI, idx, lo, hi, unique: bool, layers) -> None:
+        """Intersect children with their projections (each projection already ⊆ the child)."""
         if unique:
             LO[idx] = lo
             HI[idx] = hi
-        else:
-            # nan-safe: a NaN projection bound (only from empty operands) is ignored by fmax/fmin
-            np.fmax.at(LO, idx, lo)
-            np.fmin.at(HI, idx, hi)
+            return
+        # a node may occur several times: intersect layer by layer (ids unique in a layer);
+        # fmax/fmin ignore a NaN bound, which only comes from an empty operand
+        for pos, ids in layers:
+            LO[ids] = np.fmax(LO[ids], lo[pos])
+            HI[ids] = np.fmin(HI[ids], hi[pos])

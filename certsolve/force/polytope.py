@@ -41,6 +41,7 @@ from .wedge import facet_subsets, wedge_float
 __all__ = [
     "ForcePolytope",
     "zonotope_facets",
+    "zonotope_facets_t",
     "hyperplane_shifting",
     "dedupe_facets",
     "NORMAL_TOL",
@@ -116,6 +117,25 @@ def _box_mid_rad(tau_min, tau_max):
     return 0.5 * (tmin + tmax), 0.5 * (tmax - tmin)
 
 
+def zonotope_facets_t(Ht: np.ndarray, tau_min, tau_max):
+    """Candidate facets in batch-last layout: ``Ht`` is ``(w, m, P)``.
+
+    Returns ``(C, D, d_plus, d_minus)`` of shapes ``(w, K, P)``, ``(K, m, P)``, ``(K, P)``,
+    ``(K, P)``; see :func:`zonotope_facets`.
+    """
+    w, m = Ht.shape[:2]
+    mid, rad = _box_mid_rad(tau_min, tau_max)
+    subsets = facet_subsets(m, w)  # (K, w-1)
+    M = Ht[:, subsets.T]  # (w, w-1, K, P)
+    C = wedge_float(M)  # (w, K, P)
+    D = C[0][:, None, :] * Ht[0][None, :, :]
+    for r in range(1, w):
+        D += C[r][:, None, :] * Ht[r][None, :, :]
+    lin = np.einsum("kmp,m->kp", D, mid)
+    spread = np.einsum("kmp,m->kp", np.abs(D), rad)
+    return C, D, spread + lin, spread - lin
+
+
 def zonotope_facets(H: np.ndarray, tau_min, tau_max):
     """Candidate facets of ``{H τ}`` for a batch of poses.
 
@@ -127,16 +147,8 @@ def zonotope_facets(H: np.ndarray, tau_min, tau_max):
     candidate ``0 ≤ d`` with ``d ≥ 0``: callers drop it by its norm.
     """
     H = np.asarray(H, dtype=float)
-    _, w, m = H.shape
-    mid, rad = _box_mid_rad(tau_min, tau_max)
-    subsets = facet_subsets(m, w)
-    M = H[:, :, subsets]  # (P, w, K, w-1)
-    M = np.moveaxis(M, 2, 1)  # (P, K, w, w-1)
-    C = wedge_float(M)
-    D = C @ H  # (P, K, m)
-    lin = D @ mid
-    spread = np.abs(D) @ rad
-    return C, D, spread + lin, spread - lin
+    C, D, dp, dm = zonotope_facets_t(np.moveaxis(H, 0, -1), tau_min, tau_max)
+    return np.moveaxis(C, 0, -1).transpose(1, 0, 2), np.moveaxis(D, -1, 0), dp.T, dm.T
 
 
 def dedupe_facets(normals: np.ndarray, offsets: np.ndarray, tol: float = 1e-9):

@@ -15,7 +15,7 @@ Gouttefarde's method; cost grows with ``C(m, w-1)``).
 :func:`wedge_float` and :func:`wedge_interval` compute ``c`` for every subset in a batch by
 the Laplace recursion ``D_r[S] = Σ_t (-1)^{r-t} M[S_t, r] D_{r-1}[S \\ S_t]`` on the minors of
 the first ``r`` columns (``S`` a sorted set of ``r`` rows), vectorised over poses/boxes and
-subsets; the interval version uses the outward-rounded operations of
+subsets (batch axes last, for contiguous gathers); the interval version uses the outward-rounded operations of
 :mod:`certsolve.interval.arith`, so its result encloses every exact normal of the box.
 """
 
@@ -73,40 +73,49 @@ def wedge_tables(w: int):
 
 
 def wedge_float(M: np.ndarray) -> np.ndarray:
-    """Generalised cross products of ``M`` of shape ``(..., w, w-1)``: ``(..., w)``."""
-    w = M.shape[-2]
+    """Generalised cross products of ``M`` of shape ``(w, w-1, ...)``: ``(w, ...)``.
+
+    The batch axes come **last** so that every gather below moves contiguous blocks.
+    """
+    w = M.shape[0]
     if w == 2:
-        return np.stack([M[..., 1, 0], -M[..., 0, 0]], axis=-1)
+        return np.stack([M[1, 0], -M[0, 0]])
     if w == 3:
-        return np.cross(M[..., :, 0], M[..., :, 1])
+        a, b = M[:, 0], M[:, 1]
+        return np.stack(
+            [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+        )
     levels, order, csign = wedge_tables(w)
-    D = M[..., :, 0]
+    extra = (1,) * (M.ndim - 2)
+    D = M[:, 0]
     for r, (row_idx, prev_idx, sign) in enumerate(levels, start=1):
-        col = M[..., :, r]
-        D = np.sum(sign * col[..., row_idx] * D[..., prev_idx], axis=-2)
-    return csign * D[..., order]
+        col = M[:, r]
+        D = np.sum(sign.reshape(sign.shape + extra) * col[row_idx] * D[prev_idx], axis=0)
+    return csign.reshape((w,) + extra) * D[order]
 
 
 def wedge_interval(Mlo: np.ndarray, Mhi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Enclosure of :func:`wedge_float` over interval matrices ``[Mlo, Mhi]`` (outward rounded)."""
-    w = Mlo.shape[-2]
+    """Enclosure of :func:`wedge_float` over interval matrices ``[Mlo, Mhi]`` (outward rounded).
+
+    Same layout: ``(w, w-1, ...)`` in, ``(w, ...)`` out.
+    """
+    w = Mlo.shape[0]
     if w == 2:
-        nlo, nhi = arith.neg(Mlo[..., 0, 0], Mhi[..., 0, 0])
-        return (
-            np.stack([Mlo[..., 1, 0], nlo], axis=-1),
-            np.stack([Mhi[..., 1, 0], nhi], axis=-1),
-        )
+        nlo, nhi = arith.neg(Mlo[0, 0], Mhi[0, 0])
+        return np.stack([Mlo[1, 0], nlo]), np.stack([Mhi[1, 0], nhi])
     levels, order, csign = wedge_tables(w)
-    Dlo, Dhi = Mlo[..., :, 0], Mhi[..., :, 0]
+    extra = (1,) * (Mlo.ndim - 2)
+    Dlo, Dhi = Mlo[:, 0], Mhi[:, 0]
     for r, (row_idx, prev_idx, sign) in enumerate(levels, start=1):
-        clo, chi = Mlo[..., :, r], Mhi[..., :, r]
-        plo, phi = arith.mul(clo[..., row_idx], chi[..., row_idx], Dlo[..., prev_idx], Dhi[..., prev_idx])
-        # multiply by ±1: exact
-        slo = np.where(sign > 0, plo, -phi)
-        shi = np.where(sign > 0, phi, -plo)
-        acc_lo, acc_hi = slo[..., 0, :], shi[..., 0, :]
-        for t in range(1, slo.shape[-2]):
-            acc_lo, acc_hi = arith.add(acc_lo, acc_hi, slo[..., t, :], shi[..., t, :])
+        clo, chi = Mlo[:, r], Mhi[:, r]
+        plo, phi = arith.mul(clo[row_idx], chi[row_idx], Dlo[prev_idx], Dhi[prev_idx])
+        pos = (sign > 0).reshape(sign.shape + extra)
+        slo = np.where(pos, plo, -phi)  # times ±1: exact
+        shi = np.where(pos, phi, -plo)
+        acc_lo, acc_hi = slo[0], shi[0]
+        for t in range(1, slo.shape[0]):
+            acc_lo, acc_hi = arith.add(acc_lo, acc_hi, slo[t], shi[t])
         Dlo, Dhi = acc_lo, acc_hi
-    Dlo, Dhi = Dlo[..., order], Dhi[..., order]
-    return np.where(csign > 0, Dlo, -Dhi), np.where(csign > 0, Dhi, -Dlo)
+    Dlo, Dhi = Dlo[order], Dhi[order]
+    pos = (csign > 0).reshape((w,) + extra)
+    return np.where(pos, Dlo, -Dhi), np.where(pos, Dhi, -Dlo)

@@ -56,9 +56,9 @@ def mr_matmul(ac, ar, bc, br):
     c = ac @ bc
     abs_ac = np.abs(ac)
     abs_bc = np.abs(bc)
-    r = gamma(n) * (abs_ac @ abs_bc)
-    if br is not None:
-        r = r + abs_ac @ br
+    # |ac| (gamma |bc| + br): the rounding error of ac @ bc and the radius of B in one product
+    rb = gamma(n) * abs_bc if br is None else gamma(n) * abs_bc + br
+    r = abs_ac @ rb
     if ar is not None:
         r = r + ar @ (abs_bc if br is None else abs_bc + br)
     r = r * (1.0 + 2.0 * gamma(n + 4)) + (n + 2) * _UNDERFLOW

@@ -29,14 +29,43 @@ TINY = 2.0**-1074
 LIBM_ULPS = 8
 
 
-def down(x):
-    """The next float below ``x`` (elementwise): a lower bound of anything that rounds to x."""
-    return np.nextafter(x, _NEG_INF)
+_MAX = float(np.finfo(np.float64).max)
+_BIG = 2.0**1000
+_SMALL = 64  # below this many elements numpy's nextafter is cheaper (one call)
 
 
 def up(x):
-    """The next float above ``x`` (elementwise): an upper bound of anything that rounds to x."""
-    return np.nextafter(x, _POS_INF)
+    """An upper bound, as a float, of any real that rounds to ``x`` (elementwise).
+
+    Small arrays use ``nextafter``.  Large ones use ``x + (|x|·2^-52 + 2^-1074)``, ~9x
+    faster in numpy: ``|x|·2^-52`` is at least the spacing of floats above ``x`` (exactly
+    ``ulp(x)`` for positive ``x``, twice the spacing above a negative power of two), so the
+    rounded sum is at least the next float after ``x``; the ``2^-1074`` term covers 0 and
+    subnormals.  The ``|x|`` term is capped so that ``-inf`` (an overflowed negative value)
+    becomes ``-max_float`` as with ``nextafter``; NaN stays NaN.
+    """
+    if np.size(x) < _SMALL:
+        return np.nextafter(x, _POS_INF)
+    a = np.abs(x)
+    a *= EPS
+    np.fmin(a, _BIG, out=a)
+    a += TINY
+    a += x
+    np.maximum(a, -_MAX, out=a)
+    return a
+
+
+def down(x):
+    """A lower bound, as a float, of any real that rounds to ``x`` (mirror of :func:`up`)."""
+    if np.size(x) < _SMALL:
+        return np.nextafter(x, _NEG_INF)
+    a = np.abs(x)
+    a *= EPS
+    np.fmin(a, _BIG, out=a)
+    a += TINY
+    np.subtract(x, a, out=a)
+    np.minimum(a, _MAX, out=a)
+    return a
 
 
 def widen_down(x):

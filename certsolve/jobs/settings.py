@@ -80,3 +80,18 @@ class ServiceSettings:
     def with_(self, **changes) -> ServiceSettings:
         """A copy with some fields changed (``None`` values are ignored)."""
         return replace(self, **{k: v for k, v in changes.items() if v is not None})
+
+    @classmethod
+    def from_env(cls, environ=None, **overrides) -> ServiceSettings:
+        """Settings from ``CERTSOLVE_DATA_DIR``, ``CERTSOLVE_WORKERS``, ``CERTSOLVE_TEST_KINDS``
+        (for ``uvicorn api.app:create_app --factory``), then ``overrides``."""
+        env = os.environ if environ is None else environ
+        values: dict = {}
+        if env.get("CERTSOLVE_DATA_DIR"):
+            values["data_dir"] = Path(env["CERTSOLVE_DATA_DIR"])
+        if env.get("CERTSOLVE_WORKERS"):
+            values["workers"] = int(env["CERTSOLVE_WORKERS"])
+        if env.get("CERTSOLVE_TEST_KINDS", "").lower() in ("1", "true", "yes"):
+            values["enable_test_kinds"] = True
+        values.update({k: v for k, v in overrides.items() if v is not None})
+        return cls(**values)

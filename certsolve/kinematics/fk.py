@@ -123,7 +123,9 @@ class FKSolver:
                  batch_size: int = 256):
         self.robot = robot
         self.form: FKFormulation = build_formulation(robot, formulation)
-        self.solver = Solver(self.form.system, eps=eps, batch_size=batch_size)
+        # wire lengths are auxiliary: fixed by the pose through the length equations
+        mask = [not v.startswith("rho") for v in self.form.system.variables]
+        self.solver = Solver(self.form.system, eps=eps, batch_size=batch_size, bisect_mask=mask)
         self.csys = self.solver.csys
 
     @property

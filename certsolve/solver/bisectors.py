@@ -6,7 +6,9 @@ variation over the box comes from ``x_j`` -- and splits the best one.
 :class:`LargestFirst` splits the widest variable.  Both split at ``lo + ratio * w`` with
 ``ratio = 0.45`` by default, off-centre so that a solution lying exactly at the centre of a
 symmetric domain does not land on a bisection face.  Variables narrower than ``eps`` are
-never chosen.
+never chosen, nor variables outside an optional mask (IBEX's "auxiliary" variables:
+quantities determined by the others, like the wire lengths of forward kinematics, which
+contraction narrows as the others shrink).
 """
 
 from __future__ import annotations
@@ -33,8 +35,10 @@ class LargestFirst:
     def __init__(self, ratio: float = 0.45):
         self.ratio = ratio
 
-    def choose(self, lo, hi, jlo=None, jhi=None, eps: float = 0.0) -> np.ndarray:
+    def choose(self, lo, hi, jlo=None, jhi=None, eps: float = 0.0, mask=None) -> np.ndarray:
         w = hi - lo
+        if mask is not None:
+            w = np.where(mask, w, -1.0)
         return np.argmax(w, axis=1)
 
 
@@ -42,7 +46,8 @@ class SmearSumRelative:
     def __init__(self, ratio: float = 0.45):
         self.ratio = ratio
 
-    def choose(self, lo, hi, jlo, jhi, eps: float = 0.0) -> np.ndarray:
+    def choose(self, lo, hi, jlo, jhi, eps: float = 0.0, mask=None) -> np.ndarray:
+        """Variable to split per box; ``mask`` (n,) restricts the choice (default: all)."""
         w = hi - lo
         with np.errstate(all="ignore"):
             mag = np.maximum(np.abs(jlo), np.abs(jhi))  # (B, n, n)
@@ -51,10 +56,12 @@ class SmearSumRelative:
             rel = np.where(rows > 0, smear / rows, 0.0)
             score = np.sum(rel, axis=1)
         score = np.where(np.isfinite(score), score, 0.0)
-        score = np.where(w > eps, score, -1.0)
+        allowed = w > eps if mask is None else (w > eps) & mask
+        score = np.where(allowed, score, -1.0)
         best = np.argmax(score, axis=1)
-        # no information (all zero, or infinite Jacobian): widest variable
+        # no information (all zero, or infinite Jacobian): widest allowed variable
         stuck = np.max(score, axis=1) <= 0.0
         if np.any(stuck):
-            best[stuck] = np.argmax(w[stuck], axis=1)
+            wa = np.where(allowed[stuck], w[stuck], -1.0)
+            best[stuck] = np.argmax(wa, axis=1)
         return best

@@ -74,6 +74,7 @@ class Solver:
         hc4_passes: int = 4,
         bisector=None,
         certifier: Certifier | None = None,
+        bisect_mask=None,
     ):
         if not eps > 0:
             raise ValueError("eps must be positive")
@@ -86,6 +87,10 @@ class Solver:
         self.newton = IntervalNewton(self.csys)
         self.bisector = bisector or SmearSumRelative()
         self.certifier = certifier or Certifier(self.csys)
+        #: variables the bisector may split (None: all); the others are auxiliary
+        self.bisect_mask = None if bisect_mask is None else np.asarray(bisect_mask, dtype=bool)
+        if self.bisect_mask is not None and self.bisect_mask.shape != (self.n,):
+            raise ValueError(f"bisect_mask must have {self.n} entries")
 
     # -- public entry point ------------------------------------------------------------------
     def solve(
@@ -175,8 +180,8 @@ class Solver:
         lo, hi = state.stack.pop(self.batch_size)
         stats.boxes += lo.shape[0]
         stats.rounds += 1
-        keep = ~state.solutions.prune(lo, hi)
-        lo0, hi0 = lo[keep], hi[keep]
+        keep, plo, phi = state.solutions.prune(lo, hi)
+        lo0, hi0 = np.concatenate([lo[keep], plo]), np.concatenate([hi[keep], phi])
 
         # 1. HC4
         lo, hi, empty = self.hc4.contract(lo0, hi0)
@@ -229,13 +234,18 @@ class Solver:
         lo2, hi2 = lo1[todo], hi1[todo]
         if lo2.shape[0] == 0:
             return
-        small = np.all(hi2 - lo2 <= self.eps, axis=1)
+        wid = hi2 - lo2
+        if self.bisect_mask is not None:
+            wid = wid[:, self.bisect_mask]
+        small = np.all(wid <= self.eps, axis=1)
         for k in np.flatnonzero(small):
             state.undecided.append(Undecided(lo2[k].copy(), hi2[k].copy(), "eps"))
         big = ~small
         if np.any(big):
             lo3, hi3 = lo2[big], hi2[big]
-            var = self.bisector.choose(lo3, hi3, jlo[todo][big], jhi[todo][big], self.eps)
+            var = self.bisector.choose(
+                lo3, hi3, jlo[todo][big], jhi[todo][big], self.eps, self.bisect_mask
+            )
             (alo, ahi), (blo, bhi) = split(lo3, hi3, var, self.bisector.ratio)
             stats.bisections += lo3.shape[0]
             state.stack.push(np.concatenate([alo, blo]), np.concatenate([ahi, bhi]))
@@ -255,6 +265,7 @@ class Solver:
         elo, ehi, ulo, uhi = elo[new], ehi[new], ulo[new], uhi[new]
         if not tight:
             elo, ehi = self.certifier.tighten(elo, ehi)
+        ulo, uhi = self.certifier.expand(elo, ehi, ulo, uhi)
         kinds = self.certifier.classify(elo, ehi)
         for k, kind in enumerate(kinds):
             if not state.solutions.add(elo[k], ehi[k], ulo[k], uhi[k], kind):

@@ -104,12 +104,39 @@ class SolutionSet:
         self._uhi = np.vstack([self._uhi, uhi[None]])
         return True
 
-    def prune(self, lo, hi) -> np.ndarray:
-        """Mask of boxes contained in a known unicity box (nothing left to find there)."""
-        if not len(self.kind) or lo.shape[0] == 0:
-            return np.zeros(lo.shape[0], dtype=bool)
-        inside = (lo[:, None, :] >= self._ulo[None]) & (hi[:, None, :] <= self._uhi[None])
-        return np.any(np.all(inside, axis=2), axis=1)
+    def prune(self, lo, hi):
+        """Remove what known unicity boxes cover (nothing is left to find there).
+
+        Returns ``(keep, pieces_lo, pieces_hi)``: boxes inside a unicity box are dropped
+        (``keep`` false); a box that a unicity box covers in all but one direction is
+        replaced by the (at most two) pieces of its difference, which are returned.
+        """
+        B, n = lo.shape
+        none = np.empty((0, n))
+        if not len(self.kind) or B == 0:
+            return np.ones(B, dtype=bool), none, none
+        ge = lo[:, None, :] >= self._ulo[None]
+        le = hi[:, None, :] <= self._uhi[None]
+        inside = np.all(ge & le, axis=2)
+        keep = ~np.any(inside, axis=1)
+        overlap = np.all((lo[:, None, :] < self._uhi[None]) & (hi[:, None, :] > self._ulo[None]),
+                         axis=2)
+        uncovered = np.sum(~(ge & le), axis=2)  # directions where U does not cover the box
+        clip = keep[:, None] & overlap & (uncovered == 1)
+        if not np.any(clip):
+            return keep, none, none
+        plo, phi = [], []
+        rows, us = np.nonzero(clip)
+        done = set()
+        for r, k in zip(rows.tolist(), us.tolist()):
+            if r in done:
+                continue
+            done.add(r)
+            for a, b in box_difference(lo[r], hi[r], self._ulo[k], self._uhi[k]):
+                plo.append(a)
+                phi.append(b)
+            keep[r] = False
+        return keep, np.array(plo).reshape(-1, n), np.array(phi).reshape(-1, n)
 
     def merge(self, other: SolutionSet) -> int:
         """Add another set's solutions (e.g. from a worker); returns how many were new."""
@@ -213,6 +240,38 @@ class Certifier:
         klo, khi, _ = krawczyk(lin)
         Elo, Ehi = np.fmax(klo, Ulo), np.fmin(khi, Uhi)
         return todo[sel], Elo, Ehi, Ulo, Uhi
+
+    def expand(self, elo, ehi, ulo, uhi, fractions=(0.3, 0.1, 0.03, 0.01, 3e-3, 1e-3, 3e-4, 1e-4)):
+        """Grow unicity boxes: the largest ``mid(E) ± f·(domain width)`` still proven unique.
+
+        A larger unicity box lets the search discard more of the neighbourhood of a known
+        solution (where Newton cannot exclude boxes that nearly touch it).  A candidate is
+        accepted only if it contains ``E`` (hence the known solution) and passes Krawczyk.
+        """
+        S = elo.shape[0]
+        if S == 0:
+            return ulo, uhi
+        dw = self.csys.system.domain[:, 1] - self.csys.system.domain[:, 0]
+        s = 0.5 * elo + 0.5 * ehi
+        urad = 0.5 * (uhi - ulo)
+        F = len(fractions)
+        rad = np.maximum(np.asarray(fractions)[None, :, None] * dw[None, None, :], urad[:, None])
+        clo = (s[:, None, :] - rad).reshape(S * F, -1)
+        chi = (s[:, None, :] + rad).reshape(S * F, -1)
+        lin = linearize(self.csys, clo, chi)
+        _, _, proven = krawczyk(lin)
+        contains = np.all((clo <= np.repeat(elo, F, axis=0)) & (chi >= np.repeat(ehi, F, axis=0)),
+                          axis=1)
+        ok = (proven & contains).reshape(S, F)
+        out_lo, out_hi = ulo.copy(), uhi.copy()
+        for j in range(S):
+            hit = np.flatnonzero(ok[j])
+            if hit.size:
+                f = hit[0]  # fractions are decreasing: the first success is the largest
+                cand_lo, cand_hi = clo[j * F + f], chi[j * F + f]
+                if np.all(cand_hi - cand_lo >= uhi[j] - ulo[j]):
+                    out_lo[j], out_hi[j] = cand_lo, cand_hi
+        return out_lo, out_hi
 
     def tighten(self, lo, hi):
         """``E ← K(E) ∩ E`` a few times, starting from boxes proven to hold one zero each."""

@@ -40,14 +40,17 @@ class HC4:
         self.threshold = float(np.log1p(-ratio))
 
     def contract(self, lo, hi):
+        """Repeat HC4-revise on the boxes that keep shrinking (by ``ratio`` of volume)."""
+        lo, hi = lo.copy(), hi.copy()
         empty = np.zeros(lo.shape[0], dtype=bool)
+        active = np.arange(lo.shape[0])
         for _ in range(self.max_passes):
-            nlo, nhi, emp = self.csys.hc4_revise(lo, hi)
-            empty |= emp
-            gain = log_volume_ratio(lo, hi, nlo, nhi)
-            lo, hi = nlo, nhi
-            live = ~empty
-            if not np.any(live) or not np.any(gain[live] < self.threshold):
+            nlo, nhi, emp = self.csys.hc4_revise(lo[active], hi[active])
+            gain = log_volume_ratio(lo[active], hi[active], nlo, nhi)
+            lo[active], hi[active] = nlo, nhi
+            empty[active[emp]] = True
+            active = active[~emp & (gain < self.threshold)]
+            if active.size == 0:
                 break
         return lo, hi, empty
 

@@ -1,0 +1,325 @@
+"""Certified isotropic-force workspace: a paving of a box of poses into proven parts.
+
+Given ``f_req > 0`` and a box of positions (and, for rigid platforms, a fixed orientation
+or ranges of angles), every box of the paving is
+
+* **inside**: proven ``f_min ≥ f_req`` at every pose of the box (every interval ``g_k^±``
+  of :mod:`.enclosure` has a non-negative lower bound, ``H`` is proven of full rank and no
+  anchor is in the box);
+* **outside**: proven ``f_min < f_req`` at every pose (one ``g_k^±`` has a negative upper
+  bound over the whole box, no anchor in the box);
+* **boundary**: undecided and narrower than ``eps`` (cm) in every position axis and
+  ``eps_angle`` (degrees) in every angle axis;
+* **pending**: not processed because the computation stopped early (timeout, progress
+  callback returning ``False``, ``max_boxes``).
+
+Undecided boxes are bisected along their widest axis (relative to ``eps``/``eps_angle``);
+boxes are processed in batches of ``batch`` with one set of numpy calls per batch.  Every
+decision rests on outward-rounded interval arithmetic: no plain float enters a proof.
+
+Measures (area for planar robots, volume for dof 6; with angle ranges the measure is the
+product of position and angle widths, so shares stay meaningful) are sums of box volumes.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..robot import Robot
+from .enclosure import slack_enclosures
+from .loads import force_rows
+
+__all__ = ["CertifiedWorkspace", "WorkspaceProgress", "certified_workspace", "parse_box"]
+
+
+@dataclass
+class WorkspaceProgress:
+    """Passed to the ``progress`` callback after every batch."""
+
+    boxes: int  # boxes processed so far
+    pending: int  # boxes waiting
+    inside: int
+    outside: int
+    boundary: int
+    elapsed: float
+    inside_share: float  # share of the initial box already proven inside
+
+
+@dataclass
+class CertifiedWorkspace:
+    robot: str
+    dof: int
+    min_force: float
+    box: np.ndarray  # (d, 2) positions
+    angles: np.ndarray  # (na, 2) degrees (empty for dof 2 / identity)
+    angle_names: list[str]
+    eps: float
+    eps_angle: float
+    inside: np.ndarray  # (n, nd, 2)
+    outside: np.ndarray
+    boundary: np.ndarray
+    pending: np.ndarray
+    status: str  # complete | timeout | stopped | max_boxes
+    boxes: int
+    time: float
+    notes: list[str] = field(default_factory=list)
+
+    # -- measures -------------------------------------------------------------------------
+    @staticmethod
+    def _measure(b: np.ndarray) -> float:
+        if b.size == 0:
+            return 0.0
+        w = b[..., 1] - b[..., 0]
+        w = np.where(w > 0, w, 1.0)  # fixed angles do not count
+        return float(np.sum(np.prod(w, axis=1)))
+
+    @property
+    def total_measure(self) -> float:
+        allb = np.concatenate([self.box, self.angles]) if self.angles.size else self.box
+        return self._measure(allb[None])
+
+    @property
+    def inside_measure(self) -> float:
+        return self._measure(self.inside)
+
+    @property
+    def inside_share(self) -> float:
+        t = self.total_measure
+        return self.inside_measure / t if t > 0 else 0.0
+
+    @property
+    def unit(self) -> str:
+        u = "cm^2" if self.dof != 6 else "cm^3"
+        n_ang = int(np.sum(self.angles[:, 1] > self.angles[:, 0])) if self.angles.size else 0
+        return u + ("*deg" if n_ang == 1 else f"*deg^{n_ang}" if n_ang else "")
+
+    @property
+    def complete(self) -> bool:
+        return self.status == "complete"
+
+    def to_dict(self, boxes: bool = True) -> dict:
+        total = self.total_measure
+        out = {
+            "robot": self.robot,
+            "dof": self.dof,
+            "min_force": self.min_force,
+            "box": self.box.tolist(),
+            "angles": {n: list(map(float, a)) for n, a in zip(self.angle_names, self.angles)},
+            "eps": self.eps,
+            "eps_angle": self.eps_angle,
+            "status": self.status,
+            "complete": self.complete,
+            "boxes": self.boxes,
+            "time": self.time,
+            "counts": {
+                "inside": int(len(self.inside)),
+                "outside": int(len(self.outside)),
+                "boundary": int(len(self.boundary)),
+                "pending": int(len(self.pending)),
+            },
+            "unit": self.unit,
+            "total_measure": total,
+            "inside_measure": self.inside_measure,
+            "outside_measure": self._measure(self.outside),
+            "boundary_measure": self._measure(self.boundary),
+            "pending_measure": self._measure(self.pending),
+            "inside_share": self.inside_share,
+            "axes": ["x", "y", "z"][: self.box.shape[0]] + list(self.angle_names),
+            "notes": list(self.notes),
+        }
+        if boxes:
+            for k in ("inside", "outside", "boundary", "pending"):
+                out[f"{k}_boxes"] = getattr(self, k).tolist()
+        return out
+
+
+def parse_box(box, d: int) -> np.ndarray:
+    """``[[xmin, xmax], ...]`` or ``[xmin, xmax, ymin, ymax, ...]`` -> ``(d, 2)`` array."""
+    b = np.asarray(box, dtype=float)
+    if b.shape == (2 * d,):
+        b = b.reshape(d, 2)
+    if b.shape != (d, 2):
+        raise ValueError(f"box: expected {d} intervals (xmin,xmax,ymin,ymax{',zmin,zmax' * (d == 3)})")
+    if not np.all(np.isfinite(b)):
+        raise ValueError("box: bounds must be finite")
+    if np.any(b[:, 0] > b[:, 1]):
+        raise ValueError("box: each interval needs min <= max")
+    return b
+
+
+def _parse_orientation(robot: Robot, orientation) -> tuple[np.ndarray, list[str]]:
+    """Angle intervals in degrees: dof 3 ``θ``; dof 6 ``(yaw, pitch, roll)``; each a number or pair."""
+    if robot.dof == 2:
+        if orientation is not None:
+            raise ValueError("orientation: a point platform (dof 2) has no orientation")
+        return np.zeros((0, 2)), []
+    names = ["theta"] if robot.dof == 3 else ["yaw", "pitch", "roll"]
+    if orientation is None:
+        return np.zeros((len(names), 2)), names
+    if robot.dof == 3:
+        if np.ndim(orientation) == 0:
+            items = [orientation]
+        elif len(orientation) == 2 and all(np.ndim(t) == 0 for t in orientation):
+            items = [tuple(orientation)]  # one (lo, hi) range
+        else:
+            items = list(orientation)
+    else:
+        items = list(orientation) if np.ndim(orientation) > 0 else [orientation]
+    if len(items) != len(names):
+        raise ValueError(
+            f"orientation: expected {len(names)} angle(s) ({', '.join(names)}, degrees)"
+        )
+    out = []
+    for n, it in zip(names, items):
+        a = np.atleast_1d(np.asarray(it, dtype=float))
+        if a.size == 1:
+            a = np.array([a[0], a[0]])
+        if a.shape != (2,) or not np.all(np.isfinite(a)) or a[0] > a[1]:
+            raise ValueError(f"orientation: {n} must be a number or a (lo, hi) pair of degrees")
+        if a[1] - a[0] > 360:
+            raise ValueError(f"orientation: {n} range wider than 360 degrees")
+        out.append(a)
+    return np.array(out), names
+
+
+def certified_workspace(
+    robot: Robot,
+    min_force: float,
+    box,
+    eps: float,
+    progress: Callable[[WorkspaceProgress], bool | None] | None = None,
+    timeout: float | None = None,
+    orientation=None,
+    eps_angle: float = 1.0,
+    external=None,
+    max_boxes: int | None = None,
+    batch: int = 1024,
+) -> CertifiedWorkspace:
+    """Pave ``box`` (positions, cm) into boxes proven inside/outside ``{f_min ≥ min_force}``.
+
+    ``orientation``: dof 3: ``θ`` or ``(θlo, θhi)``; dof 6: ``(yaw, pitch, roll)``, each a
+    number or a ``(lo, hi)`` range (degrees); default: identity.  ``progress`` is called
+    after every batch with a :class:`WorkspaceProgress`; returning ``False`` stops the
+    computation (status ``"stopped"``, the rest is ``pending``).
+    """
+    t0 = time.perf_counter()
+    if not (np.isfinite(min_force) and min_force > 0):
+        raise ValueError("min_force must be a positive number (N)")
+    if not (np.isfinite(eps) and eps > 0):
+        raise ValueError("eps must be a positive number (cm)")
+    if not (np.isfinite(eps_angle) and eps_angle > 0):
+        raise ValueError("eps_angle must be a positive number (degrees)")
+    if timeout is not None and not timeout > 0:
+        raise ValueError("timeout must be positive (seconds)")
+    w = robot.wrench_dim
+    if robot.m < w:
+        raise ValueError(
+            f"{robot.name}: {robot.m} wires cannot resist a force in every direction of a "
+            f"dof-{robot.dof} platform (at least {w} are needed; the isotropic force is never "
+            "positive): nothing to certify"
+        )
+    if external is not None:
+        external = np.asarray(external, dtype=float).reshape(-1)
+        if external.shape != (w,) or not np.all(np.isfinite(external)):
+            raise ValueError(f"external wrench: expected {w} finite components")
+    d = robot.dim
+    pbox = parse_box(box, d)
+    angles, names = _parse_orientation(robot, orientation)
+    use_rot = robot.dof != 2 and (orientation is not None)
+    full = np.concatenate([pbox, angles]) if angles.size else pbox
+    nd = full.shape[0]
+    scale = np.concatenate([np.full(d, float(eps)), np.full(len(angles), float(eps_angle))])
+    pend_lo = full[None, :, 0].copy()
+    pend_hi = full[None, :, 1].copy()
+    acc = {"inside": [], "outside": [], "boundary": []}
+    counts = {"inside": 0, "outside": 0, "boundary": 0}
+    inside_measure = 0.0
+    total = CertifiedWorkspace._measure(full[None])
+    processed = 0
+    status = "complete"
+    while len(pend_lo):
+        if timeout is not None and time.perf_counter() - t0 > timeout:
+            status = "timeout"
+            break
+        if max_boxes is not None and processed >= max_boxes:
+            status = "max_boxes"
+            break
+        lo, hi = pend_lo[:batch], pend_hi[:batch]
+        pend_lo, pend_hi = pend_lo[batch:], pend_hi[batch:]
+        n = len(lo)
+        processed += n
+        glo, ghi, full_rank, wires_ok = slack_enclosures(
+            robot,
+            lo[:, :d].T,
+            hi[:, :d].T,
+            min_force,
+            external,
+            alo=lo[:, d:].T if use_rot else None,
+            ahi=hi[:, d:].T if use_rot else None,
+        )
+        ins = np.all(glo >= 0.0, axis=0) & full_rank & wires_ok
+        out = np.any(ghi < 0.0, axis=0) & wires_ok & ~ins
+        rel = (hi - lo) / scale
+        small = np.all(rel <= 1.0, axis=1)
+        bnd = ~ins & ~out & small
+        split = ~ins & ~out & ~small
+        for key, mask in (("inside", ins), ("outside", out), ("boundary", bnd)):
+            if mask.any():
+                acc[key].append(np.stack([lo[mask], hi[mask]], axis=2))
+                counts[key] += int(mask.sum())
+        if ins.any():
+            wd = hi[ins] - lo[ins]
+            inside_measure += float(np.sum(np.prod(np.where(wd > 0, wd, 1.0), axis=1)))
+        if split.any():
+            slo, shi = lo[split], hi[split]
+            axis = np.argmax(rel[split], axis=1)
+            rows = np.arange(len(slo))
+            mid = 0.5 * slo[rows, axis] + 0.5 * shi[rows, axis]
+            left_hi = shi.copy()
+            left_hi[rows, axis] = mid
+            right_lo = slo.copy()
+            right_lo[rows, axis] = mid
+            pend_lo = np.concatenate([pend_lo, slo, right_lo])
+            pend_hi = np.concatenate([pend_hi, left_hi, shi])
+        if progress is not None:
+            info = WorkspaceProgress(
+                boxes=processed,
+                pending=len(pend_lo),
+                inside=counts["inside"],
+                outside=counts["outside"],
+                boundary=counts["boundary"],
+                elapsed=time.perf_counter() - t0,
+                inside_share=inside_measure / total if total > 0 else 0.0,
+            )
+            if progress(info) is False:
+                status = "stopped" if len(pend_lo) else "complete"
+                break
+
+    def cat(key):
+        return np.concatenate(acc[key]) if acc[key] else np.zeros((0, nd, 2))
+
+    notes = []
+    if robot.dof != 2 and not use_rot:
+        notes.append("orientation: identity (fixed)")
+    return CertifiedWorkspace(
+        robot=robot.name,
+        dof=robot.dof,
+        min_force=float(min_force),
+        box=pbox,
+        angles=angles,
+        angle_names=names,
+        eps=float(eps),
+        eps_angle=float(eps_angle),
+        inside=cat("inside"),
+        outside=cat("outside"),
+        boundary=cat("boundary"),
+        pending=np.stack([pend_lo, pend_hi], axis=2) if len(pend_lo) else np.zeros((0, nd, 2)),
+        status=status,
+        boxes=processed,
+        time=time.perf_counter() - t0,
+        notes=notes + [f"force rows: {force_rows(robot)}"],
+    )

@@ -1,0 +1,322 @@
+"""The maximum isotropic force: at one pose, and vectorised over many poses.
+
+**Definition** (all dofs).  With ``H`` the wrench matrix, force rows ``f`` and moment rows
+``m`` (:mod:`.loads`), bias point ``x0 = -w_ext,f`` and required moment ``μ = -w_ext,m``,
+
+    f_min = largest r such that the ball B(x0, r) ⊂ F(μ) = {H_f τ : τ in box, H_m τ = μ},
+
+the largest force that the platform resists **in every direction** while its moment stays
+balanced.  For a point platform (dof 2) there are no moment rows, ``F = {H τ}`` is the
+paper's operational force polytope and, without load, ``f_min = min_k 1/||v_k||``
+(eq. 19) = ``min_k d_k / ||n_k||`` (signed distance from the origin to the facet planes).
+
+**Exact formula used everywhere** (maps, certificates, single poses).  Let ``c_k`` be the
+normals of the zonotope ``W = {H τ}`` (:func:`~.polytope.zonotope_facets`, both signs) with
+offsets ``d_k``.  ``W = ∩_k {c_k · x ≤ d_k}`` when ``W`` is full-dimensional, so the section
+is ``F(μ) = ∩_k {c_k,f · f ≤ d_k - c_k,m · μ}`` and a ball ``B(x0, r)`` lies in it iff
+``r ||c_k,f|| ≤ d_k - c_k,f·x0 - c_k,m·μ = d_k + c_k · w_ext`` for every ``k``:
+
+    f_min = min_k (d_k + c_k · w_ext) / ||c_k,f||,
+
+a finite minimum over ``2 C(m, w-1)`` closed-form terms (a term with ``c_k,f = 0`` is
+``+inf`` if its numerator is ``≥ 0`` and ``-inf`` otherwise: the required moment alone is
+out of reach).  This is exact, not sampled: the section is a polytope and every one of its
+facets lies in a facet plane of ``W``; terms of planes that do not touch ``F(μ)`` are larger
+than the inscribed radius and do not change the minimum.
+
+* ``f_min ≥ 0``: the bias point is in ``F(μ)`` (the pose is in the wrench-feasible
+  workspace) and ``f_min`` is the inscribed radius, status ``"inside"``;
+* ``f_min < 0``: the bias point is outside (the pose cannot even balance the load, section
+  IV-B of the paper), status ``"outside"``; ``-f_min`` is then the largest violation of a
+  facet inequality (a facet-plane distance, not the Euclidean distance to ``F``);
+* ``W`` flat (``rank H < w``: fewer wires than wrench components, e.g. the 4-wire
+  almost-planar robot with dof 6, or aligned wires): no ball fits, status ``"degenerate"``,
+  ``f_min`` is NaN in maps; at a single pose it is reported as 0 if the load can be
+  balanced (a linear program) and ``None`` otherwise.
+
+dof 3 uses the same section (force at zero extra moment about the platform origin; no
+gravity in the plane, so ``μ = 0`` and ``x0 = 0``); dof 6 the 3-D force section at the
+moment required by gravity (MARIONET).  At a single pose the section is also computed
+independently as a hull of vertices (:mod:`.section`) and reported with its facets.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from math import comb
+
+import numpy as np
+
+from ..robot import Pose, Robot, wrench_matrix
+from ..robot.statics import max_margin_tensions
+from .krut import krut_polytope
+from .loads import external_wrench, force_rows
+from .polytope import NORMAL_TOL, ForcePolytope, hyperplane_shifting, zonotope_facets_t
+from .section import force_section
+
+__all__ = [
+    "IsotropicForceResult",
+    "isotropic_force",
+    "isotropic_values",
+    "section_index",
+    "INSIDE",
+    "OUTSIDE",
+    "DEGENERATE",
+    "STATUS_NAMES",
+]
+
+INSIDE, OUTSIDE, DEGENERATE = 0, 1, 2
+STATUS_NAMES = {INSIDE: "inside", OUTSIDE: "outside", DEGENERATE: "degenerate"}
+
+
+def _ratio(num: np.ndarray, den: np.ndarray) -> np.ndarray:
+    """``num / den`` with ``den = 0`` mapped to ``+inf`` (num ≥ 0) or ``-inf`` (num < 0)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = num / den
+    zero = den == 0
+    if np.any(zero):
+        r = np.where(zero, np.where(num >= 0, np.inf, -np.inf), r)
+    return r
+
+
+def section_index(normals, offsets, w_ext, n_force: int) -> tuple[float, int]:
+    """``min_k (d_k + n_k · w_ext) / ||n_k,f||`` over given facets of ``W``; and the argmin."""
+    normals = np.asarray(normals, dtype=float)
+    num = np.asarray(offsets, dtype=float) + normals @ np.asarray(w_ext, dtype=float)
+    den = np.linalg.norm(normals[:, :n_force], axis=1)
+    r = _ratio(num, den)
+    k = int(np.argmin(r))
+    return float(r[k]), k
+
+
+def _index_batch(Ht, wt, tau_min, tau_max, nf: int):
+    """Core of :func:`isotropic_values` in batch-last layout: ``Ht`` ``(w, m, P)``, ``wt`` ``(w, P)``.
+
+    Returns ``f (P,)``, ``status (P,)`` and the unit force normal of the limiting facet
+    ``(nf, P)``.
+    """
+    P = Ht.shape[-1]
+    C, D, dp, dm = zonotope_facets_t(Ht, tau_min, tau_max)
+    K = C.shape[1]
+    if K == 0:  # fewer wires than w - 1: no facet at all
+        return np.full(P, np.nan), np.full(P, DEGENERATE, np.int8), np.full((nf, P), np.nan)
+    cw = np.einsum("wkp,wp->kp", C, wt)
+    cn = np.sqrt(np.einsum("wkp,wkp->kp", C, C))
+    valid = cn > NORMAL_TOL * np.max(cn, axis=0)
+    cf = np.sqrt(np.einsum("wkp,wkp->kp", C[:nf], C[:nf]))
+    both = np.concatenate([_ratio(dp + cw, cf), _ratio(dm - cw, cf)])  # (2K, P)
+    both = np.where(np.concatenate([valid, valid]), both, np.inf)
+    k = np.argmin(both, axis=0)
+    cols = np.arange(P)
+    f = both[k, cols]
+    scale = np.max(np.abs(Ht), axis=(0, 1)) + 1.0
+    flat = ~np.any(valid[:, None, :] & (np.abs(D) > NORMAL_TOL * scale), axis=(0, 1))
+    flat |= np.isnan(f)
+    f = np.where(flat, np.nan, f)
+    status = np.where(flat, DEGENERATE, np.where(f >= 0, INSIDE, OUTSIDE)).astype(np.int8)
+    sign = np.where(k < K, 1.0, -1.0)
+    cfk = C[:nf, k % K, cols] * sign
+    nrm = np.sqrt(np.sum(cfk * cfk, axis=0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        direction = np.where(nrm > 0, cfk / nrm, np.nan)
+    return f, status, direction
+
+
+def isotropic_values(
+    robot: Robot,
+    positions,
+    rotations=None,
+    external=None,
+    chunk: int | None = None,
+    return_direction: bool = False,
+):
+    """``f_min`` (see the module docstring) for ``P`` poses, without a Python loop per pose.
+
+    ``positions`` ``(P, d)``; ``rotations`` ``(P, d, d)`` or one ``(d, d)`` matrix (identity
+    if omitted); ``external`` an optional extra constant wrench ``(w,)``.  Returns
+    ``(f_min (P,), status (P,) int8)`` and, if ``return_direction``, the unit force normal
+    of the limiting facet ``(P, nf)`` (the weakest disturbance direction is its opposite).
+    """
+    p = np.asarray(positions, dtype=float)
+    if p.ndim == 1:
+        p = p[None]
+    d = robot.dim
+    if p.shape[-1] != d:
+        raise ValueError(f"positions: expected {d} coordinates per pose, got {p.shape[-1]}")
+    R = np.eye(d) if rotations is None else np.asarray(rotations, dtype=float)
+    if R.ndim == 2:
+        R = np.broadcast_to(R, (p.shape[0], d, d))
+    nf = force_rows(robot)
+    P = p.shape[0]
+    if chunk is None:  # keep the temporaries of one chunk in cache (~2 MB per array)
+        w = robot.wrench_dim
+        chunk = max(64, (1 << 18) // max(1, comb(robot.m, w - 1) * w * w))
+    out = np.empty(P)
+    status = np.empty(P, dtype=np.int8)
+    direction = np.full((P, nf), np.nan) if return_direction else None
+    for s in range(0, P, chunk):
+        sl = slice(s, min(P, s + chunk))
+        H = wrench_matrix(robot, p[sl], R[sl])
+        w_ext = external_wrench(robot, R[sl], external)
+        res = _index_batch(np.moveaxis(H, 0, -1), w_ext.T, robot.tau_min, robot.tau_max, nf)
+        out[sl], status[sl] = res[0], res[1]
+        if return_direction:
+            direction[sl] = res[2].T
+    if return_direction:
+        return out, status, direction
+    return out, status
+
+
+@dataclass
+class IsotropicForceResult:
+    """The maximum isotropic force at one pose, its polytope(s) and how it was obtained."""
+
+    robot: str
+    dof: int
+    pose: list[float]
+    isotropic_force: float | None
+    status: str
+    centre: np.ndarray  # bias point x0 = -w_ext,f in force space
+    required_moment: np.ndarray | None  # μ = -w_ext,m (None for dof 2)
+    external_wrench: np.ndarray
+    weakest_direction: np.ndarray | None  # unit disturbance direction resisted least
+    algorithm: str
+    polytope: ForcePolytope | None  # force polytope (dof 2) or force section F(μ)
+    wrench_polytope: ForcePolytope | None  # the full wrench zonotope (dof 3, 6)
+    section_check: float | None = None  # inscribed radius from the hull of F(μ) (dof 3, 6)
+    feasible: bool | None = None
+    time: float = 0.0
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def inside(self) -> bool:
+        return self.status == "inside"
+
+    def to_dict(self) -> dict:
+        def lst(a):
+            return None if a is None else [float(t) for t in np.asarray(a).reshape(-1)]
+
+        return {
+            "robot": self.robot,
+            "dof": self.dof,
+            "pose": [float(t) for t in self.pose],
+            "isotropic_force": self.isotropic_force,
+            "status": self.status,
+            "inside": self.inside,
+            "feasible": self.feasible,
+            "centre": lst(self.centre),
+            "required_moment": lst(self.required_moment),
+            "external_wrench": lst(self.external_wrench),
+            "weakest_direction": lst(self.weakest_direction),
+            "algorithm": self.algorithm,
+            "polytope": None if self.polytope is None else self.polytope.to_dict(),
+            "wrench_polytope": (
+                None if self.wrench_polytope is None else self.wrench_polytope.to_dict()
+            ),
+            "section_check": self.section_check,
+            "units": {"force": "N", "moment": "N*cm", "length": "cm", "angle": "deg"},
+            "definition": (
+                "radius of the largest ball centred at the bias point -w_ext (force part) "
+                "inside the force polytope at the moment required by the load; negative: "
+                "the pose cannot balance the load"
+            ),
+            "time": self.time,
+            "notes": list(self.notes),
+        }
+
+
+def _as_pose(robot: Robot, pose) -> Pose:
+    if isinstance(pose, Pose):
+        return pose
+    if isinstance(pose, str):
+        from ..robot import parse_pose
+
+        return parse_pose(robot.dof, pose)
+    return Pose.from_params(robot.dof, list(np.asarray(pose, dtype=float).reshape(-1)))
+
+
+def isotropic_force(
+    robot: Robot,
+    pose,
+    algorithm: str = "shifting",
+    external=None,
+    section: bool = True,
+) -> IsotropicForceResult:
+    """The maximum isotropic force at ``pose`` (a :class:`~certsolve.robot.Pose`, or params).
+
+    ``algorithm``: ``"shifting"`` (hyperplane shifting, default) or ``"krut"`` (the paper's
+    six steps; small ``m`` and ``w`` only).  ``external``: optional extra constant wrench.
+    ``section``: for dof 3/6, also compute the force section as a hull of vertices (its
+    facets are reported and its inscribed radius is ``section_check``).
+    """
+    t0 = time.perf_counter()
+    if algorithm not in ("shifting", "krut"):
+        raise ValueError(f"algorithm: expected 'shifting' or 'krut', got {algorithm!r}")
+    pose = _as_pose(robot, pose)
+    pos = np.asarray(pose.position, dtype=float)
+    rot = np.asarray(pose.rotation, dtype=float)
+    if pos.shape != (robot.dim,) or rot.shape != (robot.dim, robot.dim):
+        raise ValueError(f"pose: expected a {robot.dim}-D position and rotation")
+    if not np.all(np.isfinite(pos)):
+        raise ValueError("pose: coordinates must be finite")
+    nf = force_rows(robot)
+    H = wrench_matrix(robot, pos[None], rot[None])[0]
+    w_ext = external_wrench(robot, rot[None], external)[0]
+    centre = -w_ext[:nf]
+    moment = -w_ext[nf:] if robot.dof != 2 else None
+    notes: list[str] = []
+    poly_full = None
+    status = "inside"
+    value: float | None
+    direction = None
+    feasible = None
+    try:
+        if not np.all(np.isfinite(H)):
+            raise ValueError("a wire has zero length at this pose")
+        if algorithm == "krut":
+            poly_full = krut_polytope(H, robot.tau_min, robot.tau_max)
+        else:
+            poly_full = hyperplane_shifting(H, robot.tau_min, robot.tau_max)
+        value, k = section_index(poly_full.normals, poly_full.offsets, w_ext, nf)
+        nk = poly_full.normals[k, :nf]
+        direction = -nk / np.linalg.norm(nk) if np.linalg.norm(nk) > 0 else None
+        status = "inside" if value >= 0 else "outside"
+        feasible = value >= 0
+    except ValueError as exc:
+        notes.append(str(exc))
+        status = "degenerate"
+        tens = max_margin_tensions(H, w_ext, robot.tau_min, robot.tau_max)
+        feasible = bool(tens.feasible)
+        value = 0.0 if feasible else None
+    poly = None
+    section_check = None
+    if robot.dof == 2:
+        poly = poly_full
+    elif section and status != "degenerate":
+        try:
+            poly = force_section(H, robot.tau_min, robot.tau_max, moment, nf)
+            section_check = poly.signed_distance(centre)
+        except ValueError as exc:
+            notes.append(f"force section: {exc}")
+    if value is not None and not np.isfinite(value):
+        notes.append("the required moment is out of reach: the section is empty")
+        value = None
+    return IsotropicForceResult(
+        robot=robot.name,
+        dof=robot.dof,
+        pose=pose.params(robot.dof),
+        isotropic_force=value,
+        status=status,
+        centre=centre,
+        required_moment=moment,
+        external_wrench=w_ext,
+        weakest_direction=direction,
+        algorithm="krut2004" if algorithm == "krut" else "hyperplane-shifting",
+        polytope=poly,
+        wrench_polytope=poly_full if robot.dof != 2 else None,
+        section_check=section_check,
+        feasible=feasible,
+        time=time.perf_counter() - t0,
+        notes=notes,
+    )

@@ -1,0 +1,239 @@
+"""Slope (mean-value) arithmetic on interval arrays: first-order tight enclosures.
+
+A quantity ``u(x)`` over a box ``X = mid ± r`` is carried as an :class:`MV` triple
+
+* ``m``: an interval containing ``u(mid)``;
+* ``x``: an interval containing ``u(X)`` (the natural range);
+* ``s[j]``: intervals such that ``u(x) - u(mid) ∈ Σ_j s[j] (x_j - mid_j)`` for every
+  ``x ∈ X`` (interval **slopes**; an interval enclosure of ``∂u/∂x_j`` over ``X`` is one).
+
+The rules (Krawczyk & Neumaier's slope arithmetic) keep this invariant:
+
+* ``u ± v``: slopes add;
+* ``u v``:  ``uv(x) - uv(mid) = u(x) (v(x) - v(mid)) + v(mid) (u(x) - u(mid))``, slope
+  ``u.x · s_v + v.m · s_u``;
+* ``u / v``: slope ``s_u / v.x - u.m s_v / (v.x v.m)``;
+* ``u²``: slope ``(u.x + u.m) s_u``; ``√u``: slope ``s_u / (√u.x + √u.m)``;
+* a Lipschitz ``φ`` with slopes between two points in ``S`` (``φ(s) = τ⁺ max(s,0) +
+  τ⁻ min(s,0)``: ``S = {τ⁺}`` on ``s ≥ 0``, ``{τ⁻}`` on ``s ≤ 0``, ``[τ⁻, τ⁺]`` across 0):
+  slope ``S · s_u``.
+
+Every interval operation is the outward-rounded one of :mod:`certsolve.interval.arith`, so
+:meth:`MV.enclose` ``= x ∩ (m + Σ_j s[j] [-r_j, r_j])`` is a rigorous enclosure of
+``u(X)`` whose overestimation is second order in ``r`` (slopes are overestimated by O(r)).
+Arrays follow the enclosure module's layout (any shape, batch last).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from ..interval import arith
+from ..interval.linalg import mr_from_bounds, mr_matmul, mr_to_bounds
+from ..interval.rounding import up
+from .wedge import wedge_tables
+
+__all__ = ["MV", "wedge_mv", "phi_mv", "pmatmul", "pmatmul_mv"]
+
+Pair = tuple[np.ndarray, np.ndarray]
+
+
+def _sym(s: Pair, r: np.ndarray) -> np.ndarray:
+    """Upper bound of ``|s| · r`` (``s · [-r, r] ⊆ [-bound, bound]``)."""
+    mag = np.maximum(np.abs(s[0]), np.abs(s[1]))
+    with np.errstate(invalid="ignore"):
+        b = up(mag * r)
+    return np.where(np.isnan(b), np.inf, b)
+
+
+def pmatmul(A: np.ndarray, p: Pair) -> Pair:
+    """Rigorous bounds of ``A @ [p]`` for a point matrix ``A`` (batched matmul shapes)."""
+    c, r = mr_from_bounds(*p)
+    c = np.where(np.isfinite(c), c, 0.0)
+    r = np.where(np.isfinite(r), r, np.inf)
+    cc, rr = mr_matmul(A, None, c, r)
+    return mr_to_bounds(cc, rr)
+
+
+class MV:
+    """``(m, x, s)``: midpoint value, range and slopes (see the module docstring)."""
+
+    __slots__ = ("m", "x", "s")
+
+    def __init__(self, m: Pair, x: Pair, s: list[Pair]):
+        self.m = m
+        self.x = x
+        self.s = s
+
+    # -- construction / reshaping ---------------------------------------------------------
+    @classmethod
+    def const(cls, lo, hi, nd: int) -> MV:
+        z = np.zeros_like(lo)
+        return cls((lo, hi), (lo, hi), [(z, z) for _ in range(nd)])
+
+    def apply(self, fn: Callable[[np.ndarray], np.ndarray]) -> MV:
+        """The same array operation (indexing, transposition...) on every part."""
+        return MV(
+            (fn(self.m[0]), fn(self.m[1])),
+            (fn(self.x[0]), fn(self.x[1])),
+            [(fn(a), fn(b)) for a, b in self.s],
+        )
+
+    def where(self, mask: np.ndarray, value: float) -> MV:
+        """Parts replaced by the exact constant ``value`` where ``mask`` holds."""
+
+        def f(a, v):
+            return np.where(mask, v, a)
+
+        return MV(
+            (f(self.m[0], value), f(self.m[1], value)),
+            (f(self.x[0], value), f(self.x[1], value)),
+            [(f(a, 0.0), f(b, 0.0)) for a, b in self.s],
+        )
+
+    def signed(self, positive: np.ndarray) -> MV:
+        """Multiplied by +1 where ``positive`` holds and by -1 elsewhere (exact)."""
+
+        def f(p):
+            lo, hi = p
+            return np.where(positive, lo, -hi), np.where(positive, hi, -lo)
+
+        return MV(f(self.m), f(self.x), [f(p) for p in self.s])
+
+    # -- arithmetic -----------------------------------------------------------------------
+    def __add__(self, o: MV) -> MV:
+        return MV(
+            arith.add(*self.m, *o.m),
+            arith.add(*self.x, *o.x),
+            [arith.add(*a, *b) for a, b in zip(self.s, o.s)],
+        )
+
+    def __sub__(self, o: MV) -> MV:
+        return MV(
+            arith.sub(*self.m, *o.m),
+            arith.sub(*self.x, *o.x),
+            [arith.sub(*a, *b) for a, b in zip(self.s, o.s)],
+        )
+
+    def __neg__(self) -> MV:
+        return MV(arith.neg(*self.m), arith.neg(*self.x), [arith.neg(*a) for a in self.s])
+
+    def __mul__(self, o: MV) -> MV:
+        s = [
+            arith.add(*arith.mul(*self.x, *sv), *arith.mul(*o.m, *su))
+            for su, sv in zip(self.s, o.s)
+        ]
+        return MV(arith.mul(*self.m, *o.m), arith.mul(*self.x, *o.x), s)
+
+    def __truediv__(self, o: MV) -> MV:
+        den = arith.mul(*o.x, *o.m)
+        s = [
+            arith.sub(*arith.div(*su, *o.x), *arith.div(*arith.mul(*self.m, *sv), *den))
+            for su, sv in zip(self.s, o.s)
+        ]
+        return MV(arith.div(*self.m, *o.m), arith.div(*self.x, *o.x), s)
+
+    def scale(self, c) -> MV:
+        """``c · u`` for point ``c`` (``0 · inf`` counts as 0)."""
+
+        def f(p):
+            with np.errstate(invalid="ignore"):
+                lo, hi = arith.scale(p[0], p[1], c)
+            z = np.broadcast_to(np.asarray(c) == 0, lo.shape)
+            return np.where(z, 0.0, lo), np.where(z, 0.0, hi)
+
+        return MV(f(self.m), f(self.x), [f(p) for p in self.s])
+
+    def sqr(self) -> MV:
+        t = arith.add(*self.x, *self.m)
+        return MV(arith.sqr(*self.m), arith.sqr(*self.x), [arith.mul(*t, *s) for s in self.s])
+
+    def sqrt(self) -> MV:
+        rm = arith.sqrt(*self.m)
+        rx = arith.sqrt(*self.x)
+        den = arith.add(*rx, *rm)
+        return MV(rm, rx, [arith.div(*s, *den) for s in self.s])
+
+    # -- result -----------------------------------------------------------------------------
+    def enclose(self, radii: np.ndarray) -> Pair:
+        """``x ∩ (m + Σ_j s_j [-r_j, r_j])`` (``radii[j]`` broadcasts with the parts)."""
+        rad = None
+        for j, sj in enumerate(self.s):
+            t = _sym(sj, radii[j])
+            rad = t if rad is None else up(rad + t)
+        if rad is None:
+            lo, hi = self.m
+        else:
+            lo, hi = arith.sub(self.m[0], self.m[1], rad, -rad)
+        lo = np.maximum(lo, self.x[0])
+        hi = np.minimum(hi, self.x[1])
+        lo = np.where(np.isnan(lo), -np.inf, lo)
+        hi = np.where(np.isnan(hi), np.inf, hi)
+        return lo, hi
+
+    def tighten(self, radii: np.ndarray) -> MV:
+        """Replace the range by :meth:`enclose` (improves later products)."""
+        return MV(self.m, self.enclose(radii), self.s)
+
+
+def pmatmul_mv(A: np.ndarray, u: MV) -> MV:
+    """``A u`` for a point matrix ``A`` and an :class:`MV` of column vectors (matmul shapes)."""
+    return MV(pmatmul(A, u.m), pmatmul(A, u.x), [pmatmul(A, s) for s in u.s])
+
+
+def _sum_axis0(u: MV) -> MV:
+    acc = u.apply(lambda a: a[0])
+    for t in range(1, u.m[0].shape[0]):
+        acc = acc + u.apply(lambda a, t=t: a[t])
+    return acc
+
+
+def wedge_mv(M: MV) -> MV:
+    """Generalised cross products (:func:`~.wedge.wedge_float`) of ``M`` ``(w, w-1, ...)``."""
+    w = M.m[0].shape[0]
+    if w == 2:
+        a = M.apply(lambda t: t[1, 0])
+        b = -M.apply(lambda t: t[0, 0])
+        return MV(
+            (np.stack([a.m[0], b.m[0]]), np.stack([a.m[1], b.m[1]])),
+            (np.stack([a.x[0], b.x[0]]), np.stack([a.x[1], b.x[1]])),
+            [
+                (np.stack([sa[0], sb[0]]), np.stack([sa[1], sb[1]]))
+                for sa, sb in zip(a.s, b.s)
+            ],
+        )
+    levels, order, csign = wedge_tables(w)
+    extra = (1,) * (M.m[0].ndim - 2)
+    D = M.apply(lambda a: a[:, 0])
+    for r, (row_idx, prev_idx, sign) in enumerate(levels, start=1):
+        col = M.apply(lambda a, r=r: a[:, r][row_idx])
+        prod = col * D.apply(lambda a, p=prev_idx: a[p])  # (r, C, ...)
+        prod = prod.signed((sign > 0).reshape(sign.shape + extra))
+        D = _sum_axis0(prod)
+    D = D.apply(lambda a: a[order])
+    return D.signed((csign > 0).reshape((w,) + extra))
+
+
+def phi_mv(u: MV, tmin, tmax) -> MV:
+    """``φ(u) = τmax max(u, 0) + τmin min(u, 0)`` with its slope (``τ`` broadcast)."""
+
+    def scale(lo, hi, c):
+        with np.errstate(invalid="ignore"):
+            rlo, rhi = arith.scale(lo, hi, c)
+        z = np.broadcast_to(np.asarray(c) == 0, rlo.shape)
+        return np.where(z, 0.0, rlo), np.where(z, 0.0, rhi)
+
+    def phi(p):
+        a = scale(np.maximum(p[0], 0.0), np.maximum(p[1], 0.0), tmax)
+        b = scale(np.minimum(p[0], 0.0), np.minimum(p[1], 0.0), tmin)
+        return arith.add(*a, *b)
+
+    xlo, xhi = u.x
+    tmin_b = np.broadcast_to(tmin, xlo.shape)
+    tmax_b = np.broadcast_to(tmax, xlo.shape)
+    slo = np.where(xlo >= 0.0, tmax_b, tmin_b)
+    shi = np.where(xhi <= 0.0, tmin_b, tmax_b)
+    s = [arith.mul(slo, shi, *sj) for sj in u.s]
+    return MV(phi(u.m), phi(u.x), s)

@@ -1,0 +1,203 @@
+"""The job service: validated requests in, job records out; owns the store and the pool.
+
+Used by the HTTP API (:mod:`api.app`) and the offline batch runner.  One service owns a
+data directory at a time (an exclusive ``flock`` on ``service.lock``); on start it re-queues
+the jobs a previous run left ``running`` (or fails those out of attempts).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from typing import Any
+
+from .kinds import KINDS, JobLimits, request_adapter
+from .pool import WorkerPool
+from .settings import ServiceSettings
+from .store import JobRow, JobStore, NewJob, new_job_id
+
+__all__ = ["JobService", "LimitError", "ServiceError", "job_record", "iso_time"]
+
+log = logging.getLogger("certsolve.jobs")
+
+
+class ServiceError(Exception):
+    """The service cannot start (data directory in use, not writable, ...)."""
+
+
+@dataclass
+class LimitError(ValueError):
+    """A per-job limit above the service's ceiling; ``field`` is a dotted request path."""
+
+    field: str
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.field}: {self.message}"
+
+
+def iso_time(t: float | None) -> str | None:
+    if t is None:
+        return None
+    return datetime.fromtimestamp(t, UTC).isoformat(timespec="milliseconds").replace("+00:00", "Z")
+
+
+def job_record(row: JobRow, *, now: float | None = None) -> dict[str, Any]:
+    """The public description of a job (without its result and request)."""
+    now = time.time() if now is None else now
+    elapsed = None
+    if row.started_at is not None:
+        end = row.finished_at if row.finished_at is not None else now
+        elapsed = max(0.0, end - row.started_at)
+    return {
+        "id": row.id,
+        "kind": row.kind,
+        "status": row.status,
+        "batch": row.batch,
+        "created_at": iso_time(row.created_at),
+        "started_at": iso_time(row.started_at),
+        "finished_at": iso_time(row.finished_at),
+        "elapsed": elapsed,
+        "attempts": row.attempts,
+        "max_attempts": row.max_attempts,
+        "limits": row.limits,
+        "progress": row.progress,
+        "cancel_requested": row.cancel_requested_at is not None,
+        "worker_pid": row.worker_pid if row.status == "running" else None,
+        "error": row.error,
+    }
+
+
+class JobService:
+    """Submit, inspect and cancel jobs; run them on a :class:`.WorkerPool`."""
+
+    def __init__(self, settings: ServiceSettings):
+        self.settings = settings
+        try:
+            settings.data_dir.mkdir(parents=True, exist_ok=True)
+            self.store = JobStore(settings.db_path)
+        except OSError as exc:
+            raise ServiceError(
+                f"{settings.data_dir}: cannot use as data directory ({exc})"
+            ) from None
+        self.adapter = request_adapter(settings.enable_test_kinds)
+        self.pool: WorkerPool | None = None
+        self._lock_fd: int | None = None
+
+    # -- life cycle ---------------------------------------------------------------------------
+    def acquire(self) -> None:
+        """Take the data directory (exclusive); :class:`ServiceError` if another has it."""
+        if self._lock_fd is not None:
+            return
+        import fcntl
+
+        path = self.settings.lock_path
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            raise ServiceError(
+                f"{self.settings.data_dir} is in use by another certsolve service"
+            ) from None
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        self._lock_fd = fd
+
+    def start(self) -> None:
+        """Take the data directory, recover interrupted jobs, start the workers."""
+        self.acquire()
+        recovered = self.store.release("the service stopped while the job was running")
+        if recovered:
+            log.warning("recovered %d interrupted job(s): %s", len(recovered), recovered)
+        if self.settings.workers > 0 and self.pool is None:
+            self.pool = WorkerPool(self.settings, self.store)
+            self.pool.start()
+
+    def close(self) -> None:
+        if self.pool is not None:
+            self.pool.stop()
+            self.pool = None
+        self.store.close()
+        if self._lock_fd is not None:
+            os.close(self._lock_fd)
+            self._lock_fd = None
+
+    def __enter__(self) -> JobService:
+        self.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # -- requests -----------------------------------------------------------------------------
+    def validate(self, data: Any):
+        """A request dict -> the kind's model (raises pydantic ``ValidationError``)."""
+        return self.adapter.validate_python(data)
+
+    def limits_for(self, req) -> dict[str, Any]:
+        """Effective limits of a validated request; :class:`LimitError` above a ceiling."""
+        s = self.settings
+        params = getattr(req, "params", None)
+        lim = req.limits or JobLimits()
+
+        def pick(name: str, default, ceiling, unit: str):
+            asked = [
+                (f"params.{name}", getattr(params, name, None)),
+                (f"limits.{name}", getattr(lim, name, None)),
+            ]
+            for field, v in asked:
+                if v is not None and v > ceiling:
+                    shown = f"{ceiling:g}" if isinstance(ceiling, float) else str(ceiling)
+                    raise LimitError(field, f"at most {shown}{unit} on this server")
+            vals = [v for _, v in asked if v is not None]
+            return min(vals) if vals else default
+
+        limits = {
+            "timeout": float(pick("timeout", s.default_timeout, s.max_timeout, " s")),
+            "max_boxes": int(pick("max_boxes", s.default_max_boxes, s.max_max_boxes, "")),
+            "memory_mb": int(pick("memory_mb", s.default_memory_mb, s.max_memory_mb, " MiB")),
+        }
+        if limits["memory_mb"] < s.min_memory_mb:
+            raise LimitError("limits.memory_mb", f"at least {s.min_memory_mb} MiB")
+        return limits
+
+    def prepare(self, req, *, batch: str | None = None) -> NewJob:
+        return NewJob(
+            kind=req.kind,
+            request=req.model_dump_json(),
+            limits=self.limits_for(req),
+            max_attempts=self.settings.max_attempts,
+            batch=batch,
+        )
+
+    def submit(self, reqs: list, *, batch: str | None = None, max_queued: bool = True):
+        """Queue validated requests (all or none); returns their ids."""
+        jobs = [self.prepare(r, batch=batch) for r in reqs]
+        ids = self.store.add(jobs, max_queued=self.settings.max_queued if max_queued else None)
+        if self.pool is not None:
+            self.pool.notify()
+        return ids
+
+    @staticmethod
+    def new_batch_id() -> str:
+        return "b" + new_job_id()[:15]
+
+    def cancel(self, job_id: str) -> JobRow | None:
+        return self.store.request_cancel(job_id)
+
+    def health(self) -> dict[str, Any]:
+        counts = self.store.counts()
+        return {
+            "status": "ok",
+            "workers": {
+                "configured": self.settings.workers,
+                "alive": self.pool.alive() if self.pool else 0,
+                "restarts": self.pool.restarts if self.pool else 0,
+            },
+            "jobs": {"queued": counts["queued"], "running": counts["running"]},
+            "kinds": [k for k in KINDS if self.settings.enable_test_kinds or not KINDS[k].hidden],
+        }

@@ -1,0 +1,248 @@
+"""A worker process: claim a queued job from the store, run it, store the outcome, repeat.
+
+Workers are started (``spawn``) and supervised by :class:`~.pool.WorkerPool`.  While a job
+runs, the library's progress callback writes the progress to the store at most every
+``progress_interval`` seconds and reads the job's cancel flag at the same time: a cancelled
+job's callback returns ``False`` and the search stops between two rounds.  Each job runs
+under ``RLIMIT_AS`` (its ``memory_mb``); a job that runs out of memory fails and the worker
+exits so that the supervisor starts a fresh one.
+
+A worker dies with its parent (``PR_SET_PDEATHSIG``, and a ``getppid`` check in case that
+is unavailable), so a killed service never leaves workers writing to the store.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import sqlite3
+import sys
+import time
+from typing import Any
+
+from .jsonutil import dumps, plain, truncate_lists
+from .settings import ServiceSettings
+from .store import JobRow, JobStore
+
+__all__ = ["worker_main", "run_job", "JobMonitor"]
+
+log = logging.getLogger("certsolve.jobs.worker")
+
+EXIT_FRESH = 3  # the worker exits after a memory error; the supervisor starts a new one
+
+_PROGRESS_FIELDS = ("boxes", "pending", "solutions", "undecided", "elapsed")
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG
+    except Exception:  # pragma: no cover - not Linux
+        pass
+    if os.getppid() != parent_pid:
+        os._exit(0)
+
+
+def _set_memory_limit(mb: int | None):
+    """Lower the soft address-space limit to ``mb`` MiB; return the previous limits."""
+    try:
+        import resource
+
+        old = resource.getrlimit(resource.RLIMIT_AS)
+        if mb is None:
+            return old
+        want = int(mb) * 2**20
+        soft, hard = old
+        if hard != resource.RLIM_INFINITY:
+            want = min(want, hard)
+        resource.setrlimit(resource.RLIMIT_AS, (want, hard))
+        return old
+    except (ImportError, ValueError, OSError):  # pragma: no cover
+        return None
+
+
+def _restore_memory_limit(old) -> None:
+    if old is None:
+        return
+    try:
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_AS, old)
+    except (ImportError, ValueError, OSError):  # pragma: no cover
+        pass
+
+
+def progress_dict(p: Any, elapsed: float) -> dict:
+    """The numeric progress fields of a library progress object (or dict)."""
+    out: dict[str, Any] = {}
+    for name in _PROGRESS_FIELDS:
+        v = p.get(name) if isinstance(p, dict) else getattr(p, name, None)
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            try:
+                v = v.item()  # numpy scalars
+            except AttributeError:
+                continue
+        if isinstance(v, (int, float)) and v == v and abs(v) < 1e300:
+            out[name] = v
+    out.setdefault("elapsed", elapsed)
+    return out
+
+
+class JobMonitor:
+    """The progress callback of one running job (see the module docstring)."""
+
+    def __init__(
+        self,
+        store: JobStore,
+        job: JobRow,
+        lease: str,
+        *,
+        interval: float,
+        parent_pid: int | None,
+        max_boxes: int | None = None,
+    ):
+        self.store = store
+        self.job = job
+        self.lease = lease
+        self.interval = interval
+        self.parent_pid = parent_pid
+        self.max_boxes = max_boxes  # enforced here for kinds whose call has no such limit
+        self.t0 = time.monotonic()
+        self.next_tick = self.t0
+        self.last: dict | None = None
+        self.cancelled = False
+        self.lost = False  # the job was taken away (re-queued, cancelled by the supervisor)
+        self.stopped_by: str | None = None
+
+    def __call__(self, p: Any) -> bool:
+        now = time.monotonic()
+        self.last = progress_dict(p, now - self.t0)
+        if self.cancelled or self.lost:
+            return False
+        if self.max_boxes is not None and self.last.get("boxes", 0) >= self.max_boxes:
+            self.stopped_by = "max_boxes"
+            return False
+        if now < self.next_tick:
+            return True
+        self.next_tick = now + self.interval
+        return self.check()
+
+    def check(self) -> bool:
+        """Write the progress, read the cancel flag; False if the job must stop."""
+        if self.parent_pid is not None and os.getppid() != self.parent_pid:
+            os._exit(0)
+        try:
+            owned, cancel = self.store.heartbeat(self.job.id, self.lease, self.last)
+        except sqlite3.Error as exc:  # a busy store must not kill the job
+            log.warning("progress of job %s not recorded: %s", self.job.id, exc)
+            return True
+        if not owned:
+            self.lost = True
+            return False
+        if cancel:
+            self.cancelled = True
+            return False
+        return True
+
+
+def run_job(
+    store: JobStore,
+    job: JobRow,
+    lease: str,
+    settings: ServiceSettings,
+    *,
+    parent_pid: int | None = None,
+) -> bool:
+    """Run one claimed job and record its outcome; True if the worker should exit after."""
+    from pydantic import ValidationError
+
+    from .kinds import KINDS, KindUnavailable, RunContext, request_adapter
+
+    limits = job.limits
+    exit_after = False
+    monitor = JobMonitor(
+        store, job, lease, interval=settings.progress_interval, parent_pid=parent_pid
+    )
+    status, text, error = "failed", None, None
+    old_limit = None
+    try:
+        req = request_adapter(True).validate_json(job.request)
+        kind = KINDS[req.kind]
+        if not kind.has_max_boxes:
+            monitor.max_boxes = limits.get("max_boxes")
+        ctx = RunContext(
+            time_limit=float(limits["timeout"]),
+            max_boxes=int(limits["max_boxes"]),
+            progress=monitor,
+        )
+        old_limit = _set_memory_limit(limits.get("memory_mb"))
+        try:
+            raw = kind.run(req, ctx)
+        finally:
+            _restore_memory_limit(old_limit)
+            old_limit = None
+        result = truncate_lists(plain(raw), settings.max_result_items)
+        text = dumps(result)
+        if monitor.cancelled:
+            status, error = "cancelled", "cancelled while running (partial result)"
+        else:
+            status = "done"
+    except KindUnavailable as exc:
+        error = str(exc)
+    except MemoryError:
+        _restore_memory_limit(old_limit)
+        error = f"memory limit exceeded ({limits.get('memory_mb')} MiB)"
+        exit_after = True
+    except ValidationError as exc:
+        from .errors import describe_validation_error
+
+        error = "invalid job: " + describe_validation_error(exc)
+    except (ValueError, ArithmeticError) as exc:  # the input's fault (user errors)
+        error = str(exc) or type(exc).__name__
+    except Exception as exc:
+        log.exception("job %s (%s) failed", job.id, job.kind)
+        error = f"internal error: {type(exc).__name__}: {exc}"[:1000]
+    if monitor.lost:
+        return exit_after
+    if monitor.cancelled and status != "cancelled":
+        status, error = "cancelled", error or "cancelled while running"
+    if monitor.stopped_by and monitor.last is not None:
+        monitor.last["stopped_by"] = monitor.stopped_by
+    try:
+        store.finish(job.id, lease, status, result=text, error=error, progress=monitor.last)
+    except sqlite3.Error:
+        log.exception("cannot record the outcome of job %s", job.id)
+        exit_after = True
+    return exit_after
+
+
+def worker_main(db_path: str, settings: ServiceSettings, parent_pid: int, wake) -> None:
+    """Entry point of a worker process (see the module docstring)."""
+    _die_with_parent(parent_pid)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
+    logging.basicConfig(
+        level=logging.WARNING,
+        stream=sys.stderr,
+        format=f"certsolve worker {os.getpid()}: %(levelname)s %(message)s",
+    )
+    store = JobStore(db_path)
+    pid = os.getpid()
+    while True:
+        if os.getppid() != parent_pid:
+            os._exit(0)
+        try:
+            claimed = store.claim(pid)
+        except sqlite3.Error as exc:
+            log.warning("cannot claim a job: %s", exc)
+            claimed = None
+        if claimed is None:
+            wake.wait(settings.poll_interval)
+            wake.clear()
+            continue
+        job, lease = claimed
+        if run_job(store, job, lease, settings, parent_pid=parent_pid):
+            store.close()
+            os._exit(EXIT_FRESH)

@@ -1,0 +1,299 @@
+"""Algorithm 1 of Merlet (2007): the under-constrained IK system by branch and prune.
+
+Unknowns: the controls ``u`` (``m`` of them) in the box ``U`` = strokes (or a window around
+the last ``u``) ∩ the range allowed by the tension limits (eq. 5).  Equations: ``f(u) = H
+τ(u) + w_g = 0`` (``w`` of them, ``w < m`` for MARIONET).  The search stops at the first
+*certified* solution.
+
+**Design.**  Each ``τ_i`` depends on ``u_i`` alone and increases with it (eq. 6), so a box of
+``u`` is a box of ``τ`` and back; in ``τ`` the equations are *linear*.  The search therefore
+runs on boxes of tensions ``T`` (the image of ``U`` intersected with ``[τ_min, τ_max]``,
+enclosed outward), a batch of boxes per numpy call:
+
+1. **contract** with the preconditioned linear system ``M τ + b = 0`` (``M = P H``, ``b = P
+   w_g``, ``P`` chosen by a pivoted QR of ``H`` so that ``M ≈ [I | N]``; ``M``, ``b`` enclosed
+   rigorously): interval Gauss–Seidel on every (row, variable) pair, repeated until it stalls,
+   plus a check that each full row can still vanish.  An empty box is *proven* to hold no
+   solution.  For a one-dimensional solution set (MARIONET) this contraction is nearly the
+   hull of the segment of the solution line inside the box.
+2. **certify**: the ``m - w`` *parametric* wires (the columns QR left out of the basis) are
+   fixed at the controls of the midpoint tensions of the box, ``u_P``; the other controls
+   follow from the square linear system in ``τ`` (one solve, the limit of Newton's method in
+   the ``τ`` coordinates) and eq. 5.  A small box around that point (radius ``box_radius``,
+   default 1e-6 cm) goes through the Krawczyk test on the *square* system in ``u_S`` with
+   ``u_P`` fixed (:func:`.ik_enclose.krawczyk_mr`): ``K(X) ⊂ int X`` proves that exactly one
+   solution exists in ``X``, so ``(u_P, u_S*)`` is an exact solution of the under-constrained
+   system.  It counts only if the proven enclosure lies in the strokes/window and its
+   tensions provably within the limits.
+3. **bisect** boxes that were neither discarded nor certified (widest side relative to the
+   domain), until a solution is certified, the buffer is empty (proof that no solution exists
+   in ``U``), or a limit is hit.
+
+With more than ``w`` equations (``m < w``: the almost-planar robot) nothing square remains
+to certify: the search can still *prove* that no control vector in ``U`` balances the pose
+(every box contracted to empty), or it narrows down to undecided boxes.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg
+
+from ..interval import arith
+from ..robot.model import Robot
+from .ik_enclose import (
+    SAFE,
+    PoseEnclosure,
+    SquareSystem,
+    tension_mr,
+    tension_range,
+)
+
+__all__ = ["SearchOutcome", "search_controls", "preconditioner", "control_point"]
+
+_U = 2.0**-53
+_TINY = 2.0**-1000
+
+
+def _gamma(n: int) -> float:
+    return n * _U / (1.0 - n * _U)
+
+
+def control_point(robot: Robot, rho, tau, idx=slice(None)):
+    """Eq. (5) in floating point for the wires ``idx`` (no error bound: a candidate only)."""
+    k, K, V, L0 = robot.k[idx], robot.K[idx], robot.V[idx], robot.L0[idx]
+    return k * L0 / (K * (k - tau)) - (rho + V) / K
+
+
+@dataclass
+class Preconditioner:
+    P: np.ndarray  # (w, w)
+    basis: np.ndarray  # (r,) columns solved for
+    params: np.ndarray  # (m - r,) columns fixed when certifying
+    rank: int
+    Mc: np.ndarray  # (w, m) enclosure of P H
+    Mr: np.ndarray
+    bc: np.ndarray  # (w,) enclosure of P w_g
+    br: np.ndarray
+    usable: np.ndarray  # (w, m) M_ij bounded away from 0 and not negligible
+
+
+def preconditioner(enc: PoseEnclosure) -> Preconditioner:
+    """``P`` with ``P H[:, basis] ≈ [I; 0]`` from a pivoted QR of ``H`` (see module docstring)."""
+    H = enc.H
+    w, m = H.shape
+    _, Rq, piv = scipy.linalg.qr(H, pivoting=True, mode="economic")
+    diag = np.abs(np.diag(Rq))
+    rank = int(np.sum(diag > diag[0] * 1e-12)) if diag.size and diag[0] > 0 else 0
+    basis = np.sort(piv[:rank])
+    params = np.sort(piv[rank:])
+    Q, R1 = np.linalg.qr(H[:, basis], mode="complete")
+    P = np.zeros((w, w))
+    P[:rank] = np.linalg.solve(R1[:rank, :rank], Q[:, :rank].T)
+    P[rank:] = Q[:, rank:].T
+    aP = np.abs(P)
+    Mc = P @ H
+    Mr = (aP @ enc.H_err + _gamma(w) * (aP @ np.abs(H))) * SAFE + _TINY
+    bc = P @ enc.wg
+    br = (aP @ enc.wg_err + _gamma(w) * (aP @ np.abs(enc.wg))) * SAFE + _TINY
+    big = np.max(np.abs(Mc), axis=1, keepdims=True)
+    usable = (np.abs(Mc) > 2.0 * Mr) & (np.abs(Mc) > 1e-10 * big)
+    return Preconditioner(P, basis, params, rank, Mc, Mr, bc, br, usable)
+
+
+def contract(pc: Preconditioner, lo, hi, sweeps: int = 8):
+    """Interval Gauss–Seidel (Jacobi order) on ``M τ + b = 0`` for a batch ``(B, m)``.
+
+    Returns ``(lo, hi, empty)``; sound: every solution in a box stays in its contraction.
+    """
+    Mc, Mr, bc, br = pc.Mc, pc.Mr, pc.bc, pc.br
+    m = Mc.shape[1]
+    mask = 1.0 - np.eye(m)
+    aMc = np.abs(Mc)
+    Dlo = np.nextafter(Mc - Mr, -np.inf)[None]
+    Dhi = np.nextafter(Mc + Mr, np.inf)[None]
+    use = pc.usable[None]
+    gm = _gamma(m)
+    gm1 = _gamma(m + 1)
+    empty = np.zeros(lo.shape[0], dtype=bool)
+    for _ in range(sweeps):
+        Tc = 0.5 * lo + 0.5 * hi
+        Tr = np.maximum(hi - Tc, Tc - lo) * (1.0 + 4.0 * _U)
+        aTc = np.abs(Tc)
+        Pc = Mc[None] * Tc[:, None, :]  # (B, w, m)
+        aPc = np.abs(Pc)
+        Pr = aMc[None] * Tr[:, None, :] + Mr[None] * (aTc + Tr)[:, None, :] + _U * aPc
+        # full rows must contain 0
+        Fc = Pc.sum(axis=2) + bc
+        Fr = (Pr.sum(axis=2) + br + gm1 * (aPc.sum(axis=2) + np.abs(bc))) * SAFE + _TINY
+        empty |= np.any(np.abs(Fc) > Fr, axis=1)
+        # rows without variable j
+        Sc = Pc @ mask  # (B, w, m)
+        Sr = (Pr @ mask + gm * (aPc @ mask)) * SAFE
+        Nc = -(bc[None, :, None] + Sc)
+        Nr = (br[None, :, None] + Sr + 2.0 * _U * np.abs(Nc)) * SAFE + _TINY
+        Nlo = np.nextafter(Nc - Nr, -np.inf)
+        Nhi = np.nextafter(Nc + Nr, np.inf)
+        qlo, qhi = arith.div(Nlo, Nhi, Dlo, Dhi)
+        qlo = np.where(use, qlo, -np.inf)
+        qhi = np.where(use, qhi, np.inf)
+        nlo = np.maximum(lo, qlo.max(axis=1))
+        nhi = np.minimum(hi, qhi.min(axis=1))
+        empty |= np.any(~(nlo <= nhi), axis=1)
+        w0 = hi - lo
+        w1 = nhi - nlo
+        lo, hi = nlo, nhi
+        if not np.any(w1 < 0.9 * w0):
+            break
+    return lo, hi, empty
+
+
+@dataclass
+class SearchOutcome:
+    status: str  # "certified" | "infeasible" | "undecided" | "incomplete"
+    u: np.ndarray | None = None  # (m,) the certified point (parametric wires exact)
+    params: list[int] = field(default_factory=list)  # 0-based indices of fixed wires
+    box_lo: np.ndarray | None = None  # unicity box (parametric wires degenerate)
+    box_hi: np.ndarray | None = None
+    enc_lo: np.ndarray | None = None  # tight enclosure of the solution
+    enc_hi: np.ndarray | None = None
+    undecided: list = field(default_factory=list)  # tension boxes (lo, hi)
+    boxes: int = 0
+    rounds: int = 0
+    time: float = 0.0
+    stopped_by: str | None = None
+
+
+def _certify(robot, enc, pc, sq, lo, hi, ulo, uhi, box_radius):
+    """Try to certify one solution per tension box; data of the first success or None."""
+    B, m = lo.shape
+    S, Pw = pc.basis, pc.params
+    rho = enc.rho
+    u = np.zeros((B, m))
+    if Pw.size:
+        tmid = 0.5 * lo[:, Pw] + 0.5 * hi[:, Pw]
+        u[:, Pw] = np.clip(control_point(robot, rho[Pw], tmid, Pw), ulo[Pw], uhi[Pw])
+        tP, _ = tension_mr(robot, enc, u)
+        rhs = -(enc.wg[None] + tP[:, Pw] @ enc.Ht[Pw])
+    else:
+        rhs = np.broadcast_to(-enc.wg, (B, enc.Ht.shape[1]))
+    tS = rhs @ sq.G.T
+    uS = control_point(robot, rho[S], tS, S)
+    ok = np.all(np.isfinite(uS) & (tS < robot.k[S]), axis=1)
+    if not np.any(ok):
+        return None
+    u, uS = u[ok], uS[ok]
+    u[:, S] = uS
+    xlo, xhi, klo, khi, proven, _, _ = sq.krawczyk(u, box_radius * (1.0 + np.abs(uS)))
+    if not np.any(proven):
+        return None
+    elo = np.maximum(klo, xlo)
+    ehi = np.minimum(khi, xhi)
+    E_lo = u.copy()
+    E_hi = u.copy()
+    E_lo[:, S] = elo
+    E_hi[:, S] = ehi
+    # the solution must be in the strokes / window and its tensions within the limits
+    inside = np.all((E_lo >= ulo) & (E_hi <= uhi), axis=1)
+    tlo, thi = tension_range(robot, enc, E_lo, E_hi)
+    inside &= np.all((tlo >= robot.tau_min) & (thi <= robot.tau_max), axis=1)
+    good = np.flatnonzero(proven & inside)
+    if good.size == 0:
+        return None
+    k = int(good[0])
+    X_lo, X_hi = u[k].copy(), u[k].copy()
+    X_lo[S], X_hi[S] = xlo[k], xhi[k]
+    return u[k], X_lo, X_hi, E_lo[k], E_hi[k]
+
+
+def search_controls(
+    robot: Robot,
+    enc: PoseEnclosure,
+    ulo,
+    uhi,
+    *,
+    max_boxes: int = 20000,
+    timeout: float | None = 10.0,
+    eps: float = 1e-9,
+    box_radius: float = 1e-6,
+    batch_size: int = 64,
+) -> SearchOutcome:
+    """Algorithm 1 over the control box ``[ulo, uhi]`` (see the module docstring)."""
+    with np.errstate(all="ignore"):
+        return _search(robot, enc, ulo, uhi, max_boxes, timeout, eps, box_radius, batch_size)
+
+
+def _search(robot, enc, ulo, uhi, max_boxes, timeout, eps, box_radius, batch_size):
+    t0 = time.perf_counter()
+    ulo = np.asarray(ulo, dtype=float)
+    uhi = np.asarray(uhi, dtype=float)
+    out = SearchOutcome("incomplete")
+    # tension domain: image of the control box, within the tension limits (outward)
+    tlo, thi = tension_range(robot, enc, ulo, uhi)
+    tlo = np.maximum(tlo, robot.tau_min)
+    thi = np.minimum(thi, robot.tau_max)
+    if np.any(~(tlo <= thi)) or np.any(ulo > uhi):
+        out.status = "infeasible"
+        out.time = time.perf_counter() - t0
+        return out
+    pc = preconditioner(enc)
+    out.params = [int(i) for i in pc.params]
+    sq = None
+    if pc.rank == enc.Ht.shape[1] and pc.basis.size == pc.rank:
+        try:
+            sq = SquareSystem(robot, enc, pc.basis)
+        except np.linalg.LinAlgError:
+            sq = None
+    dom_w = np.maximum(thi - tlo, 1e-300)
+    stack_lo = [tlo[None]]
+    stack_hi = [thi[None]]
+    while stack_lo:
+        if out.boxes >= max_boxes:
+            out.stopped_by = "max_boxes"
+            break
+        if timeout is not None and time.perf_counter() - t0 > timeout:
+            out.stopped_by = "timeout"
+            break
+        lo = np.concatenate(stack_lo)
+        hi = np.concatenate(stack_hi)
+        lo, rest_lo = lo[-batch_size:], lo[:-batch_size]
+        hi, rest_hi = hi[-batch_size:], hi[:-batch_size]
+        stack_lo = [rest_lo] if rest_lo.shape[0] else []
+        stack_hi = [rest_hi] if rest_hi.shape[0] else []
+        out.boxes += lo.shape[0]
+        out.rounds += 1
+        lo, hi, empty = contract(pc, lo, hi)
+        lo, hi = lo[~empty], hi[~empty]
+        if lo.shape[0] == 0:
+            continue
+        found = None if sq is None else _certify(robot, enc, pc, sq, lo, hi, ulo, uhi, box_radius)
+        if found is not None:
+            out.status = "certified"
+            out.u, out.box_lo, out.box_hi, out.enc_lo, out.enc_hi = found
+            break
+        width = hi - lo
+        small = np.all(width <= eps * (1.0 + np.abs(lo)), axis=1)
+        for k in np.flatnonzero(small):
+            if len(out.undecided) < 20:
+                out.undecided.append((lo[k].copy(), hi[k].copy()))
+            else:
+                out.stopped_by = "undecided-limit"
+        big = ~small
+        if np.any(big):
+            lo, hi = lo[big], hi[big]
+            j = np.argmax((hi - lo) / dom_w, axis=1)
+            rows = np.arange(lo.shape[0])
+            mid = 0.5 * lo[rows, j] + 0.5 * hi[rows, j]
+            alo, ahi = lo.copy(), hi.copy()
+            ahi[rows, j] = mid
+            blo, bhi = lo.copy(), hi.copy()
+            blo[rows, j] = mid
+            stack_lo.append(np.concatenate([blo, alo]))
+            stack_hi.append(np.concatenate([bhi, ahi]))
+    else:  # the buffer is empty: every box was discarded or reported undecided
+        out.status = "undecided" if out.undecided else "infeasible"
+    out.time = time.perf_counter() - t0
+    return out

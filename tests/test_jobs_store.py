@@ -1,0 +1,181 @@
+"""The SQLite job store: WAL, claims and leases, recovery, cancellation, pagination."""
+
+import json
+import sqlite3
+import threading
+
+import pytest
+
+from certsolve.jobs.store import JobStore, NewJob, QueueFull
+
+LIMITS = {"timeout": 10.0, "max_boxes": 1000, "memory_mb": 1024}
+
+
+def new(kind="solve", attempts=2, batch=None):
+    return NewJob(
+        kind=kind,
+        request=json.dumps({"kind": kind}),
+        limits=LIMITS,
+        max_attempts=attempts,
+        batch=batch,
+    )
+
+
+@pytest.fixture
+def store(tmp_path):
+    s = JobStore(tmp_path / "jobs.sqlite3")
+    yield s
+    s.close()
+
+
+def test_wal_mode_and_schema(store, tmp_path):
+    assert store.journal_mode() == "wal"
+    con = sqlite3.connect(tmp_path / "jobs.sqlite3")
+    assert con.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+    cols = {r[1] for r in con.execute("PRAGMA table_info(jobs)")}
+    assert {"id", "status", "request", "result", "lease", "attempts", "fseq"} <= cols
+    con.close()
+    # reopening an existing store keeps the jobs
+    (job_id,) = store.add([new()])
+    again = JobStore(tmp_path / "jobs.sqlite3")
+    assert again.get(job_id).status == "queued"
+    again.close()
+
+
+def test_claim_fifo_lease_and_finish(store):
+    ids = store.add([new(), new(), new()])
+    job, lease = store.claim(worker_pid=111)
+    assert job.id == ids[0] and job.status == "running" and job.attempts == 1
+    assert job.worker_pid == 111 and json.loads(job.request) == {"kind": "solve"}
+    job2, lease2 = store.claim(worker_pid=222)
+    assert job2.id == ids[1] and lease2 != lease
+    # progress and the cancel flag travel through the heartbeat
+    assert store.heartbeat(job.id, lease, {"boxes": 5}) == (True, False)
+    assert store.get(job.id).progress == {"boxes": 5}
+    # a wrong lease cannot write
+    assert store.heartbeat(job.id, "nope", {"boxes": 6}) == (False, True)
+    assert not store.finish(job.id, "nope", "done", result="{}")
+    assert store.finish(job.id, lease, "done", result='{"x": 1}')
+    row = store.get(job.id)
+    assert row.status == "done" and row.result == '{"x": 1}' and row.finished_at is not None
+    # finishing twice is refused
+    assert not store.finish(job.id, lease, "failed", error="late")
+    assert store.result_text(job.id) == ("done", '{"x": 1}')
+    assert store.result_text("missing") is None
+    with pytest.raises(ValueError):
+        store.finish(job2.id, lease2, "running")
+
+
+def test_claim_is_atomic_across_threads(tmp_path):
+    path = tmp_path / "jobs.sqlite3"
+    store = JobStore(path)
+    store.add([new() for _ in range(40)])
+    got: list[str] = []
+    lock = threading.Lock()
+
+    def worker(pid):
+        s = JobStore(path)
+        while (c := s.claim(pid)) is not None:
+            with lock:
+                got.append(c[0].id)
+        s.close()
+
+    threads = [threading.Thread(target=worker, args=(i,)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(got) == 40 and len(set(got)) == 40
+    store.close()
+
+
+def test_release_requeues_then_fails_after_max_attempts(store):
+    (job_id,) = store.add([new(attempts=2)])
+    job, lease = store.claim(10)
+    assert store.release("worker died", worker_pids=[10]) == [(job_id, "queued")]
+    row = store.get(job_id)
+    assert row.status == "queued" and row.lease is None and "worker died" in row.error
+    # the old worker's lease is void
+    assert not store.finish(job_id, lease, "done", result="{}")
+    job, lease = store.claim(11)
+    assert job.attempts == 2
+    assert store.release("worker died", worker_pids=[11]) == [(job_id, "failed")]
+    row = store.get(job_id)
+    assert row.status == "failed" and "attempt 2 of 2" in row.error
+    # other workers' jobs are untouched
+    (other,) = store.add([new()])
+    store.claim(12)
+    assert store.release("x", worker_pids=[99]) == []
+    assert store.get(other).status == "running"
+
+
+def test_restart_recovery_and_orderly_shutdown(store):
+    a, b, c = store.add([new(), new(), new()])
+    store.claim(1)
+    store.claim(2)
+    # an orderly shutdown gives the attempt back
+    assert sorted(store.release("stopped", worker_pids=[1], count_attempt=False)) == [(a, "queued")]
+    assert store.get(a).attempts == 0 and store.get(a).error is None
+    # recovery after a crash: every running job (no pid filter) is re-queued
+    assert store.release("service restarted") == [(b, "queued")]
+    assert store.get(b).attempts == 1
+    assert store.counts() == {"queued": 3, "running": 0, "done": 0, "failed": 0, "cancelled": 0}
+    assert store.get(c).status == "queued"
+
+
+def test_cancel_queued_and_running(store):
+    a, b = store.add([new(), new()])
+    row = store.request_cancel(a)
+    assert row.status == "cancelled" and row.finished_at is not None
+    job, lease = store.claim(5)
+    assert job.id == b  # the cancelled job is never claimed
+    row = store.request_cancel(b)
+    assert row.status == "running" and row.cancel_requested_at is not None
+    assert store.heartbeat(b, lease, None) == (True, True)
+    assert store.finish(b, lease, "cancelled", result='{"partial": true}')
+    assert store.request_cancel("nope") is None
+    # a worker dying while its job is being cancelled ends it cancelled, not re-queued
+    (c,) = store.add([new()])
+    store.claim(6)
+    store.request_cancel(c)
+    assert store.release("died", worker_pids=[6]) == [(c, "cancelled")]
+
+
+def test_pagination_and_filters(store):
+    ids = store.add([new(kind="solve") for _ in range(7)])
+    ids += store.add([new(kind="fk", batch="b1") for _ in range(3)])
+    seen, cursor = [], None
+    while True:
+        rows, cursor = store.list(limit=3, cursor=cursor)
+        seen += [r.id for r in rows]
+        if cursor is None:
+            break
+    assert seen == ids[::-1]  # newest first, each once
+    rows, nxt = store.list(kind="fk", limit=10)
+    assert [r.id for r in rows] == ids[7:][::-1] and nxt is None
+    rows, _ = store.list(batch="b1", oldest_first=True)
+    assert [r.id for r in rows] == ids[7:]
+    job, lease = store.claim(1)
+    store.finish(job.id, lease, "done", result="{}")
+    rows, _ = store.list(status="done")
+    assert [r.id for r in rows] == [ids[0]]
+    assert store.counts(batch="b1")["queued"] == 3
+
+
+def test_finish_order_is_recorded(store):
+    ids = store.add([new() for _ in range(4)])
+    claims = [store.claim(i) for i in range(4)]
+    # finish in reverse order: finished_since reports completion order
+    for job, lease in reversed(claims):
+        store.finish(job.id, lease, "done", result="1")
+    rows = store.finished_since(0)
+    assert [r.id for r in rows] == ids[::-1]
+    assert store.finished_since(rows[1].fseq)[0].id == ids[1]
+    assert rows[0].result == "1"
+
+
+def test_queue_limit(store):
+    store.add([new(), new()], max_queued=3)
+    with pytest.raises(QueueFull):
+        store.add([new(), new()], max_queued=3)
+    assert store.counts()["queued"] == 2  # all or none
