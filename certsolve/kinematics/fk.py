@@ -184,6 +184,8 @@ class FKSolver:
             P = x[: k * d].reshape(k, d)
             points = f.L @ P
             pos, R = rotation_from_points(f, P)
+            if x.size == k * d:  # reduced formulation: lengths from the points
+                rho = np.linalg.norm(r.A - points, axis=1)
         else:
             pos, R = pose_from_angles(f, x)
             points = pos + r.B @ R.T

@@ -43,14 +43,23 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..expr import Constraint, System, const, cos, esum, param, sin, sqr, var
+from ..expr import Constraint, System, const, cos, esum, param, sin, sqr, sqrt, var
 from ..expr.node import Expr
 from ..robot.geometry import rotation_2d, rotation_zyx
 from ..robot.model import Robot
 
 __all__ = ["FKFormulation", "build_formulation", "FORMULATIONS", "choose_formulation"]
 
-FORMULATIONS = ("auto", "general-19", "T-16", "almost-planar-13", "planar-10", "points", "pose")
+FORMULATIONS = (
+    "auto",
+    "general-19",
+    "T-16",
+    "almost-planar-13",
+    "planar-10",
+    "points",
+    "reduced",
+    "pose",
+)
 
 
 @dataclass
@@ -171,7 +180,64 @@ def _lin(coefs: np.ndarray, P: list[list[Expr]], c: int) -> Expr:
 # -- the point formulations --------------------------------------------------------------------
 
 
-def _points_formulation(robot: Robot, name: str, k: int) -> FKFormulation:
+def _eliminating_moments(robot, B, G, L, w, P, d):
+    """Redundant equilibrium equations that eliminate wires (statics, section III).
+
+    The moment of all forces about a platform point ``B_p`` has no term for the wires
+    attached at ``p``; about the line through two attachment points ``B_p, B_q`` it has
+    no term for the wires attached at either.  Fewer wide tension terms make these
+    equations much sharper for HC4 than the six equilibrium equations alone.
+    Returns a list of expressions (each = 0 at every equilibrium).
+    """
+    W = [float(v) for v in robot.weight]
+    groups: dict[tuple, list[int]] = {}
+    for i in range(robot.m):
+        groups.setdefault(tuple(np.round(L[i], 12)), []).append(i)
+    keys = list(groups)
+    out = []
+
+    def moment_about(pt, skip):
+        comps = [[] for _ in range(3 if d == 3 else 1)]
+        for i in range(robot.m):
+            if i in skip:
+                continue
+            r = [B[i][c] - pt[c] for c in range(d)]
+            a = [float(robot.A[i, c]) - pt[c] for c in range(d)]
+            if d == 3:
+                m = _cross(r, a)
+                for c in range(3):
+                    comps[c].append(w[i] * m[c])
+            else:
+                comps[0].append(w[i] * (r[0] * a[1] - r[1] * a[0]))
+        if any(v != 0.0 for v in W):
+            g = [G[c] - pt[c] for c in range(d)]
+            mg = _cross(g, W) if d == 3 else [g[0] * W[1] - g[1] * W[0]]
+            for c in range(len(comps)):
+                comps[c].append(mg[c])
+        return comps
+
+    for kp in keys:
+        p_idx = groups[kp]
+        pt = B[p_idx[0]]
+        comps = moment_about(pt, set(p_idx))
+        out.extend(esum(c) for c in comps if c)
+        if d != 3:
+            continue
+        for kq in keys:
+            if kq <= kp:
+                continue
+            q_idx = groups[kq]
+            e = [B[q_idx[0]][c] - pt[c] for c in range(3)]
+            comps2 = moment_about(pt, set(p_idx) | set(q_idx))
+            terms = [esum(comps2[c]) * e[c] for c in range(3) if comps2[c]]
+            if terms:
+                out.append(esum(terms))
+    return out
+
+
+def _points_formulation(
+    robot: Robot, name: str, k: int, redundant_moments: bool = True, reduced: bool = False
+) -> FKFormulation:
     robot.require_elastic("forward kinematics")
     d = robot.dim
     pts, _ = robot.attachment_groups()
@@ -185,14 +251,19 @@ def _points_formulation(robot: Robot, name: str, k: int) -> FKFormulation:
     lG = _affine_coordinates(Q, robot.com[None])[0]
     axes = "xyz"[:d]
     P = [[var(f"{a}{j + 1}") for a in axes] for j in range(k)]
-    rho = [var(f"rho{i + 1}") for i in range(robot.m)]
     dom = robot.domain
     O = dom.mean(axis=1)
 
     eqs: list[Expr] = []
     B = [[_lin(L[i], P, c) for c in range(d)] for i in range(robot.m)]
-    for i in range(robot.m):  # lengths
-        eqs.append(esum(sqr(B[i][c] - float(robot.A[i, c])) for c in range(d)) - sqr(rho[i]))
+    if reduced:  # ρ_i = |A_i - B_i| eliminated: coordinates are the only unknowns
+        rho = [sqrt(esum(sqr(B[i][c] - float(robot.A[i, c])) for c in range(d)))
+               for i in range(robot.m)]
+    else:
+        rho = [var(f"rho{i + 1}") for i in range(robot.m)]
+        for i in range(robot.m):  # lengths
+            eqs.append(esum(sqr(B[i][c] - float(robot.A[i, c])) for c in range(d))
+                       - sqr(rho[i]))
     for a, b in itertools.combinations(range(k), 2):  # rigidity
         dab = float(np.sum((Q[a] - Q[b]) ** 2))
         eqs.append(esum(sqr(P[a][c] - P[b][c]) for c in range(d)) - dab)
@@ -247,11 +318,14 @@ def _points_formulation(robot: Robot, name: str, k: int) -> FKFormulation:
         seen.add(key)
         for c in range(d):
             constraints.append(Constraint(_lin(coefs, P, c), float(dom[c, 0]), float(dom[c, 1])))
+    if redundant_moments:
+        for e in _eliminating_moments(robot, B, G, L, w, P, d):
+            constraints.append(Constraint(e, 0.0, 0.0, redundant=True))
     # wires sharing an attachment: the difference of their length equations is linear
     groups: dict[tuple, list[int]] = {}
     for i in range(robot.m):
         groups.setdefault(tuple(np.round(L[i], 15)), []).append(i)
-    for members in groups.values():
+    for members in ([] if reduced else groups.values()):
         for a, b in zip(members, members[1:]):
             Aa, Ab = robot.A[a], robot.A[b]
             lhs = esum(2.0 * float(Aa[c] - Ab[c]) * B[a][c] for c in range(d))
@@ -260,11 +334,20 @@ def _points_formulation(robot: Robot, name: str, k: int) -> FKFormulation:
                 Constraint(sqr(rho[a]) - sqr(rho[b]) + lhs - const_term, 0.0, 0.0, redundant=True)
             )
 
-    names = [f"{a}{j + 1}" for j in range(k) for a in axes] + [f"rho{i + 1}" for i in
-                                                               range(robot.m)]
-    domain = np.vstack([np.tile(dom, (k, 1)), np.zeros((robot.m, 2))])
-    u0 = np.zeros(robot.m)
-    system = System(names, _with_rho(domain, robot, u0, d, k), eqs, constraints, name=name,
+    names = [f"{a}{j + 1}" for j in range(k) for a in axes]
+    if reduced:
+        # the tension limits become constraints on the lengths (eq. 7), with u as parameter
+        for i in range(robot.m):
+            c = robot.V[i] + robot.K[i] * param(f"u{i + 1}")
+            lo_t = float(robot.k[i] * robot.L0[i] / (robot.k[i] - robot.tau_min[i]))
+            hi_t = float(robot.k[i] * robot.L0[i] / (robot.k[i] - robot.tau_max[i]))
+            constraints.append(Constraint(rho[i] + c, lo_t, hi_t))
+        domain = np.tile(dom, (k, 1))
+    else:
+        names += [f"rho{i + 1}" for i in range(robot.m)]
+        domain = _with_rho(np.vstack([np.tile(dom, (k, 1)), np.zeros((robot.m, 2))]), robot,
+                           np.zeros(robot.m), d, k)
+    system = System(names, domain, eqs, constraints, name=name,
                     parameters={f"u{i + 1}": 0.0 for i in range(robot.m)})
     return FKFormulation(name, robot, system, "points", Q=Q, L=L, lG=lG,
                          info={"points": [int(i) for i in sel]})
@@ -284,6 +367,8 @@ def search_domain(form: FKFormulation, u) -> tuple[np.ndarray, bool]:
     u = np.asarray(u, dtype=float)
     lo, hi = _rho_domain(robot, u, robot.domain)
     dom = form.system.domain.copy()
+    if not any(v.startswith("rho") for v in form.system.variables):
+        return dom, bool(np.all(lo <= hi))
     nr = robot.m
     dom[-nr:, 0] = lo
     dom[-nr:, 1] = np.maximum(hi, lo)
@@ -372,6 +457,10 @@ def build_formulation(robot: Robot, name: str = "auto") -> FKFormulation:
         name = choose_formulation(robot)
     if name == "pose":
         return _pose_formulation(robot)
+    if name == "reduced":
+        base = choose_formulation(robot)
+        k = 4 if base == "general-19" else 3
+        return _points_formulation(robot, f"reduced-{base}", k, reduced=True)
     if name == "planar-10":
         if robot.dof != 3:
             raise ValueError("planar-10 is for planar robots (dof 3)")
