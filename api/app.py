@@ -66,6 +66,7 @@ class BatchCreated(BaseModel):
 
 
 class JobProgress(BaseModel):
+    model_config = ConfigDict(extra="allow")  # e.g. inside / outside of a workspace job
     boxes: int | None = None
     pending: int | None = None
     solutions: int | None = None

@@ -21,7 +21,7 @@ def make_settings(tmp_path, **kw):
     base = dict(
         data_dir=tmp_path / "data",
         workers=0,
-        max_body_bytes=200_000,
+        max_body_bytes=300_000,
         max_batch=20,
         max_queued=50,
         max_timeout=100.0,
@@ -220,8 +220,13 @@ def test_limits_and_sizes(client):
     r = client.post("/v1/jobs", json={"kind": "isotropic-map", "robot": PLANAR, "params": grid})
     assert r.status_code == 422 and "at most" in r.json()["error"]
     # over-long system text, body size, batch size
-    r = client.post("/v1/jobs", json={"kind": "solve", "system": "x" * 200_001})
-    assert r.status_code == 413
+    fields = detail_fields(client.post("/v1/jobs", json={"kind": "solve", "system": "x" * 200_001}))
+    assert "200000 characters" in fields["system"]
+    r = client.post("/v1/jobs", json={"kind": "solve", "system": "x" * 300_001})
+    assert r.status_code == 413 and "too large" in r.json()["error"]
+    chunks = iter([b'{"kind": "solve", "system": "', b"x" * 200_000, b"x" * 200_000, b'"}'])
+    r = client.post("/v1/jobs", content=chunks, headers={"content-type": "application/json"})
+    assert r.status_code == 413  # chunked, no Content-Length
     r = client.post("/v1/jobs", json={"kind": "solve", "system": "/" * 150_000})
     assert r.status_code == 422  # not a system, though small enough
     r = client.post("/v1/jobs/batch", json={"jobs": [{"kind": "solve", "system": CIRCLE}] * 21})

@@ -9,6 +9,7 @@ not the IK's code paths.
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -219,7 +220,7 @@ def test_alg1_certified_solution():
     assert res.status == "ok" and res.feasible
     cert = res.certificate
     assert cert.kind == "unique-in-box" and len(cert.fixed) == 1
-    (j, val), = cert.fixed.items()
+    ((j, val),) = cert.fixed.items()
     assert res.u[j - 1] == val
     elo, ehi = cert.enclosure
     assert np.all(elo <= res.u) and np.all(res.u <= ehi) and np.max(ehi - elo) < 1e-9
@@ -315,3 +316,56 @@ def test_pose_forms_and_errors():
         inverse_kinematics(robot, [111, 58, 107], "alg3")
     with pytest.raises(ValueError, match="finite"):
         inverse_kinematics(robot, Pose(np.array([np.nan, 1.0, 2.0]), np.eye(3)), "alg2")
+
+
+def test_alg1_window_matches_exact_lambda_interval():
+    """Independent decision: on the line τ = τ_p + λ v the window and the tension limits
+    are an interval of λ per wire; Algorithm 1 certifies iff their intersection is not empty
+    (decided here in floating point, skipping windows within 1e-9 of the edge)."""
+    robot = load("marionet")
+    pose = Pose.from_params(6, [108, 60, 104, 2, -1, 3])
+    H = wrench_matrix(robot, pose.position, pose.rotation)[0]
+    wg = gravity_wrench(robot, pose.rotation)[0]
+    rho = wire_geometry(robot, pose.position, pose.rotation)[0][0]
+    ch = distribute_tensions(H, wg, robot.tau_min, robot.tau_max)
+    tp, v = ch.particular, ch.null_vector
+    u_star = inverse_kinematics(robot, pose, "alg1").u
+    rng = np.random.default_rng(3)
+    seen = set()
+    for _ in range(80):
+        c = u_star + rng.uniform(-0.08, 0.08, 7)
+        lo, hi = c - 0.05, c + 0.05
+        tlo = np.maximum(tension(robot, rho, lo), robot.tau_min)
+        thi = np.minimum(tension(robot, rho, hi), robot.tau_max)
+        a, b = (tlo - tp) / v, (thi - tp) / v
+        gap = np.min(np.maximum(a, b)) - np.max(np.minimum(a, b))
+        res = inverse_kinematics(robot, pose, "alg1", u_last=c, window=0.1)
+        if gap > 1e-9:
+            assert res.status == "ok"
+            assert np.all(res.u >= lo - 1e-12) and np.all(res.u <= hi + 1e-12)
+        elif gap < -1e-9:
+            assert res.status == "infeasible"
+        seen.add(res.status)
+    assert seen == {"ok", "infeasible"}
+
+
+def test_two_dimensional_null_space():
+    """8 wires on a 6-dof platform: LP tensions, two parametric / fixed wires."""
+    spec = json.loads(Path("examples/robots/marionet.json").read_text())
+    w = dict(spec["wires"][3], base=[100.0, 120.0, 180.0], platform=[0.0, 5.0, 10.0])
+    rho = np.linalg.norm(np.array(w["base"]) - np.array([111, 58, 107]) - np.array(w["platform"]))
+    w["L0"] = round((rho + 100) * (1 - 3 / 383), 3)
+    spec["wires"].append(w)
+    spec["name"] = "marionet-8"
+    robot = Robot.load(spec)
+    pose = Pose.from_params(6, [105, 62, 100, 3, -2, 1])
+    t = inverse_kinematics(robot, pose, "tension")
+    assert t.details["distribution"] == "lp" and t.status == "ok"
+    a1 = inverse_kinematics(robot, pose, "alg1")
+    assert a1.status == "ok" and len(a1.certificate.fixed) == 2
+    a2 = inverse_kinematics(robot, pose, "alg2")
+    assert a2.certificate.kind == "unique-in-box" and len(a2.details["fixed_wires"]) == 2
+    assert a2.details["fixed_wires"][0] == 1
+    for r in (t, a1, a2):
+        assert forward_residual(robot, pose, r.u)[0] < 1e-9
+    assert inverse_kinematics(robot, [111, 58, 107, 0, 20, 0], "alg1").status == "infeasible"

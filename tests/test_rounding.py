@@ -7,8 +7,28 @@ import pytest
 from certsolve.interval.rounding import down, up
 
 MAX = np.finfo(float).max
-SPECIALS = [0.0, -0.0, np.inf, -np.inf, 5e-324, -5e-324, 2.0**-1022, -(2.0**-1022), MAX, -MAX,
-            1.0, -1.0, 2.0, -2.0, 0.5, -0.5, 3.0, 2.0**-1070, 1e-310, -1e-310]
+SPECIALS = [
+    0.0,
+    -0.0,
+    np.inf,
+    -np.inf,
+    5e-324,
+    -5e-324,
+    2.0**-1022,
+    -(2.0**-1022),
+    MAX,
+    -MAX,
+    1.0,
+    -1.0,
+    2.0,
+    -2.0,
+    0.5,
+    -0.5,
+    3.0,
+    2.0**-1070,
+    1e-310,
+    -1e-310,
+]
 
 
 def _samples(n, seed=0):

@@ -1,5 +1,161 @@
-"""Placeholder: sub-commands of this module are being written (see certsolve/cli/__init__.py)."""
+"""``certsolve fk ROBOT --u ...``: every equilibrium pose for a control vector."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from ..kinematics.fk import forward_kinematics, with_tau_max
+from ..kinematics.fk_systems import FORMULATIONS
+from ..kinematics.tracking import Tracker
+from ..robot.geometry import parse_pose
+from ..robot.model import Robot
+from .common import CliError, parse_floats, print_json, progress_reporter
 
 
 def register(sub) -> None:
-    """Add this module's sub-commands to the parser (none yet)."""
+    p = sub.add_parser(
+        "fk",
+        help="forward kinematics: all certified equilibrium poses for a control vector u",
+        description="Forward kinematics of an elastic-wire robot (Merlet 2007): every pose in "
+        "the search domain where the platform is in equilibrium for the control vector u, "
+        "each certified to be the only solution in its box.  With --near, one real-time "
+        "tracking step (Newton + Krawczyk certificate) instead.",
+    )
+    p.add_argument("robot", help="robot JSON file")
+    p.add_argument("--u", required=True, help="control vector u1,...,um (cm), one per wire")
+    p.add_argument(
+        "--formulation",
+        default="auto",
+        choices=FORMULATIONS,
+        help="equation system (default: the paper's choice for the robot)",
+    )
+    p.add_argument(
+        "--tau-max", type=float, default=None, help="override every wire's maximum tension (N)"
+    )
+    p.add_argument("--eps", type=float, default=1e-8, help="width below which boxes stop")
+    p.add_argument("--timeout", type=float, default=None, help="time limit (s)")
+    p.add_argument("--max-boxes", type=int, default=None, help="limit on processed boxes")
+    p.add_argument("--workers", type=int, default=1, help="worker processes")
+    p.add_argument("--verify", action="store_true", help="re-prove solutions with mpmath")
+    p.add_argument(
+        "--seed-planar",
+        action="store_true",
+        help="almost-planar robots: search around the planar solutions first",
+    )
+    p.add_argument(
+        "--seeded-only",
+        action="store_true",
+        help="with --seed-planar: skip the rest of the domain (incomplete answer)",
+    )
+    p.add_argument(
+        "--near",
+        default=None,
+        help="tracking: a known nearby pose x,y,z[,yaw,pitch,roll] (cm, degrees)",
+    )
+    p.add_argument(
+        "--half-width",
+        type=float,
+        default=0.1,
+        help="tracking: half-width (cm) of the certified uniqueness box",
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    robot = with_tau_max(Robot.load(args.robot), args.tau_max)
+    u = parse_floats(args.u, "--u", robot.m)
+    if args.seeded_only and not args.seed_planar:
+        raise CliError("--seeded-only needs --seed-planar")
+    if not args.eps > 0:
+        raise CliError("--eps must be positive")
+    if args.workers < 1:
+        raise CliError("--workers must be at least 1")
+    if args.near is not None:
+        near = parse_pose(robot.dof, args.near)
+        res = Tracker(robot, args.formulation).step(u, near, args.half_width)
+        if args.json:
+            print_json(res.to_dict())
+        else:
+            print(format_track(robot, res))
+        return 0
+    progress, stop = progress_reporter(not args.json)
+    try:
+        res = forward_kinematics(
+            robot,
+            u,
+            formulation=args.formulation,
+            eps=args.eps,
+            timeout=args.timeout,
+            max_boxes=args.max_boxes,
+            seed_planar=args.seed_planar,
+            seeded_only=args.seeded_only,
+            progress=progress,
+            workers=args.workers,
+            verify=args.verify,
+        )
+    finally:
+        stop()
+    if args.json:
+        print_json(res.to_dict())
+    else:
+        print(format_result(robot, res))
+    return 0
+
+
+def _pose_lines(robot, s) -> list[str]:
+    pos = ", ".join(f"{v:.6f}" for v in s.position)
+    ang = ", ".join(f"{v:.4f}" for v in s.euler_deg)
+    names = "yaw, pitch, roll" if robot.dof == 6 else "theta"
+    lines = [
+        f"  position ({'x, y, z' if robot.dof == 6 else 'x, y'}) = ({pos}) cm",
+        f"  orientation ({names}) = ({ang}) deg",
+        "  wire      rho (cm)    tau (N)    B_i (world, cm)",
+    ]
+    for i in range(robot.m):
+        b = ", ".join(f"{v:9.4f}" for v in s.platform_points[i])
+        lines.append(f"  {i + 1:4d}  {s.rho[i]:12.6f}  {s.tau[i]:9.5f}    ({b})")
+    return lines
+
+
+def format_result(robot, res) -> str:
+    st = res.stats
+    lines = [
+        f"{robot.name}: {res.formulation}, u = {np.array2string(res.u, precision=4)}",
+        f"{res.status}: {len(res.solutions)} certified pose(s), {len(res.undecided)} undecided, "
+        f"{len(res.pending)} pending; {st.boxes} boxes, {st.time:.2f} s"
+        + (f", stopped by {st.stopped_by}" if st.stopped_by else ""),
+    ]
+    if res.seeding:
+        sd = res.seeding
+        lines.append(
+            f"planar seeding: {sd['planar_solutions']} planar solution(s), "
+            f"{sd['solutions_in_seeds']} found in the seed boxes after "
+            f"{sd['time_to_seeded_solutions']:.2f} s; rest of the domain "
+            f"{'searched' if sd['rest_of_domain_searched'] else 'NOT searched'}"
+        )
+    lines.extend(f"note: {n}" for n in res.notes if not n.startswith("compiled"))
+    for k, s in enumerate(res.solutions, 1):
+        tag = s.certificate + (" (verified)" if s.verified else "")
+        lines.append(f"pose {k} [{tag}]")
+        lines.extend(_pose_lines(robot, s))
+    for k, und in enumerate(res.undecided, 1):
+        lines.append(f"undecided {k} ({und.reason}): box {und.box}")
+    return "\n".join(lines)
+
+
+def format_track(robot, res) -> str:
+    head = (
+        f"tracking step: {'certified' if res.certified else 'NOT certified'}, "
+        f"{res.iterations} Newton iteration(s), {1e3 * res.time:.3f} ms"
+    )
+    if res.certified:
+        head += f"; the only solution with every chosen point within ±{res.half_width:g} cm"
+    lines = [head]
+    if res.message:
+        lines.append(f"note: {res.message}")
+    if res.pose is not None:
+        lines.extend(_pose_lines(robot, res.pose))
+    return "\n".join(lines)

@@ -1,5 +1,349 @@
-"""Placeholder: sub-commands of this module are being written (see certsolve/cli/__init__.py)."""
+"""``certsolve isotropic`` and ``certsolve workspace``: force indexes (Krut et al. 2004).
+
+* ``certsolve isotropic ROBOT --at x,y[,z,...]``: the maximum isotropic force at one pose and
+  the force polytope's facets;
+* ``certsolve isotropic ROBOT --grid xmin,xmax,ymin,ymax[,nx,ny] [--plot map.png]``: the index
+  over a grid of positions (fixed orientation), optionally drawn as a heat map;
+* ``certsolve workspace ROBOT --min-force F --box ... --eps E [--plot paving.png]``: the
+  certified paving of ``{f_min ≥ F}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+
+import numpy as np
+
+from ..robot import Robot, parse_pose
+from .common import CliError, parse_floats, print_json
 
 
 def register(sub) -> None:
-    """Add this module's sub-commands to the parser (none yet)."""
+    p = sub.add_parser(
+        "isotropic",
+        help="maximum isotropic force at a pose or over a grid (Krut et al. 2004)",
+        description="Maximum isotropic force: the radius of the largest ball of forces, "
+        "centred at the load's bias (-gravity), inside the force polytope at the moment the "
+        "load requires. Negative: the pose cannot balance the load.",
+    )
+    p.add_argument("robot", help="robot file (JSON)")
+    where = p.add_mutually_exclusive_group(required=True)
+    where.add_argument(
+        "--at", metavar="POSE", help="x,y (dof 2), x,y[,theta] (dof 3), x,y,z[,yaw,pitch,roll]"
+    )
+    where.add_argument(
+        "--grid", metavar="XMIN,XMAX,YMIN,YMAX[,NX,NY]", help="grid of positions (default 200x200)"
+    )
+    p.add_argument("--z", type=float, default=None, help="height of the grid (dof 6; cm)")
+    p.add_argument(
+        "--orientation",
+        metavar="ANGLES",
+        default=None,
+        help="fixed orientation of the grid: theta (dof 3) or yaw,pitch,roll (dof 6), degrees",
+    )
+    p.add_argument(
+        "--algorithm",
+        choices=("shifting", "krut"),
+        default="shifting",
+        help="polytope algorithm at one pose: hyperplane shifting (default) or the paper's six "
+        "steps (small robots only)",
+    )
+    p.add_argument(
+        "--external", metavar="WRENCH", default=None, help="extra constant wrench (N, N*cm)"
+    )
+    p.add_argument(
+        "--ellipse", action="store_true", help="with --at: also the largest centred ellipse"
+    )
+    p.add_argument("--plot", metavar="PNG", default=None, help="heat map of the grid (PNG)")
+    p.add_argument("--vmax", type=float, default=None, help="top of the colour scale (N)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run_isotropic)
+    _allow_negative_lists(p)
+
+    w = sub.add_parser(
+        "workspace",
+        help="certified workspace where the maximum isotropic force is at least F",
+        description="Pave a box of positions into boxes proven inside (f_min >= F at every "
+        "pose), proven outside (f_min < F at every pose) and boundary boxes narrower than eps.",
+    )
+    w.add_argument("robot", help="robot file (JSON)")
+    w.add_argument("--min-force", type=float, required=True, metavar="F", help="required force (N)")
+    w.add_argument(
+        "--box",
+        required=True,
+        metavar="XMIN,XMAX,YMIN,YMAX[,ZMIN,ZMAX]",
+        help="box of positions (cm; z for dof 6)",
+    )
+    w.add_argument("--eps", type=float, required=True, help="width below which boxes stop (cm)")
+    w.add_argument(
+        "--orientation",
+        metavar="ANGLES",
+        default=None,
+        help="theta (dof 3) or yaw,pitch,roll (dof 6) in degrees; each a number or lo:hi",
+    )
+    w.add_argument("--eps-angle", type=float, default=1.0, help="angle width to stop (degrees)")
+    w.add_argument(
+        "--external", metavar="WRENCH", default=None, help="extra constant wrench (N, N*cm)"
+    )
+    w.add_argument("--timeout", type=float, default=None, help="time limit in seconds")
+    w.add_argument("--max-boxes", type=int, default=None, help="limit on processed boxes")
+    w.add_argument("--plot", metavar="PNG", default=None, help="picture of the paving (PNG)")
+    w.add_argument("--no-boxes", action="store_true", help="omit the box lists from --json")
+    w.add_argument("--json", action="store_true", help="print one JSON object")
+    w.set_defaults(func=run_workspace)
+    _allow_negative_lists(w)
+
+
+def _allow_negative_lists(parser: argparse.ArgumentParser) -> None:
+    """Let ``--grid -100,100,...`` read as a value, not as an option (argparse only treats
+    plain negative numbers that way); ``--grid=-100,...`` works in any case."""
+    parser._negative_number_matcher = re.compile(r"^-(\d|\.\d)[\d.eE+,:-]*$")
+
+
+# -- helpers ------------------------------------------------------------------------------
+def _external(robot: Robot, text: str | None):
+    if text is None:
+        return None
+    return parse_floats(text, "--external", robot.wrench_dim)
+
+
+def _fixed_orientation(robot: Robot, text: str | None):
+    if text is None:
+        return None
+    if robot.dof == 2:
+        raise CliError("--orientation: a point robot (dof 2) has no orientation")
+    n = 1 if robot.dof == 3 else 3
+    vals = parse_floats(text, "--orientation", n)
+    return vals
+
+
+def _orientation_ranges(robot: Robot, text: str | None):
+    if text is None:
+        return None
+    if robot.dof == 2:
+        raise CliError("--orientation: a point robot (dof 2) has no orientation")
+    n = 1 if robot.dof == 3 else 3
+    items = [t for t in text.replace(" ", "").split(",") if t != ""]
+    if len(items) != n:
+        raise CliError(f"--orientation: expected {n} angle(s), got {len(items)}")
+    out = []
+    for it in items:
+        parts = it.split(":")
+        try:
+            vals = [float(x) for x in parts]
+        except ValueError:
+            raise CliError(f"--orientation: {it!r} is not a number or lo:hi") from None
+        if len(vals) == 1:
+            out.append(vals[0])
+        elif len(vals) == 2:
+            if vals[0] > vals[1]:
+                raise CliError(f"--orientation: {it!r} needs lo <= hi")
+            out.append((vals[0], vals[1]))
+        else:
+            raise CliError(f"--orientation: {it!r} is not a number or lo:hi")
+    return out[0] if n == 1 else out
+
+
+def _fmt(x) -> str:
+    return "n/a" if x is None else f"{x:.6g}"
+
+
+# -- isotropic ------------------------------------------------------------------------------
+def run_isotropic(args: argparse.Namespace) -> int:
+    from ..force import isotropic_force, isotropic_map
+
+    robot = Robot.load(args.robot)
+    external = _external(robot, args.external)
+    if args.at is not None:
+        for opt in ("z", "orientation", "plot"):
+            if getattr(args, opt) is not None:
+                raise CliError(f"--{opt} goes with --grid (with --at, put angles in the pose)")
+        try:
+            pose = parse_pose(robot.dof, args.at)
+        except ValueError as exc:
+            raise CliError(f"--at: {exc}") from None
+        try:
+            res = isotropic_force(
+                robot, pose, algorithm=args.algorithm, external=external, ellipse=args.ellipse
+            )
+        except ValueError as exc:
+            raise CliError(f"--algorithm {args.algorithm}: {exc}") from None
+        if args.json:
+            print_json(res.to_dict())
+        else:
+            print(format_isotropic(res))
+        return 0
+
+    vals = parse_floats(args.grid, "--grid")
+    if len(vals) not in (4, 6):
+        raise CliError("--grid: expected xmin,xmax,ymin,ymax[,nx,ny]")
+    xmin, xmax, ymin, ymax = vals[:4]
+    if not all(np.isfinite(vals)) or xmin > xmax or ymin > ymax:
+        raise CliError("--grid: need finite bounds with xmin <= xmax and ymin <= ymax")
+    nx, ny = (200, 200) if len(vals) == 4 else (vals[4], vals[5])
+    if nx != int(nx) or ny != int(ny) or not (1 <= nx <= 5000 and 1 <= ny <= 5000):
+        raise CliError("--grid: nx and ny must be integers between 1 and 5000")
+    if args.z is not None and robot.dof != 6:
+        raise CliError(f"--z: a dof-{robot.dof} robot is planar")
+    if args.algorithm != "shifting":
+        raise CliError("--algorithm: maps always use hyperplane shifting")
+    if args.ellipse:
+        raise CliError("--ellipse goes with --at")
+    rotation = _fixed_orientation(robot, args.orientation)
+    xs = np.linspace(xmin, xmax, int(nx))
+    ys = np.linspace(ymin, ymax, int(ny))
+    res = isotropic_map(robot, xs, ys, z=args.z, rotation=rotation, external=external)
+    if args.plot:
+        from ..force.plots import plot_map
+
+        plot_map(res, args.plot, vmax=args.vmax)
+    if args.json:
+        out = res.to_dict()
+        if args.plot:
+            out["plot"] = args.plot
+        print_json(out)
+    else:
+        print(format_map(res, args.plot))
+    return 0
+
+
+def format_isotropic(res) -> str:
+    where = ", ".join(f"{v:g}" for v in res.pose)
+    lines = [
+        f"{res.robot} at ({where}): maximum isotropic force {_fmt(res.isotropic_force)} N "
+        f"[{res.status}]"
+    ]
+    if res.dof != 2:
+        lines.append(
+            "  centre (bias -w_ext) "
+            + ", ".join(f"{v:.6g}" for v in res.centre)
+            + " N; moment "
+            + ", ".join(f"{v:.6g}" for v in res.required_moment)
+            + " N*cm"
+        )
+    if res.weakest_direction is not None:
+        lines.append(
+            "  weakest disturbance direction: "
+            + ", ".join(f"{v:.4f}" for v in res.weakest_direction)
+        )
+    if res.ellipse is not None:
+        lines.append(
+            "  largest centred ellipse: semi-axes "
+            + ", ".join(f"{v:.6g}" for v in res.ellipse.semi_axes)
+            + f" N, measure {res.ellipse.measure:.6g}"
+        )
+    for note in res.notes:
+        lines.append(f"  note: {note}")
+    poly = res.polytope
+    if poly is not None:
+        what = "force polytope" if res.dof == 2 else "force section at the required moment"
+        lines.append(f"  {what}: {poly.n_facets} facets (n . f <= d; paper form m . v <= 1)")
+        v = poly.paper_vectors()
+        for k in range(poly.n_facets):
+            n = ", ".join(f"{t: .5f}" for t in poly.normals[k])
+            vv = "-" if np.isnan(v[k]).any() else ", ".join(f"{t: .6g}" for t in v[k])
+            lines.append(f"    n = ({n})  d = {poly.offsets[k]: .6g}  v = ({vv})")
+    lines.append(f"  {res.algorithm}, {1e3 * res.time:.2f} ms")
+    return "\n".join(lines)
+
+
+def format_map(res, plot) -> str:
+    s = res.summary()
+    lines = [
+        f"{res.robot}: {s['poses']} poses ({len(res.xs)} x {len(res.ys)}"
+        + (f", z = {res.z:g}" if res.z is not None else "")
+        + f"), {s['inside']} inside, {s['outside']} outside, {s['degenerate']} degenerate",
+        f"  maximum isotropic force: {_fmt(s['max'])} N"
+        + (f" at ({s['argmax'][0]:g}, {s['argmax'][1]:g})" if s["argmax"] else ""),
+        f"  {res.time:.3f} s ({1e6 * res.time / max(s['poses'], 1):.2f} us per pose)",
+    ]
+    if plot:
+        lines.append(f"  wrote {plot}")
+    return "\n".join(lines)
+
+
+# -- workspace -------------------------------------------------------------------------------
+def run_workspace(args: argparse.Namespace) -> int:
+    from ..force import certified_workspace
+
+    robot = Robot.load(args.robot)
+    if not (np.isfinite(args.min_force) and args.min_force > 0):
+        raise CliError("--min-force must be a positive number of newtons")
+    if not (np.isfinite(args.eps) and args.eps > 0):
+        raise CliError("--eps must be a positive number (cm)")
+    if not (np.isfinite(args.eps_angle) and args.eps_angle > 0):
+        raise CliError("--eps-angle must be a positive number (degrees)")
+    if args.timeout is not None and not args.timeout > 0:
+        raise CliError("--timeout must be positive (seconds)")
+    if args.max_boxes is not None and args.max_boxes < 1:
+        raise CliError("--max-boxes must be at least 1")
+    d = robot.dim
+    box = parse_floats(args.box, "--box", 2 * d)
+    b = np.array(box).reshape(d, 2)
+    if not np.all(np.isfinite(b)) or np.any(b[:, 0] > b[:, 1]):
+        raise CliError("--box: need finite bounds with min <= max on every axis")
+    orientation = _orientation_ranges(robot, args.orientation)
+    external = _external(robot, args.external)
+    progress, stop = _progress(not args.json)
+    try:
+        ws = certified_workspace(
+            robot,
+            args.min_force,
+            box,
+            args.eps,
+            progress=progress,
+            timeout=args.timeout,
+            orientation=orientation,
+            eps_angle=args.eps_angle,
+            external=external,
+            max_boxes=args.max_boxes,
+        )
+    finally:
+        stop()
+    if args.plot:
+        from ..force.plots import plot_paving
+
+        plot_paving(ws, args.plot, anchors=robot.A)
+    if args.json:
+        out = ws.to_dict(boxes=not args.no_boxes)
+        if args.plot:
+            out["plot"] = args.plot
+        print_json(out)
+    else:
+        print(format_workspace(ws, args.plot))
+    return 0
+
+
+def format_workspace(ws, plot) -> str:
+    total = ws.total_measure
+    lines = [
+        f"{ws.robot}: certified f_min >= {ws.min_force:g} N, eps {ws.eps:g} cm: {ws.status}",
+        f"  inside {ws.inside_measure:.6g} {ws.unit} ({100 * ws.inside_share:.2f} % of "
+        f"{total:.6g}), {len(ws.inside)} boxes",
+        f"  outside {len(ws.outside)} boxes, boundary {len(ws.boundary)} boxes, "
+        f"pending {len(ws.pending)}",
+        f"  {ws.boxes} boxes processed in {ws.time:.3f} s",
+    ]
+    if plot:
+        lines.append(f"  wrote {plot}")
+    return "\n".join(lines)
+
+
+def _progress(enabled: bool):
+    if not enabled or not sys.stderr.isatty():
+        return None, lambda: None
+
+    def update(p):
+        sys.stderr.write(
+            f"\rpaving: {p.boxes} boxes, {p.pending} pending, {p.inside} inside, "
+            f"{100 * p.inside_share:.1f} % proven, {p.elapsed:.1f} s   "
+        )
+        sys.stderr.flush()
+
+    def stop():
+        sys.stderr.write("\r" + " " * 78 + "\r")
+        sys.stderr.flush()
+
+    return update, stop

@@ -80,6 +80,23 @@ def _settings(args, **extra):
         raise CliError(str(exc)) from None
 
 
+def _check_port(host: str, port: int) -> None:
+    """A clear error now rather than after the workers have started."""
+    import socket
+
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except socket.gaierror as exc:
+        raise CliError(f"--host {host}: {exc.strerror}") from None
+    family, _, _, _, addr = infos[0]
+    with socket.socket(family, socket.SOCK_STREAM) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            s.bind(addr)
+        except OSError as exc:
+            raise CliError(f"cannot listen on {host}:{port} ({exc.strerror})") from None
+
+
 def run_serve(args: argparse.Namespace) -> int:
     import logging
 
@@ -94,8 +111,7 @@ def run_serve(args: argparse.Namespace) -> int:
     if not 0 <= args.port < 65536:
         raise CliError("--port must be in 0..65535")
     settings = _settings(args)
-    if settings.max_timeout < settings.default_timeout:
-        raise CliError("--default-timeout exceeds --max-timeout")
+    _check_port(args.host, args.port)
     try:
         service = JobService(settings)
         service.acquire()

@@ -67,7 +67,9 @@ class CompiledSystem:
             lo[i], hi[i] = float(a), float(b)
         self.param_lo, self.param_hi = lo, hi
         self.param_mid = 0.5 * lo + 0.5 * hi
-        self.system.parameters = {n: (float(a), float(b)) for n, a, b in zip(self.param_names, lo, hi)}
+        self.system.parameters = {
+            n: (float(a), float(b)) for n, a, b in zip(self.param_names, lo, hi)
+        }
 
     # -- interval evaluation --------------------------------------------------------------
     def eval_f(self, lo, hi):
@@ -116,6 +118,46 @@ class CompiledSystem:
         J = np.zeros((B, self.n * self.n))
         J[:, self._jac_flat] = V[self._fj_jac].T
         return V[self._fj_f].T, J.reshape(B, self.n, self.n)
+
+    # -- one box at a time (generated straight-line code, see :mod:`.scalar`) -------------
+    def scalar(self):
+        """``(f, fj)`` :class:`~.scalar.ScalarProgram` objects, built on first use."""
+        if getattr(self, "_scalar", None) is None:
+            from .scalar import ScalarProgram
+
+            outs_f = self.f.global_ids[self.f.outputs].tolist()
+            outs_fj = self.fj.global_ids[self.fj.outputs].tolist()
+            self._scalar = (ScalarProgram(self.graph, outs_f), ScalarProgram(self.graph, outs_fj))
+        return self._scalar
+
+    def fj_box(self, lo, hi):
+        """Enclosures of ``f`` and ``J`` over one box (1-D arrays in, numpy arrays out)."""
+        _, sfj = self.scalar()
+        flo, fhi = sfj.interval(
+            lo.tolist(), hi.tolist(), self.param_lo.tolist(), self.param_hi.tolist()
+        )
+        n = self.n
+        jlo = np.zeros(n * n)
+        jhi = np.zeros(n * n)
+        jlo[self._jac_flat] = flo[n:]
+        jhi[self._jac_flat] = fhi[n:]
+        return np.array(flo[:n]), np.array(fhi[:n]), jlo.reshape(n, n), jhi.reshape(n, n)
+
+    def f_point(self, x):
+        """Rigorous enclosure of ``f`` at one point."""
+        sf, _ = self.scalar()
+        xl = x.tolist()
+        flo, fhi = sf.interval(xl, xl, self.param_lo.tolist(), self.param_hi.tolist())
+        return np.array(flo), np.array(fhi)
+
+    def fj_point_float(self, x):
+        """Approximate ``f(x)`` and ``J(x)`` at one point (floats)."""
+        _, sfj = self.scalar()
+        v = sfj.floats(x.tolist(), self.param_mid.tolist())
+        n = self.n
+        J = np.zeros(n * n)
+        J[self._jac_flat] = v[n:]
+        return np.array(v[:n]), J.reshape(n, n)
 
     # -- HC4 -------------------------------------------------------------------------------
     def hc4_revise(self, lo, hi):

@@ -8,14 +8,18 @@
 * :mod:`.ellipse`    -- the largest centred ellipse / ellipsoid (section IV-C)
 * :mod:`.maps`       -- the index over a grid of positions
 * :mod:`.enclosure`  -- interval enclosures of the index test over boxes (proofs)
+* :mod:`.meanvalue`  -- slope (mean-value) interval arithmetic used by the proofs
 * :mod:`.certified`  -- certified workspace ``{f_min ≥ f_req}``: paving by bisection
 * :mod:`.plots`      -- heat maps and pavings (matplotlib)
-* :mod:`.wedge`      -- facet candidates: generalised cross products (float and interval)
+* :mod:`.wedge`      -- facet candidates: generalised cross products
+
+Layering: this package imports :mod:`certsolve.interval` and :mod:`certsolve.robot` only.
 
 Entry points: :func:`isotropic_force`, :func:`isotropic_map`, :func:`certified_workspace`.
 """
 
 from .certified import CertifiedWorkspace, WorkspaceProgress, certified_workspace
+from .ellipse import CentredEllipsoid, largest_centred_ellipsoid
 from .isotropic import IsotropicForceResult, isotropic_force, isotropic_values
 from .krut import krut_polytope
 from .loads import external_wrench
@@ -24,6 +28,7 @@ from .polytope import ForcePolytope, hyperplane_shifting
 from .section import force_section
 
 __all__ = [
+    "CentredEllipsoid",
     "CertifiedWorkspace",
     "ForcePolytope",
     "IsotropicForceResult",
@@ -37,4 +42,5 @@ __all__ = [
     "isotropic_map",
     "isotropic_values",
     "krut_polytope",
+    "largest_centred_ellipsoid",
 ]

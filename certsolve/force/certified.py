@@ -24,7 +24,7 @@ product of position and angle widths, so shares stay meaningful) are sums of box
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -143,7 +143,9 @@ def parse_box(box, d: int) -> np.ndarray:
     if b.shape == (2 * d,):
         b = b.reshape(d, 2)
     if b.shape != (d, 2):
-        raise ValueError(f"box: expected {d} intervals (xmin,xmax,ymin,ymax{',zmin,zmax' * (d == 3)})")
+        raise ValueError(
+            f"box: expected {d} intervals (xmin,xmax,ymin,ymax{',zmin,zmax' * (d == 3)})"
+        )
     if not np.all(np.isfinite(b)):
         raise ValueError("box: bounds must be finite")
     if np.any(b[:, 0] > b[:, 1]):
@@ -152,7 +154,7 @@ def parse_box(box, d: int) -> np.ndarray:
 
 
 def _parse_orientation(robot: Robot, orientation) -> tuple[np.ndarray, list[str]]:
-    """Angle intervals in degrees: dof 3 ``θ``; dof 6 ``(yaw, pitch, roll)``; each a number or pair."""
+    """Angle intervals (degrees): dof 3 ``θ``; dof 6 ``(yaw, pitch, roll)``; numbers or pairs."""
     if robot.dof == 2:
         if orientation is not None:
             raise ValueError("orientation: a point platform (dof 2) has no orientation")
@@ -160,15 +162,16 @@ def _parse_orientation(robot: Robot, orientation) -> tuple[np.ndarray, list[str]
     names = ["theta"] if robot.dof == 3 else ["yaw", "pitch", "roll"]
     if orientation is None:
         return np.zeros((len(names), 2)), names
-    if robot.dof == 3:
-        if np.ndim(orientation) == 0:
-            items = [orientation]
-        elif len(orientation) == 2 and all(np.ndim(t) == 0 for t in orientation):
-            items = [tuple(orientation)]  # one (lo, hi) range
-        else:
-            items = list(orientation)
+
+    def number(x) -> bool:
+        return isinstance(x, (int, float, np.integer, np.floating))
+
+    if number(orientation):
+        items = [orientation]
+    elif robot.dof == 3 and len(orientation) == 2 and all(number(t) for t in orientation):
+        items = [tuple(orientation)]  # one (lo, hi) range of theta
     else:
-        items = list(orientation) if np.ndim(orientation) > 0 else [orientation]
+        items = list(orientation)
     if len(items) != len(names):
         raise ValueError(
             f"orientation: expected {len(names)} angle(s) ({', '.join(names)}, degrees)"

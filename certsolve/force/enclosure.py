@@ -31,32 +31,30 @@ rigorous ``sin``/``cos``; point-matrix products with the a-priori rounding-error
 ``p``: its interval is exact up to rounding.
 
 **Rigid platforms (dof 3, 6).**  The natural interval extension of a 5×5 determinant loses
-everything to cancellation, so the columns are enclosed in **mean-value form**
-``ĥ_l(x) ∈ ĥ_l(x_mid) + Σ_j J_lj(X) [-r_j, r_j]`` (``J`` the interval Jacobian over the box
-``X``; at fixed orientation ``ĥ`` is affine in ``p`` and this is exact), and **preconditioned**
-per facet subset ``S_k`` by a point matrix ``A_k ≈ [M_c | c_c]^{-1}`` built from the midpoint
-columns.  Since ``wedge(A M) = det(A) A^{-T} wedge(M)``, with ``T_l = A_k ĥ_l`` and
-``c' = wedge(T_S)``:
-
-    c'·T_l = det(A_k) c_k·ĥ_l,   c'·(A_k w) = det(A_k) c_k·w,   A_k^T c' = det(A_k) c_k,
-
-so every ``g`` computed from ``(c', T)`` is ``|det A_k|`` times a true ``g`` (the two signs
-swap when ``det A_k < 0``).  ``T_S`` is then close to ``[I; 0]`` and its interval wedge is
-tight; ``A_k`` is proven invertible (``||A_k G_k - I||_∞ < 1``, rigorously bounded) or the
-subset is left unproven.
+everything to cancellation, so the normals are written in **basis form** (:func:`_rigid`):
+with ``w`` columns ``B0`` proven independent over the box and ``Y = ĥ_B0^{-1} ĥ_N``, every
+normal is ``λ^T ĥ_B0^{-1}`` with ``λ`` a small wedge of a block of ``Y``, and every
+``c·ĥ_l`` is an entry of ``λ`` or ``λ^T Y``.  All quantities are carried in **slope form**
+(:mod:`.meanvalue`: value at the box midpoint, range, slopes), starting from the columns
+``ĥ(x) ∈ ĥ(mid) + Σ_j J_j(X)(x_j - mid_j)`` (``J`` the interval Jacobian over the box; at a
+fixed orientation ``ĥ`` is affine in ``p``), so the final enclosures are tight to first order.
+The inverse is proven with ``P ≈ ĥ_B0(mid)^{-1}`` and ``||P ĥ_B0(X) - I||_∞ < 1/2``; the basis
+is, per box, the one with the smallest such bound (boxes where none exists stay undecided).
 """
 
 from __future__ import annotations
 
+from itertools import combinations
+
 import numpy as np
 
 from ..interval import arith, elementary
-from ..interval.linalg import mr_from_bounds, mr_matmul, mr_to_bounds
-from ..interval.rounding import up
+from ..interval.linalg import mr_from_bounds
+from ..interval.rounding import down, up
 from ..robot import Robot
 from .loads import force_rows
-from .meanvalue import MV, phi_mv, pmatmul_mv, wedge_mv
-from .wedge import facet_subsets, wedge_float
+from .meanvalue import MV, phi_mv, pmatmul, wedge_mv
+from .wedge import basis_groups, facet_subsets
 
 __all__ = ["interval_rotation", "slack_enclosures"]
 
@@ -72,11 +70,10 @@ def _sum(terms):
     return lo, hi
 
 
-def _mul(*fs):
-    lo, hi = fs[0]
-    for f in fs[1:]:
-        lo, hi = arith.mul(lo, hi, *f)
-    return lo, hi
+def _sum_up(x):
+    """Upper bound of the sum of non-negative ``x`` over the last axis (rounding included)."""
+    n = x.shape[-1]
+    return up(np.sum(x, axis=-1) * (1.0 + (n + 2) * 2.0**-52))
 
 
 def _deg_to_rad(lo, hi):
@@ -151,7 +148,7 @@ def interval_rotation(dof: int, alo: np.ndarray, ahi: np.ndarray):
 
 
 def _matvec_point(R, V):
-    """``R v_i`` for interval ``R`` ``(d, d, B)`` and point vectors ``V`` ``(m, d)``: ``(m, d, B)``."""
+    """``R v_i`` for interval ``R`` ``(d, d, B)``, point vectors ``V`` ``(m, d)``: ``(m, d, B)``."""
     Rlo, Rhi = R
     d = V.shape[1]
     terms = [
@@ -192,10 +189,6 @@ def _phi(slo, shi, tmin, tmax):
     plo, phi = _scale(np.maximum(slo, 0.0), np.maximum(shi, 0.0), tmax)
     nlo, nhi = _scale(np.minimum(slo, 0.0), np.minimum(shi, 0.0), tmin)
     return arith.add(plo, phi, nlo, nhi)
-
-
-def _mag(lo, hi):
-    return np.maximum(np.abs(lo), np.abs(hi))
 
 
 # -- the robot's columns ------------------------------------------------------------------
@@ -256,30 +249,13 @@ def _column_slopes(robot: Robot, e, b, dR) -> list:
     return out
 
 
-def _upper_absmatmul(absA, X):
-    """Rigorous upper bound of ``|A| @ X`` for non-negative ``X``."""
-    c, r = mr_matmul(absA, None, X, None)
-    return up(c + r)
-
-
-def _weight_wrench(robot: Robot, R, B: int, external):
-    """Enclosure of ``w_ext`` (weight about the platform origin, plus ``external``): ``(w, B)``."""
+def _weight_wrench(robot: Robot, B: int, external):
+    """dof 2: enclosure of ``w_ext`` = weight (+ ``external``), shape ``(2, B)``."""
     d = robot.dim
     mass = np.full(d, robot.mass)
     flo, fhi = arith.mul(mass, mass, robot.gravity, robot.gravity)  # weight = mass * g
-    f = (np.broadcast_to(flo[:, None], (d, B)), np.broadcast_to(fhi[:, None], (d, B)))
-    if robot.dof == 2:
-        wlo, whi = f
-    else:
-        glo, ghi = _matvec_point(R, robot.com[None, :])  # (1, d, B)
-        g = (glo[0], ghi[0])
-        if robot.dof == 3:
-            mlo, mhi = _cross2(g, f)
-            mlo, mhi = mlo[None], mhi[None]
-        else:
-            mlo, mhi = _cross3(g, f)
-        wlo = np.concatenate([f[0], mlo])
-        whi = np.concatenate([f[1], mhi])
+    wlo = np.broadcast_to(flo[:, None], (d, B))
+    whi = np.broadcast_to(fhi[:, None], (d, B))
     if external is not None:
         e = np.asarray(external, dtype=float)[:, None]
         wlo, whi = arith.add(wlo, whi, e, e)
@@ -306,7 +282,7 @@ def slack_enclosures(
     """
     with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
         if robot.dof == 2:
-            return _finish(robot, f_req, external, *_parts_point(robot, plo, phi))
+            return _point_slacks(robot, f_req, external, *_parts_point(robot, plo, phi))
         return _rigid(robot, plo, phi, f_req, external, alo, ahi, rotation)
 
 
@@ -333,8 +309,7 @@ def _parts_point(robot: Robot, plo, phi):
     D = arith.neg(*cr)  # (K, m, B)
     c = (np.stack([elo[j, 1], -ehi[j, 0]]), np.stack([ehi[j, 1], -elo[j, 0]]))  # (2, K, B)
     cf = (rho[0][j], rho[1][j])  # ||c_j|| = ρ_j
-    ok = np.ones((subsets.shape[0], plo.shape[1]), dtype=bool)
-    return subsets, rho, D, c, cf, None, None, ok
+    return subsets, rho, D, c, cf
 
 
 def _weight_mv(robot: Robot, R, Rmid, dR, nd: int, B: int, external) -> MV:
@@ -371,16 +346,68 @@ def _weight_mv(robot: Robot, R, Rmid, dR, nd: int, B: int, external) -> MV:
     )
     if external is not None:
         ex = np.asarray(external, dtype=float)[:, None]
-        out = out + MV.const(np.broadcast_to(ex, (len(ex), B)), np.broadcast_to(ex, (len(ex), B)), nd)
+        out = out + MV.const(
+            np.broadcast_to(ex, (len(ex), B)), np.broadcast_to(ex, (len(ex), B)), nd
+        )
     return out
 
 
+def _imatmul_b(X, Y):
+    """Interval matrix product ``(B, a, b) @ (B, b, c)`` (natural, outward rounded)."""
+    (xlo, xhi), (ylo, yhi) = X, Y
+    plo, phi = arith.mul(
+        xlo[..., :, :, None], xhi[..., :, :, None], ylo[..., None, :, :], yhi[..., None, :, :]
+    )
+    return _sum([(plo[..., :, k, :], phi[..., :, k, :]) for k in range(xlo.shape[-1])])
+
+
+class _BasisInverse:
+    """Enclosures of ``G = ĥ_B0(x)^{-1}`` (applied to matrices) over a set of ``x``.
+
+    With ``P ≈ ĥ_B0(mid)^{-1}`` a float matrix and ``E = P ĥ_B0 - I``, ``β = ||E||_∞ < 1``
+    gives ``G = (I + F) P`` with ``||F||_∞ ≤ β' = β / (1 - β)``, so for any ``V``:
+    ``G V = u + F u`` with ``u = P V`` and ``|(F u)_ij| ≤ β' max_k |u_kj|``.
+    """
+
+    def __init__(self, P: np.ndarray, M):
+        w = P.shape[-1]
+        Elo, Ehi = pmatmul(P, M)
+        eye = np.eye(w)
+        mag = np.maximum(np.abs(up(Ehi - eye)), np.abs(down(Elo - eye)))
+        beta = np.max(_sum_up(mag), axis=-1)  # (B,)
+        self.ok = beta < 0.5
+        with np.errstate(divide="ignore", invalid="ignore"):
+            bp = up(beta / down(1.0 - beta))
+        self.beta = np.where(self.ok, bp, np.inf)
+        self.P = P
+
+    def apply(self, V):
+        ulo, uhi = pmatmul(self.P, V)
+        mag = np.max(np.maximum(np.abs(ulo), np.abs(uhi)), axis=-2, keepdims=True)
+        with np.errstate(invalid="ignore"):
+            rad = up(self.beta[:, None, None] * mag)
+        rad = np.where(np.isnan(rad), np.inf, rad)
+        return down(ulo - rad), up(uhi + rad)
+
+
 def _rigid(robot: Robot, plo, phi, f_req, external, alo, ahi, rotation):
-    """dof 3 and 6: preconditioned slope enclosures (see the module docstring)."""
+    r"""dof 3 and 6: the basis form of the facets with slope enclosures.
+
+    With a basis ``B0`` of ``w`` columns (nonsingular over the box, the one with the largest
+    normalised determinant at the midpoint), the extra columns ``N`` and
+    ``Y = ĥ_B0^{-1} ĥ_N`` (``w × e``), the normal of the facet subset ``S`` is, up to the
+    factor ``±det ĥ_B0`` (of constant sign over the box),
+
+        c_S = λ^T ĥ_B0^{-1}[F, :],   λ = wedge(Y[F, T]),   F = B0 \ S,  T = S ∩ N,
+
+    (``λ = 1`` if ``T`` is empty) and ``c_S · ĥ_l`` is ``λ_l`` for ``l`` in ``F``,
+    ``λ · Y[F, l]`` for ``l`` in ``N \ S``, 0 on ``S``.  Also ``c_S · w = λ · z[F]`` with
+    ``z = ĥ_B0^{-1} w_ext``.  Everything is carried in slope form (:mod:`.meanvalue`); the
+    slopes of the inverse follow from ``ĥ_B0(x) y(x) = ĥ_N(x)``:
+    ``y(x) - y(m) = G(x)[(ĥ_N(x) - ĥ_N(m)) - (ĥ_B0(x) - ĥ_B0(m)) y(m)]``.
+    """
     d, B = plo.shape
     m, w, nf = robot.m, robot.wrench_dim, force_rows(robot)
-    subsets = facet_subsets(m, w)
-    K = subsets.shape[0]
     if alo is not None:
         R, dR = _rotation_parts(robot.dof, alo, ahi, derivatives=True)
         amid = np.minimum(np.maximum(0.5 * alo + 0.5 * ahi, alo), ahi)
@@ -404,76 +431,160 @@ def _rigid(robot: Robot, plo, phi, f_req, external, alo, ahi, rotation):
     for r in range(1, d):
         sq = sq + a.apply(lambda t, r=r: t[r]).sqr()
     rho = sq.sqrt()  # (m, B)
-    rho_x = rho.enclose(radii)
-
-    # preconditioners A_k from the midpoint columns; proof that each is invertible
-    hc = mr_from_bounds(*hm)[0]  # (w, m, B)
-    Mc = hc[:, subsets.T]  # (w, w-1, K, B)
-    cc = wedge_float(Mc)  # (w, K, B)
-    G = np.concatenate([Mc, cc[:, None]], axis=1)
-    G = np.transpose(G, (3, 2, 0, 1))  # (B, K, w, w)
-    G = G / np.maximum(np.linalg.norm(G, axis=2, keepdims=True), 1e-300)
-    good = np.isfinite(G).all(axis=(2, 3))
-    G = np.where(good[..., None, None], G, np.eye(w))
-    good &= np.abs(np.linalg.det(G)) > 1e-10
-    G = np.where(good[..., None, None], G, np.eye(w))
-    Ak = np.linalg.inv(G)
-    pc, pr = mr_matmul(Ak, None, G, None)
-    resid = up(np.abs(pc - np.eye(w)) + pr)
-    ok = (np.max(up(np.sum(resid, axis=3)), axis=2) < 0.5).T  # (K, B)
-
-    T = pmatmul_mv(Ak, h.apply(lambda t: np.transpose(t, (2, 0, 1))[:, None]))  # (B, K, w, m)
-    T = T.apply(lambda t: np.transpose(t, (2, 3, 1, 0)))  # (w, m, K, B)
-    kk = np.arange(K)[None, :]
-    c = wedge_mv(T.apply(lambda t: t[:, subsets.T, kk])).tighten(radii)  # (w, K, B)
-    D = None
-    for r in range(w):
-        term = c.apply(lambda t, r=r: t[r][:, None, :]) * T.apply(
-            lambda t, r=r: np.transpose(t[r], (1, 0, 2))
-        )
-        D = term if D is None else D + term  # (K, m, B)
-    member = np.zeros((K, m), dtype=bool)
-    member[np.arange(K)[:, None], subsets] = True
-    D = D.where(member[..., None], 0.0)
-    Dlo, Dhi = D.enclose(radii)
-    full_rank = np.any(((Dlo > 0.0) | (Dhi < 0.0)) & ok[:, None, :], axis=(0, 1))
-    q = (D / rho.apply(lambda t: t[None])).where(member[..., None], 0.0)
-    tmx = robot.tau_max[None, :, None]
-    tmn = robot.tau_min[None, :, None]
-    pp = phi_mv(q, tmn, tmx)
-    pm = phi_mv(-q, tmn, tmx)
-    Np = pp.apply(lambda t: t[:, 0])
-    Nm = pm.apply(lambda t: t[:, 0])
-    for i in range(1, m):
-        Np = Np + pp.apply(lambda t, i=i: t[:, i])
-        Nm = Nm + pm.apply(lambda t, i=i: t[:, i])
+    rho = rho.tighten(radii)
+    wires_ok = np.all(rho.x[0] > 0.0, axis=0)
     wext = _weight_mv(robot, R, Rmid, dR, nd, B, external)  # (w, B)
-    Aw = pmatmul_mv(Ak, wext.apply(lambda t: t.T[:, None, :, None]))  # (B, K, w, 1)
-    Aw = Aw.apply(lambda t: np.transpose(t[..., 0], (2, 1, 0)))  # (w, K, B)
-    cw = None
-    for r in range(w):
-        term = c.apply(lambda t, r=r: t[r]) * Aw.apply(lambda t, r=r: t[r])
-        cw = term if cw is None else cw + term
-    cT = pmatmul_mv(
-        np.swapaxes(Ak, 2, 3), c.apply(lambda t: np.transpose(t, (2, 1, 0))[..., None])
-    )  # (B, K, w, 1): A_k^T c'
-    cT = cT.apply(lambda t: np.transpose(t[..., 0], (2, 1, 0)))  # (w, K, B)
-    n2 = cT.apply(lambda t: t[0]).sqr()
-    for r in range(1, nf):
-        n2 = n2 + cT.apply(lambda t, r=r: t[r]).sqr()
-    cf = n2.sqrt().scale(float(f_req))
-    gp = (Np + cw - cf).enclose(radii)
-    gm = (Nm - cw - cf).enclose(radii)
-    bad = ~ok
-    glo = np.concatenate([np.where(bad, -np.inf, gp[0]), np.where(bad, -np.inf, gm[0])])
-    ghi = np.concatenate([np.where(bad, np.inf, gp[1]), np.where(bad, np.inf, gm[1])])
+
+    # basis per box: the one whose inverse is proven with the smallest β over the box
+    bases = list(combinations(range(m), w))
+    betas = np.full((len(bases), B), np.inf)
+    hbx = np.transpose(hx[0], (2, 0, 1)), np.transpose(hx[1], (2, 0, 1))  # (B, w, m)
+    hbm = mr_from_bounds(*hm)[0].transpose(2, 0, 1)
+    for ib, b0 in enumerate(bases):
+        cols = list(b0)
+        Mm = hbm[:, :, cols]
+        good = np.all(np.isfinite(Mm), axis=(1, 2))
+        Mm = np.where(good[:, None, None], Mm, np.eye(w))
+        good &= (
+            np.abs(
+                np.linalg.det(Mm / np.maximum(np.linalg.norm(Mm, axis=1, keepdims=True), 1e-300))
+            )
+            > 1e-12
+        )
+        Mm = np.where(good[:, None, None], Mm, np.eye(w))
+        inv = _BasisInverse(np.linalg.inv(Mm), (hbx[0][:, :, cols], hbx[1][:, :, cols]))
+        betas[ib] = np.where(good & inv.ok, inv.beta, np.inf)
+    choice = np.argmin(betas, axis=0)
+    found = np.isfinite(np.min(betas, axis=0))
+
+    K = len(facet_subsets(m, w))
+    glo = np.full((2 * K, B), -np.inf)
+    ghi = np.full((2 * K, B), np.inf)
+    full_rank = np.zeros(B, dtype=bool)
+    for ib, b0 in enumerate(bases):
+        sel = np.nonzero((choice == ib) & found)[0]
+        if sel.size == 0:
+            continue
+        g_lo, g_hi, ok = _rigid_basis(
+            robot,
+            b0,
+            h.apply(lambda t, s=sel: t[..., s]),
+            rho.apply(lambda t, s=sel: t[..., s]),
+            wext.apply(lambda t, s=sel: t[..., s]),
+            radii[:, sel],
+            f_req,
+            nf,
+        )
+        glo[:, sel] = np.where(ok, g_lo, -np.inf)
+        ghi[:, sel] = np.where(ok, g_hi, np.inf)
+        full_rank[sel] = ok
     glo = np.where(np.isnan(glo), -np.inf, glo)
     ghi = np.where(np.isnan(ghi), np.inf, ghi)
-    wires_ok = np.all(rho_x[0] > 0.0, axis=0)
     return glo, ghi, full_rank, wires_ok
 
 
-def _finish(robot, f_req, external, subsets, rho, D, c, cf, Ak, w_ext, ok):
+def _rigid_basis(robot: Robot, b0, h: MV, rho: MV, wext: MV, radii, f_req, nf):
+    """The slacks of :func:`_rigid` for boxes sharing the basis ``b0``: ``(2K, B')``."""
+    m, w = robot.m, robot.wrench_dim
+    b0 = tuple(int(i) for i in b0)
+    nn = [i for i in range(m) if i not in b0]
+    B = radii.shape[1]
+    # leading batch for the matrix algebra
+    hb = h.apply(lambda t: np.transpose(t[:, list(b0)], (2, 0, 1)))  # (B, w, w)
+    hn = h.apply(lambda t: np.transpose(t[:, nn], (2, 0, 1)))  # (B, w, e)
+    wv = wext.apply(lambda t: t.T[:, :, None])  # (B, w, 1)
+    Pm = mr_from_bounds(*hb.m)[0]
+    P = np.linalg.inv(np.where(np.isfinite(Pm), Pm, 0.0) + 0.0)
+    GX = _BasisInverse(P, hb.x)
+    Gm = _BasisInverse(P, hb.m)
+    ok = GX.ok & Gm.ok & np.all(np.isfinite(P), axis=(1, 2))
+
+    # G(X): start from (I + F) P, then refine twice by its own slope form
+    # G(x) - G(m) = -G(x) (ĥ_B(x) - ĥ_B(m)) G(m)
+    w_eye = np.broadcast_to(np.eye(w), (B, w, w))
+    Gm_full = Gm.apply((w_eye, w_eye))
+    GXf = GX.apply((w_eye, w_eye))
+    rad3 = radii[:, :, None, None]
+    for _ in range(2):
+        sG = [arith.neg(*_imatmul_b(GXf, _imatmul_b(sb, Gm_full))) for sb in hb.s]
+        GXf = MV(Gm_full, GXf, sG).enclose(rad3)
+
+    def solve(rhs: MV) -> MV:
+        """``G(x) v(x)`` in slope form for ``v`` = ``ĥ_N`` or ``w_ext``."""
+        vm = Gm.apply(rhs.m)
+        vx = GX.apply(rhs.x)
+        s = [_imatmul_b(GXf, arith.sub(*sv, *_imatmul_b(sb, vm))) for sv, sb in zip(rhs.s, hb.s)]
+        return MV(vm, vx, s)
+
+    y = solve(hn).tighten(rad3)
+    z = solve(wv).tighten(rad3)
+    gm = (Gm_full[0][..., :nf], Gm_full[1][..., :nf])
+    gx = (GXf[0][..., :nf], GXf[1][..., :nf])
+    gs = [arith.neg(*_imatmul_b(GXf, _imatmul_b(sb, gm))) for sb in hb.s]
+    Gf = MV(gm, gx, gs).tighten(rad3)  # rows of G, force columns: (B, w, nf)
+    # batch last again
+    y = y.apply(lambda t: np.transpose(t, (1, 2, 0)))  # (w, e, B)
+    z = z.apply(lambda t: t[:, :, 0].T)  # (w, B)
+    Gf = Gf.apply(lambda t: np.transpose(t, (1, 2, 0)))  # (w, nf, B)
+    tmin, tmax = robot.tau_min, robot.tau_max
+    gp_lo, gp_hi, gm_lo, gm_hi = [], [], [], []
+    for F, T, Rr in basis_groups(m, w, b0):
+        Kt, t = T.shape
+        if t == 0:
+            one = np.ones((1, Kt, B))
+            lam = MV.const(one, one, len(radii))
+        else:
+            lam = wedge_mv(y.apply(lambda a, F=F, T=T: a[F.T[:, None, :], T.T[None, :, :]]))
+            lam = lam.tighten(radii)
+        # c · ĥ_l for l in F (λ) and l in R (λ · Y[F, l])
+        cols = [np.array(b0)[F.T]]  # (t+1, Kt) column ids
+        qs = [lam / rho.apply(lambda a, c=cols[0]: a[c])]
+        if Rr.shape[1]:
+            YF = y.apply(lambda a, F=F, Rr=Rr: a[F.T[:, None, :], Rr.T[None, :, :]])
+            DR = None
+            for f in range(t + 1):
+                term = lam.apply(lambda a, f=f: a[f][None]) * YF.apply(lambda a, f=f: a[f])
+                DR = term if DR is None else DR + term  # (e-t, Kt, B)
+            DR = DR.tighten(radii)
+            cR = np.array(nn)[Rr.T]
+            cols.append(cR)
+            qs.append(DR / rho.apply(lambda a, c=cR: a[c]))
+        Np = Nm = None
+        for q, c in zip(qs, cols):
+            pp = phi_mv(q, tmin[c][..., None], tmax[c][..., None])
+            pm = phi_mv(-q, tmin[c][..., None], tmax[c][..., None])
+            for i in range(c.shape[0]):
+                a1 = pp.apply(lambda a, i=i: a[i])
+                a2 = pm.apply(lambda a, i=i: a[i])
+                Np = a1 if Np is None else Np + a1
+                Nm = a2 if Nm is None else Nm + a2
+        cw = cf = None
+        for f in range(t + 1):
+            lf = lam.apply(lambda a, f=f: a[f])  # (Kt, B)
+            t1 = lf * z.apply(lambda a, f=f, F=F: a[F[:, f]])
+            t2 = lf.apply(lambda a: a[None]) * Gf.apply(
+                lambda a, f=f, F=F: np.moveaxis(a[F[:, f]], 1, 0)
+            )
+            cw = t1 if cw is None else cw + t1
+            cf = t2 if cf is None else cf + t2  # (nf, Kt, B)
+        cf = cf.tighten(radii)
+        n2 = cf.apply(lambda a: a[0]).sqr()
+        for r in range(1, nf):
+            n2 = n2 + cf.apply(lambda a, r=r: a[r]).sqr()
+        fr = n2.sqrt().scale(float(f_req))
+        gp = (Np + cw - fr).enclose(radii)
+        gn = (Nm - cw - fr).enclose(radii)
+        gp_lo.append(gp[0])
+        gp_hi.append(gp[1])
+        gm_lo.append(gn[0])
+        gm_hi.append(gn[1])
+    glo = np.concatenate(gp_lo + gm_lo)
+    ghi = np.concatenate(gp_hi + gm_hi)
+    return glo, ghi, ok
+
+
+def _point_slacks(robot, f_req, external, subsets, rho, D, c, cf):
+    """dof 2: the slacks from the exact linear cross products of :func:`_parts_point`."""
     m, w = robot.m, robot.wrench_dim
     K = subsets.shape[0]
     B = rho[0].shape[1]
@@ -482,7 +593,7 @@ def _finish(robot, f_req, external, subsets, rho, D, c, cf, Ak, w_ext, ok):
     mem = member[..., None]
     Dlo = np.where(mem, 0.0, D[0])
     Dhi = np.where(mem, 0.0, D[1])
-    full_rank = np.any(((Dlo > 0.0) | (Dhi < 0.0)) & ok[:, None, :], axis=(0, 1))
+    full_rank = np.any((Dlo > 0.0) | (Dhi < 0.0), axis=(0, 1))
     wires_ok = np.all(rho[0] > 0.0, axis=0)
     qlo, qhi = arith.div(Dlo, Dhi, rho[0][None], rho[1][None])  # c_k · h_l
     qlo = np.where(mem, 0.0, qlo)
@@ -493,30 +604,15 @@ def _finish(robot, f_req, external, subsets, rho, D, c, cf, Ak, w_ext, ok):
     pm = _phi(-qhi, -qlo, tmn, tmx)
     Np = _sum([(pp[0][:, i], pp[1][:, i]) for i in range(m)])  # (K, B)
     Nm = _sum([(pm[0][:, i], pm[1][:, i]) for i in range(m)])
-    if robot.dof == 2:
-        wlo, whi = _weight_wrench(robot, None, B, external)  # (2, B)
-        cw = _sum(
-            [arith.mul(c[0][r], c[1][r], wlo[r][None], whi[r][None]) for r in range(w)]
-        )
-    else:
-        wlo, whi = w_ext
-        if external is not None:
-            ex = np.asarray(external, dtype=float)[:, None]
-            wlo, whi = arith.add(wlo, whi, ex, ex)
-        wc, wr = mr_from_bounds(wlo, whi)  # (w, B)
-        awc, awr = mr_matmul(Ak, None, wc.T[:, None, :, None], wr.T[:, None, :, None])
-        awlo, awhi = mr_to_bounds(awc[..., 0], awr[..., 0])  # (B, K, w)
-        cw = _sum(
-            [arith.mul(c[0][r], c[1][r], awlo[..., r].T, awhi[..., r].T) for r in range(w)]
-        )
+    wlo, whi = _weight_wrench(robot, B, external)  # (2, B)
+    cw = _sum([arith.mul(c[0][r], c[1][r], wlo[r][None], whi[r][None]) for r in range(w)])
     Np = arith.add(*Np, *cw)
     Nm = arith.sub(*Nm, *cw)
     fr = _scale(cf[0], cf[1], float(f_req))
     gp = arith.sub(*Np, *fr)
     gm = arith.sub(*Nm, *fr)
-    bad = ~ok  # unproven preconditioner: this subset decides nothing
-    glo = np.concatenate([np.where(bad, -np.inf, gp[0]), np.where(bad, -np.inf, gm[0])])
-    ghi = np.concatenate([np.where(bad, np.inf, gp[1]), np.where(bad, np.inf, gm[1])])
+    glo = np.concatenate([gp[0], gm[0]])
+    ghi = np.concatenate([gp[1], gm[1]])
     # NaN can only come from inf - inf (a wire of length ~0): make it the whole line
     glo = np.where(np.isnan(glo), -np.inf, glo)
     ghi = np.where(np.isnan(ghi), np.inf, ghi)

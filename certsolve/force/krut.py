@@ -35,7 +35,7 @@ from math import comb
 
 import numpy as np
 
-from .polytope import ForcePolytope, dedupe_facets
+from .polytope import FlatPolytopeError, ForcePolytope, dedupe_facets
 from .wedge import wedge_float
 
 __all__ = ["krut_polytope", "box_vertices"]
@@ -64,7 +64,7 @@ def krut_polytope(
         )
     U, S, Vt = np.linalg.svd(H)
     if S[-1] <= 1e-12 * S[0]:
-        raise ValueError(f"the wrench matrix has rank < {n}: the polytope is flat")
+        raise FlatPolytopeError(f"the wrench matrix has rank < {n}: the polytope is flat")
     verts = box_vertices(tau_min, tau_max)  # step 1
     tau_s = verts @ Vt.T  # step 2, eq. (8)
     tau_r = tau_s[:, :n]  # step 3, eq. (9)
@@ -79,7 +79,7 @@ def krut_polytope(
     # singular systems: hyperplane through the origin when the points are affinely independent
     Ts = T[~cramer]
     diffs = np.swapaxes(Ts[:, 1:, :] - Ts[:, :1, :], 1, 2)  # (q', n, n-1)
-    nr = wedge_float(diffs) if n >= 2 else np.ones((len(Ts), 1))
+    nr = wedge_float(np.moveaxis(diffs, 0, -1)).T if n >= 2 else np.ones((len(Ts), 1))
     nn = np.linalg.norm(nr, axis=1)
     good = nn > 1e-12 * scale ** (n - 1)
     nr = nr[good] / nn[good, None]

@@ -32,10 +32,10 @@ import numpy as np
 
 from ..interval import arith
 from ..interval.linalg import mr_from_bounds, mr_matmul, mr_to_bounds
-from ..interval.rounding import up
+from ..interval.rounding import down, up
 from .wedge import wedge_tables
 
-__all__ = ["MV", "wedge_mv", "phi_mv", "pmatmul", "pmatmul_mv"]
+__all__ = ["MV", "wedge_mv", "phi_mv", "pmatmul"]
 
 Pair = tuple[np.ndarray, np.ndarray]
 
@@ -166,21 +166,18 @@ class MV:
         if rad is None:
             lo, hi = self.m
         else:
-            lo, hi = arith.sub(self.m[0], self.m[1], rad, -rad)
+            with np.errstate(invalid="ignore"):
+                lo, hi = down(self.m[0] - rad), up(self.m[1] + rad)
         lo = np.maximum(lo, self.x[0])
         hi = np.minimum(hi, self.x[1])
-        lo = np.where(np.isnan(lo), -np.inf, lo)
-        hi = np.where(np.isnan(hi), np.inf, hi)
-        return lo, hi
+        # both are enclosures, so the intersection cannot be empty; if rounding or a NaN
+        # ever made it so, give up on this value rather than prove anything from it
+        bad = np.isnan(lo) | np.isnan(hi) | (lo > hi)
+        return np.where(bad, -np.inf, lo), np.where(bad, np.inf, hi)
 
     def tighten(self, radii: np.ndarray) -> MV:
         """Replace the range by :meth:`enclose` (improves later products)."""
         return MV(self.m, self.enclose(radii), self.s)
-
-
-def pmatmul_mv(A: np.ndarray, u: MV) -> MV:
-    """``A u`` for a point matrix ``A`` and an :class:`MV` of column vectors (matmul shapes)."""
-    return MV(pmatmul(A, u.m), pmatmul(A, u.x), [pmatmul(A, s) for s in u.s])
 
 
 def _sum_axis0(u: MV) -> MV:
@@ -199,16 +196,13 @@ def wedge_mv(M: MV) -> MV:
         return MV(
             (np.stack([a.m[0], b.m[0]]), np.stack([a.m[1], b.m[1]])),
             (np.stack([a.x[0], b.x[0]]), np.stack([a.x[1], b.x[1]])),
-            [
-                (np.stack([sa[0], sb[0]]), np.stack([sa[1], sb[1]]))
-                for sa, sb in zip(a.s, b.s)
-            ],
+            [(np.stack([sa[0], sb[0]]), np.stack([sa[1], sb[1]])) for sa, sb in zip(a.s, b.s)],
         )
     levels, order, csign = wedge_tables(w)
     extra = (1,) * (M.m[0].ndim - 2)
     D = M.apply(lambda a: a[:, 0])
     for r, (row_idx, prev_idx, sign) in enumerate(levels, start=1):
-        col = M.apply(lambda a, r=r: a[:, r][row_idx])
+        col = M.apply(lambda a, r=r, ri=row_idx: a[:, r][ri])
         prod = col * D.apply(lambda a, p=prev_idx: a[p])  # (r, C, ...)
         prod = prod.signed((sign > 0).reshape(sign.shape + extra))
         D = _sum_axis0(prod)
@@ -235,5 +229,6 @@ def phi_mv(u: MV, tmin, tmax) -> MV:
     tmax_b = np.broadcast_to(tmax, xlo.shape)
     slo = np.where(xlo >= 0.0, tmax_b, tmin_b)
     shi = np.where(xhi <= 0.0, tmin_b, tmax_b)
+    slo, shi = np.minimum(slo, shi), np.maximum(slo, shi)  # u ≡ 0: any slope, keep it non-empty
     s = [arith.mul(slo, shi, *sj) for sj in u.s]
     return MV(phi(u.m), phi(u.x), s)

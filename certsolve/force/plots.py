@@ -31,14 +31,21 @@ def _draw_map(ax, res: IsotropicMap, vmax=None, title=None, cmap="jet", colorbar
     plt = _plt()
     v = np.where(res.values >= 0, res.values, np.nan)
     masked = np.ma.masked_invalid(v)
-    cm = plt.get_cmap(cmap).copy()
-    cm.set_bad("white")
+    cm = plt.get_cmap(cmap).with_extremes(bad="white")
     dx = (res.xs[-1] - res.xs[0]) / max(len(res.xs) - 1, 1) / 2
     dy = (res.ys[-1] - res.ys[0]) / max(len(res.ys) - 1, 1) / 2
     extent = (res.xs[0] - dx, res.xs[-1] + dx, res.ys[0] - dy, res.ys[-1] + dy)
     vmax = vmax if vmax is not None else (float(np.nanmax(v)) if np.isfinite(v).any() else 1.0)
-    im = ax.imshow(masked, origin="lower", extent=extent, cmap=cm, vmin=0.0, vmax=vmax,
-                   interpolation="nearest", aspect="equal")
+    im = ax.imshow(
+        masked,
+        origin="lower",
+        extent=extent,
+        cmap=cm,
+        vmin=0.0,
+        vmax=vmax,
+        interpolation="nearest",
+        aspect="equal",
+    )
     finite = np.where(np.isfinite(res.values), res.values, -1.0)
     if (finite >= 0).any() and (finite < 0).any() and len(res.xs) > 1 and len(res.ys) > 1:
         ax.contour(res.xs, res.ys, finite, levels=[0.0], colors="k", linewidths=0.8)
@@ -84,8 +91,12 @@ def plot_maps(maps: list[IsotropicMap], path=None, titles=None, shared_scale=Tru
     im = None
     for k, (ax, m) in enumerate(zip(axes, maps)):
         im = _draw_map(
-            ax, m, vmax=vmax if shared_scale else None,
-            title=None if titles is None else titles[k], cmap=cmap, colorbar=not shared_scale,
+            ax,
+            m,
+            vmax=vmax if shared_scale else None,
+            title=None if titles is None else titles[k],
+            cmap=cmap,
+            colorbar=not shared_scale,
         )
     if shared_scale and im is not None:
         fig.colorbar(im, ax=list(axes), label="maximum isotropic force (N)", shrink=0.85)
@@ -95,17 +106,19 @@ def plot_maps(maps: list[IsotropicMap], path=None, titles=None, shared_scale=Tru
     return fig
 
 
-def plot_paving(ws: CertifiedWorkspace, path=None, title=None, anchors=None):
+def plot_paving(ws: CertifiedWorkspace, path=None, title=None, anchors=None, z=None):
     """The paving of a planar box (x, y): inside green, outside grey, boundary orange.
 
-    For dof 6, boxes are projected on the (x, y) plane (drawn with transparency).
+    For dof 6 the picture is the slice ``z = z`` (default: the middle of the box): the boxes
+    whose z-range contains it.
     """
     plt = _plt()
     from matplotlib.collections import PatchCollection
     from matplotlib.patches import Patch, Rectangle
 
     fig, ax = plt.subplots(figsize=(6.4, 5.6), dpi=120)
-    alpha = 1.0 if ws.dof != 6 else 0.15
+    if ws.dof == 6 and z is None:
+        z = float(0.5 * (ws.box[2, 0] + ws.box[2, 1]))
     styles = [
         ("outside", "#d9d9d9", "proven f < f_req"),
         ("boundary", "#ff9f1c", "boundary (< eps)"),
@@ -115,13 +128,17 @@ def plot_paving(ws: CertifiedWorkspace, path=None, title=None, anchors=None):
     handles = []
     for key, color, label in styles:
         boxes = getattr(ws, key)
+        if ws.dof == 6 and len(boxes):
+            boxes = boxes[(boxes[:, 2, 0] <= z) & (z <= boxes[:, 2, 1])]
         if len(boxes) == 0:
             continue
-        rects = [
-            Rectangle((b[0, 0], b[1, 0]), b[0, 1] - b[0, 0], b[1, 1] - b[1, 0]) for b in boxes
-        ]
-        pc = PatchCollection(rects, facecolor=color, edgecolor="k" if len(rects) < 3000 else color,
-                             linewidth=0.15, alpha=alpha)
+        rects = [Rectangle((b[0, 0], b[1, 0]), b[0, 1] - b[0, 0], b[1, 1] - b[1, 0]) for b in boxes]
+        pc = PatchCollection(
+            rects,
+            facecolor=color,
+            edgecolor="k" if len(rects) < 3000 else color,
+            linewidth=0.15,
+        )
         ax.add_collection(pc)
         handles.append(Patch(facecolor=color, edgecolor="k", label=f"{label} ({len(boxes)})"))
     if anchors is not None:
@@ -135,12 +152,20 @@ def plot_paving(ws: CertifiedWorkspace, path=None, title=None, anchors=None):
     ax.set_ylabel("y (cm)")
     if title is None:
         title = (
-            f"{ws.robot}: f_min ≥ {ws.min_force:g} N, eps {ws.eps:g} cm\n"
+            f"{ws.robot}: f_min ≥ {ws.min_force:g} N, eps {ws.eps:g} cm"
+            + (f", slice z = {z:g} cm" if ws.dof == 6 else "")
+            + "\n"
             f"inside {ws.inside_measure:.4g} {ws.unit} ({100 * ws.inside_share:.1f} % of the box)"
         )
     ax.set_title(title, fontsize=10)
-    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2,
-              fontsize=8, frameon=False)
+    ax.legend(
+        handles=handles,
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.12),
+        ncol=2,
+        fontsize=8,
+        frameon=False,
+    )
     fig.tight_layout()
     if path is not None:
         fig.savefig(Path(path))

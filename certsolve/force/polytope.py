@@ -39,6 +39,7 @@ import numpy as np
 from .wedge import facet_subsets, wedge_float
 
 __all__ = [
+    "FlatPolytopeError",
     "ForcePolytope",
     "zonotope_facets",
     "zonotope_facets_t",
@@ -49,6 +50,10 @@ __all__ = [
 
 #: generalised cross products below this (columns of norm ≤ 1) are treated as zero
 NORMAL_TOL = 1e-12
+
+
+class FlatPolytopeError(ValueError):
+    """The polytope has no interior (``rank H < w``): no facet description, no ball."""
 
 
 @dataclass
@@ -189,8 +194,10 @@ def hyperplane_shifting(H: np.ndarray, tau_min, tau_max) -> ForcePolytope:
     cn = np.linalg.norm(C, axis=1)
     ok = cn > NORMAL_TOL * max(1.0, float(np.abs(H).max()) ** (w - 1))
     if not ok.any() or not np.any(np.abs(D[ok]) > NORMAL_TOL):
-        raise ValueError(f"the wrench matrix has rank < {w}: the polytope is flat")
+        raise FlatPolytopeError(f"the wrench matrix has rank < {w}: the polytope is flat")
     normals = np.concatenate([C[ok], -C[ok]])
     offsets = np.concatenate([dp[ok], dm[ok]])
     n, d = dedupe_facets(normals, offsets)
-    return ForcePolytope(n, d, algorithm="hyperplane-shifting", space="force" if w == 2 else "wrench")
+    return ForcePolytope(
+        n, d, algorithm="hyperplane-shifting", space="force" if w == 2 else "wrench"
+    )

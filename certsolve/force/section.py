@@ -27,7 +27,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from .krut import box_vertices
-from .polytope import ForcePolytope, dedupe_facets
+from .polytope import FlatPolytopeError, ForcePolytope, dedupe_facets
 
 __all__ = ["slice_vertices", "hull_polytope", "force_section"]
 
@@ -71,13 +71,13 @@ def hull_polytope(points: np.ndarray, algorithm: str) -> ForcePolytope:
     pts = np.asarray(points, dtype=float)
     dim = pts.shape[1]
     if len(pts) <= dim:
-        raise ValueError("the polytope is flat (too few vertices)")
+        raise FlatPolytopeError("the polytope is flat (too few vertices)")
     scale = max(1.0, float(np.abs(pts).max()))
     pts_u = np.unique(np.round(pts / (1e-12 * scale)) * (1e-12 * scale), axis=0)
     try:
         hull = ConvexHull(pts_u)
     except QhullError:
-        raise ValueError("the polytope is flat (no interior)") from None
+        raise FlatPolytopeError("the polytope is flat (no interior)") from None
     eq = hull.equations  # n·x + e ≤ 0
     normals, offsets = dedupe_facets(eq[:, :-1], -eq[:, -1], tol=1e-9)
     return ForcePolytope(normals, offsets, algorithm=algorithm, vertices=pts_u[hull.vertices])

@@ -12,11 +12,11 @@ which is orthogonal to every column of ``M`` (expand ``det[M, x]`` along its las
 subsets are the ``C(m, w-1)`` combinations of columns (hyperplane shifting, Bouchet /
 Gouttefarde's method; cost grows with ``C(m, w-1)``).
 
-:func:`wedge_float` and :func:`wedge_interval` compute ``c`` for every subset in a batch by
-the Laplace recursion ``D_r[S] = Σ_t (-1)^{r-t} M[S_t, r] D_{r-1}[S \\ S_t]`` on the minors of
-the first ``r`` columns (``S`` a sorted set of ``r`` rows), vectorised over poses/boxes and
-subsets (batch axes last, for contiguous gathers); the interval version uses the outward-rounded operations of
-:mod:`certsolve.interval.arith`, so its result encloses every exact normal of the box.
+:func:`wedge_float` computes ``c`` for every subset in a batch by the Laplace recursion
+``D_r[S] = Σ_t ±M[S_t, r] D_{r-1}[S - S_t]`` on the minors of the first ``r`` columns (``S``
+a sorted set of ``r`` rows), vectorised over poses and subsets (batch axes last, for
+contiguous gathers); :func:`certsolve.force.meanvalue.wedge_mv` is its interval (slope)
+version, built on the same tables.
 """
 
 from __future__ import annotations
@@ -26,9 +26,7 @@ from itertools import combinations
 
 import numpy as np
 
-from ..interval import arith
-
-__all__ = ["facet_subsets", "wedge_tables", "wedge_float", "wedge_interval"]
+__all__ = ["facet_subsets", "basis_groups", "wedge_tables", "wedge_float"]
 
 
 @lru_cache(maxsize=64)
@@ -94,28 +92,34 @@ def wedge_float(M: np.ndarray) -> np.ndarray:
     return csign.reshape((w,) + extra) * D[order]
 
 
-def wedge_interval(Mlo: np.ndarray, Mhi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Enclosure of :func:`wedge_float` over interval matrices ``[Mlo, Mhi]`` (outward rounded).
+@lru_cache(maxsize=64)
+def basis_groups(m: int, w: int, b0: tuple[int, ...]):
+    r"""Facet subsets relative to a basis ``b0`` of ``w`` columns, grouped by ``t = |S ∩ N|``.
 
-    Same layout: ``(w, w-1, ...)`` in, ``(w, ...)`` out.
+    ``N`` are the other columns.  Used by the basis form of the facets (a normal is
+    ``λ^T H_B0^{-1}[F]`` with ``λ`` the generalised cross product of ``Y[F, T]``, ``Y = H_B0^{-1}
+    H_N``).
+
+    Returns a list of ``(F, T, R)`` index arrays: positions in ``b0`` of ``F = b0 \ S``
+    ``(K_t, t+1)``, positions in ``N`` of ``T = S ∩ N`` ``(K_t, t)`` and of ``R = N \ S``
+    ``(K_t, e-t)``.
     """
-    w = Mlo.shape[0]
-    if w == 2:
-        nlo, nhi = arith.neg(Mlo[0, 0], Mhi[0, 0])
-        return np.stack([Mlo[1, 0], nlo]), np.stack([Mhi[1, 0], nhi])
-    levels, order, csign = wedge_tables(w)
-    extra = (1,) * (Mlo.ndim - 2)
-    Dlo, Dhi = Mlo[:, 0], Mhi[:, 0]
-    for r, (row_idx, prev_idx, sign) in enumerate(levels, start=1):
-        clo, chi = Mlo[:, r], Mhi[:, r]
-        plo, phi = arith.mul(clo[row_idx], chi[row_idx], Dlo[prev_idx], Dhi[prev_idx])
-        pos = (sign > 0).reshape(sign.shape + extra)
-        slo = np.where(pos, plo, -phi)  # times ±1: exact
-        shi = np.where(pos, phi, -plo)
-        acc_lo, acc_hi = slo[0], shi[0]
-        for t in range(1, slo.shape[0]):
-            acc_lo, acc_hi = arith.add(acc_lo, acc_hi, slo[t], shi[t])
-        Dlo, Dhi = acc_lo, acc_hi
-    Dlo, Dhi = Dlo[order], Dhi[order]
-    pos = (csign > 0).reshape((w,) + extra)
-    return np.where(pos, Dlo, -Dhi), np.where(pos, Dhi, -Dlo)
+    nn = [i for i in range(m) if i not in b0]
+    groups: dict[int, list] = {}
+    for S in combinations(range(m), w - 1):
+        Ss = set(S)
+        F = [k for k, b in enumerate(b0) if b not in Ss]
+        T = [k for k, n in enumerate(nn) if n in Ss]
+        R = [k for k, n in enumerate(nn) if n not in Ss]
+        groups.setdefault(len(T), []).append((F, T, R))
+    out = []
+    for t in sorted(groups):
+        g = groups[t]
+        out.append(
+            (
+                np.array([x[0] for x in g], dtype=np.int64).reshape(len(g), t + 1),
+                np.array([x[1] for x in g], dtype=np.int64).reshape(len(g), t),
+                np.array([x[2] for x in g], dtype=np.int64).reshape(len(g), len(nn) - t),
+            )
+        )
+    return out

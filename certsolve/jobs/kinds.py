@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import functools
 import importlib
+import inspect
 import logging
 import os
 import time
@@ -71,6 +72,15 @@ _MAX_COORD = 1e6  # cm, the robot schema's bound
 _MAX_FORCE = 1e9  # N
 
 Coord = Annotated[float, Field(ge=-_MAX_COORD, le=_MAX_COORD)]
+Angle = Annotated[float, Field(ge=-1e4, le=1e4)]  # degrees
+Wrench = Annotated[
+    list[Annotated[float, Field(ge=-_MAX_FORCE, le=_MAX_FORCE)]],
+    Field(min_length=2, max_length=6, description="extra constant wrench (N, N*cm)"),
+]
+Orientation = Annotated[
+    Angle | list[Angle | tuple[Angle, Angle]] | None,
+    Field(description="theta (dof 3) or [yaw, pitch, roll] (dof 6), degrees; [lo, hi] ranges"),
+]
 
 
 class KindUnavailable(Exception):
@@ -124,6 +134,8 @@ class IsotropicMapParams(_Model):
     nx: int = Field(default=41, ge=1, le=MAX_GRID_SIDE)
     ny: int = Field(default=41, ge=1, le=MAX_GRID_SIDE)
     z: Coord | None = Field(default=None, description="height of the map (dof 6)")
+    orientation: Orientation = None
+    external: Wrench | None = None
 
     @model_validator(mode="after")
     def _grid(self):
@@ -136,12 +148,16 @@ class IsotropicMapParams(_Model):
 
 
 class WorkspaceParams(_Model):
-    min_force: float = Field(ge=0, le=_MAX_FORCE, description="required force (N)")
+    min_force: float = Field(gt=0, le=_MAX_FORCE, description="required force (N)")
     box: list[tuple[Coord, Coord]] = Field(
-        min_length=1, max_length=6, description="search box, one [lo, hi] per coordinate (cm)"
+        min_length=1, max_length=6, description="box of positions, [lo, hi] per axis (cm)"
     )
     eps: float = Field(gt=0, le=1e9, description="boxes narrower stop (cm)")
     timeout: float | None = Field(default=None, gt=0, description="time limit (s)")
+    max_boxes: int | None = Field(default=None, ge=1, description="limit on processed boxes")
+    orientation: Orientation = None
+    eps_angle: float = Field(default=1.0, gt=0, le=360, description="angle width to stop (deg)")
+    external: Wrench | None = None
 
     @field_validator("box")
     @classmethod
@@ -162,6 +178,8 @@ class SleepParams(_Model):
 
 class PoseParams(_Model):
     pose: list[Coord] = Field(min_length=2, max_length=6, description="see IkParams.pose")
+    algorithm: Literal["shifting", "krut"] = "shifting"
+    external: Wrench | None = None
 
 
 class TrackParams(_Model):
@@ -324,6 +342,33 @@ def _plain(result) -> Any:
     return result.to_dict() if hasattr(result, "to_dict") else result
 
 
+def _call(fn: Callable, *args, **options) -> Any:
+    """``fn(*args, **options)`` without the options its signature lacks (when unset)."""
+    try:
+        accepted = inspect.signature(fn).parameters
+    except (TypeError, ValueError):  # pragma: no cover - builtins
+        return fn(*args, **options)
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in accepted.values()):
+        return fn(*args, **options)
+    kwargs = {}
+    for name, value in options.items():
+        if name in accepted:
+            kwargs[name] = value
+        elif value is not None and name not in _ADVISORY:
+            raise ValueError(f"params.{name} is not supported by this build")
+    return fn(*args, **kwargs)
+
+
+# passed when the library takes them, else enforced by the worker (progress callback, kill)
+_ADVISORY = frozenset({"timeout", "max_boxes", "progress"})
+
+
+def _orientation(value):
+    if isinstance(value, list):
+        return [tuple(v) if isinstance(v, tuple) else v for v in value]
+    return value
+
+
 def _robot(spec: RobotSpec):
     from ..robot.model import Robot
 
@@ -383,19 +428,27 @@ def run_isotropic_map(job: IsotropicMapJob, ctx: RunContext) -> Any:
     xmin, xmax, ymin, ymax = p.grid
     xs = np.linspace(xmin, xmax, p.nx)
     ys = np.linspace(ymin, ymax, p.ny)
-    return _plain(imap(_robot(job.robot), xs, ys, z=p.z, rotation=None))
+    robot = _robot(job.robot)
+    return _plain(
+        _call(imap, robot, xs, ys, z=p.z, rotation=_orientation(p.orientation), external=p.external)
+    )
 
 
 def run_workspace(job: WorkspaceJob, ctx: RunContext) -> Any:
     ws = library_function("workspace", "certsolve.force", "certified_workspace")
     p = job.params
-    result = ws(
+    result = _call(
+        ws,
         _robot(job.robot),
         p.min_force,
-        [tuple(b) for b in p.box],
+        [list(b) for b in p.box],
         p.eps,
         progress=ctx.progress,
         timeout=ctx.time_limit,
+        max_boxes=ctx.max_boxes,
+        orientation=_orientation(p.orientation),
+        eps_angle=p.eps_angle,
+        external=p.external,
     )
     return _plain(result)
 
@@ -538,7 +591,9 @@ def call_isotropic(req: IsotropicCall) -> Any:
     from ..robot.geometry import Pose
 
     robot = _robot(req.robot)
-    return _plain(fn(robot, Pose.from_params(robot.dof, req.params.pose)))
+    p = req.params
+    pose = Pose.from_params(robot.dof, p.pose)
+    return _plain(_call(fn, robot, pose, algorithm=p.algorithm, external=p.external))
 
 
 def call_track(req: TrackCall) -> Any:

@@ -56,12 +56,15 @@ class WorkerPool:
         self.store = store
         self.size = settings.workers
         self._ctx = multiprocessing.get_context("spawn")
-        self._wake = self._ctx.Event()
         self._procs: list = [None] * self.size
+        self._wakers: list = [None] * self.size  # write ends of the workers' wake-up pipes
+        self._wlock = threading.Lock()
         self._deaths: list[deque] = [deque(maxlen=5) for _ in range(self.size)]
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._started = threading.Event()
+        self._killed: set[int] = set()  # pids the supervisor killed (not crashes)
+        self._ever = [False] * self.size  # slot started once (later starts are restarts)
         self.restarts = 0
 
     # -- control ------------------------------------------------------------------------------
@@ -75,14 +78,25 @@ class WorkerPool:
     def stop(self, timeout: float = 10.0) -> None:
         """Stop the workers; their running jobs go back to the queue (no attempt used)."""
         self._stop.set()
-        self._wake.set()
         if self._thread is not None:
             self._thread.join(timeout)
             self._thread = None
 
     def notify(self) -> None:
-        """Wake idle workers (new jobs were queued)."""
-        self._wake.set()
+        """Wake idle workers (new jobs were queued).
+
+        One byte down each worker's pipe, never blocking: a full pipe already means "wake
+        up", and a dead worker's pipe is simply ignored.  (A ``multiprocessing.Event``
+        would hang the service if a worker were killed while waiting on it.)
+        """
+        with self._wlock:  # never write to a descriptor being closed (and maybe reused)
+            for w in self._wakers:
+                if w is None:
+                    continue
+                try:
+                    os.write(w.fileno(), b"!")
+                except (BlockingIOError, BrokenPipeError, OSError, ValueError):
+                    pass
 
     def pids(self) -> list[int]:
         return [p.pid for p in self._procs if p is not None and p.pid is not None]
@@ -102,13 +116,22 @@ class WorkerPool:
         self._shutdown()
 
     def _spawn(self, slot: int):
+        with self._wlock:
+            old, self._wakers[slot] = self._wakers[slot], None
+            if old is not None:
+                old.close()
+        r, w = self._ctx.Pipe(duplex=False)
+        os.set_blocking(w.fileno(), False)
         p = self._ctx.Process(
             target=worker_main,
-            args=(str(self.store.path), self.settings, os.getpid(), self._wake),
+            args=(str(self.store.path), self.settings, os.getpid(), r),
             name=f"certsolve-worker-{slot}",
             daemon=True,
         )
         p.start()
+        r.close()  # the child has its copy
+        with self._wlock:
+            self._wakers[slot] = w
         return p
 
     def supervise_once(self) -> None:
@@ -121,16 +144,18 @@ class WorkerPool:
                 if p.exitcode != EXIT_FRESH or released:
                     log.warning("%s (pid %s); jobs: %s", reason, p.pid, released or "none")
                 self._procs[i] = None
-                if p.exitcode != EXIT_FRESH:
-                    self._deaths[i].append(now)
+                if p.exitcode != EXIT_FRESH and p.pid not in self._killed:
+                    self._deaths[i].append(now)  # a crash: counts towards the back-off
+                self._killed.discard(p.pid)
                 p.close()
             if self._procs[i] is None and not self._stop.is_set():
                 d = self._deaths[i]
                 if len(d) == d.maxlen and now - d[0] < 60 and now - d[-1] < 10:
                     continue  # crash loop: wait a little before the next try
-                self._procs[i] = self._spawn(i)
-                if d:
+                if self._ever[i]:
                     self.restarts += 1
+                self._procs[i] = self._spawn(i)
+                self._ever[i] = True
 
         live = {p.pid: p for p in self._procs if p is not None}
         s = self.settings
@@ -161,6 +186,7 @@ class WorkerPool:
     def _kill(self, proc) -> None:
         if proc is None:
             return
+        self._killed.add(proc.pid)
         try:
             os.kill(proc.pid, signal.SIGKILL)
         except ProcessLookupError:
@@ -187,4 +213,9 @@ class WorkerPool:
                 p.close()
             except ValueError:  # pragma: no cover - still running
                 pass
+        with self._wlock:
+            for w in self._wakers:
+                if w is not None:
+                    w.close()
+            self._wakers = [None] * self.size
         self._procs = [None] * self.size

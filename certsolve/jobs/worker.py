@@ -13,6 +13,7 @@ is unavailable), so a killed service never leaves workers writing to the store.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import os
 import signal
@@ -76,9 +77,16 @@ def _restore_memory_limit(old) -> None:
 
 
 def progress_dict(p: Any, elapsed: float) -> dict:
-    """The numeric progress fields of a library progress object (or dict)."""
+    """The numeric progress fields of a library progress object (or dict).
+
+    ``boxes``, ``pending``, ``solutions``, ``undecided``, ``elapsed`` when present, and the
+    other numeric fields of a dataclass (e.g. the workspace's ``inside`` / ``outside``).
+    """
+    names = list(_PROGRESS_FIELDS)
+    if dataclasses.is_dataclass(p):
+        names += [f.name for f in dataclasses.fields(p) if f.name not in names][:12]
     out: dict[str, Any] = {}
-    for name in _PROGRESS_FIELDS:
+    for name in names:
         v = p.get(name) if isinstance(p, dict) else getattr(p, name, None)
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             try:
@@ -219,9 +227,22 @@ def run_job(
     return exit_after
 
 
+def _nap(wake, seconds: float) -> None:
+    """Sleep until woken through the pipe (new jobs) or ``seconds`` pass; drain the pipe."""
+    try:
+        if wake.poll(seconds) and os.read(wake.fileno(), 4096) == b"":
+            time.sleep(seconds)  # the service closed its end: it is going away
+    except (EOFError, OSError):
+        time.sleep(seconds)
+
+
 def worker_main(db_path: str, settings: ServiceSettings, parent_pid: int, wake) -> None:
-    """Entry point of a worker process (see the module docstring)."""
+    """Entry point of a worker process (see the module docstring).
+
+    ``wake`` is the read end of a pipe on which the service writes when jobs are queued.
+    """
     _die_with_parent(parent_pid)
+    os.set_blocking(wake.fileno(), False)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
     logging.basicConfig(
         level=logging.WARNING,
@@ -239,8 +260,7 @@ def worker_main(db_path: str, settings: ServiceSettings, parent_pid: int, wake) 
             log.warning("cannot claim a job: %s", exc)
             claimed = None
         if claimed is None:
-            wake.wait(settings.poll_interval)
-            wake.clear()
+            _nap(wake, settings.poll_interval)
             continue
         job, lease = claimed
         if run_job(store, job, lease, settings, parent_pid=parent_pid):

@@ -119,8 +119,9 @@ def with_tau_max(robot: Robot, tau_max: float | None) -> Robot:
 class FKSolver:
     """Compile a formulation once, solve forward kinematics for many control vectors."""
 
-    def __init__(self, robot: Robot, formulation: str = "auto", *, eps: float = 1e-8,
-                 batch_size: int = 256):
+    def __init__(
+        self, robot: Robot, formulation: str = "auto", *, eps: float = 1e-8, batch_size: int = 256
+    ):
         self.robot = robot
         self.form: FKFormulation = build_formulation(robot, formulation)
         # wire lengths are auxiliary: fixed by the pose through the length equations
@@ -143,26 +144,48 @@ class FKSolver:
         self.csys.system.domain = dom
         return u, ok
 
-    def solve(self, u, *, timeout=None, max_boxes=None, progress=None, workers: int = 1,
-              verify: bool = False, boxes=None) -> FKResult:
+    def solve(
+        self,
+        u,
+        *,
+        timeout=None,
+        max_boxes=None,
+        progress=None,
+        workers: int = 1,
+        verify: bool = False,
+        boxes=None,
+    ) -> FKResult:
         """All equilibrium poses for control ``u`` (``boxes``: search only these boxes)."""
         u, ok = self._prepare(u)
         notes = []
-        for i in np.flatnonzero(u < self.robot.u_min) .tolist() + np.flatnonzero(
-                u > self.robot.u_max).tolist():
-            notes.append(f"u{i + 1} = {u[i]:g} is outside the stroke "
-                         f"[{self.robot.u_min[i]:g}, {self.robot.u_max[i]:g}]")
+        for i in (
+            np.flatnonzero(u < self.robot.u_min).tolist()
+            + np.flatnonzero(u > self.robot.u_max).tolist()
+        ):
+            notes.append(
+                f"u{i + 1} = {u[i]:g} is outside the stroke "
+                f"[{self.robot.u_min[i]:g}, {self.robot.u_max[i]:g}]"
+            )
         if not ok:
             notes.append("no wire length satisfies the tension limits inside the domain")
             res = SolveResult(list(self.form.system.variables), "complete")
-            return FKResult(self.robot.name, self.formulation, u, "complete", [], res,
-                            notes=notes)
+            return FKResult(self.robot.name, self.formulation, u, "complete", [], res, notes=notes)
         if boxes is None and workers == 1:
-            res = self.solver.solve(timeout=timeout, max_boxes=max_boxes, progress=progress,
-                                    workers=workers, verify=verify)
+            res = self.solver.solve(
+                timeout=timeout,
+                max_boxes=max_boxes,
+                progress=progress,
+                workers=workers,
+                verify=verify,
+            )
         elif boxes is None:
-            res = self.solver.solve(timeout=timeout, max_boxes=max_boxes, progress=progress,
-                                    workers=workers, verify=verify)
+            res = self.solver.solve(
+                timeout=timeout,
+                max_boxes=max_boxes,
+                progress=progress,
+                workers=workers,
+                verify=verify,
+            )
         else:
             state = SearchState.start(self.csys.system.domain, self.csys.n)
             state.stack.pop(1)
@@ -191,16 +214,34 @@ class FKSolver:
             points = pos + r.B @ R.T
         tau = tension(r, rho, u)
         box = [[float(a), float(b)] for a, b in zip(lo, hi, strict=True)]
-        return FKPose(pos, R, points, rho, tau, box, list(f.system.variables),
-                      certificate=getattr(sol, "certificate", "unique"),
-                      verified=getattr(sol, "verified", None))
+        return FKPose(
+            pos,
+            R,
+            points,
+            rho,
+            tau,
+            box,
+            list(f.system.variables),
+            certificate=getattr(sol, "certificate", "unique"),
+            verified=getattr(sol, "verified", None),
+        )
 
 
-def forward_kinematics(robot: Robot, u, *, formulation: str = "auto", eps: float = 1e-8,
-                       timeout: float | None = None, max_boxes: int | None = None,
-                       tau_max: float | None = None, seed_planar: bool = False,
-                       seeded_only: bool = False, progress=None, workers: int = 1,
-                       verify: bool = False) -> FKResult:
+def forward_kinematics(
+    robot: Robot,
+    u,
+    *,
+    formulation: str = "auto",
+    eps: float = 1e-8,
+    timeout: float | None = None,
+    max_boxes: int | None = None,
+    tau_max: float | None = None,
+    seed_planar: bool = False,
+    seeded_only: bool = False,
+    progress=None,
+    workers: int = 1,
+    verify: bool = False,
+) -> FKResult:
     """Every equilibrium pose of ``robot`` for the control vector ``u`` (see module doc).
 
     ``tau_max`` overrides every wire's maximum tension; ``seed_planar`` solves the planar
@@ -212,14 +253,22 @@ def forward_kinematics(robot: Robot, u, *, formulation: str = "auto", eps: float
     if seed_planar:
         from .seeding import seeded_forward_kinematics
 
-        return seeded_forward_kinematics(robot, u, formulation=formulation, eps=eps,
-                                         timeout=timeout, max_boxes=max_boxes,
-                                         seeded_only=seeded_only, progress=progress)
+        return seeded_forward_kinematics(
+            robot,
+            u,
+            formulation=formulation,
+            eps=eps,
+            timeout=timeout,
+            max_boxes=max_boxes,
+            seeded_only=seeded_only,
+            progress=progress,
+        )
     t0 = time.perf_counter()
     fk = FKSolver(robot, formulation, eps=eps)
     compile_time = time.perf_counter() - t0
-    res = fk.solve(u, timeout=timeout, max_boxes=max_boxes, progress=progress,
-                   workers=workers, verify=verify)
+    res = fk.solve(
+        u, timeout=timeout, max_boxes=max_boxes, progress=progress, workers=workers, verify=verify
+    )
     res.notes.append(f"compiled in {compile_time:.3f} s")
     return res
 

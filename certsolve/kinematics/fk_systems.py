@@ -125,8 +125,10 @@ def _is_coplanar(points: np.ndarray) -> bool:
 def choose_formulation(robot: Robot) -> str:
     """The paper's formulation for this robot (``auto``)."""
     if robot.dof == 2:
-        raise ValueError("point robots (dof 2) have no rigid platform: forward kinematics of the "
-                         "elastic model needs dof 3 or 6")
+        raise ValueError(
+            "point robots (dof 2) have no rigid platform: forward kinematics of the "
+            "elastic model needs dof 3 or 6"
+        )
     if robot.dof == 3:
         return "planar-10"
     pts, _ = robot.attachment_groups()
@@ -147,8 +149,9 @@ def _rho_domain(robot: Robot, u: np.ndarray, domain: np.ndarray):
     hi_t = robot.k * robot.L0 / (robot.k - robot.tau_max) - c
     near = np.clip(robot.A, domain[:, 0], domain[:, 1])
     dmin = np.linalg.norm(robot.A - near, axis=1)
-    far = np.where(np.abs(robot.A - domain[:, 0]) > np.abs(robot.A - domain[:, 1]),
-                   domain[:, 0], domain[:, 1])
+    far = np.where(
+        np.abs(robot.A - domain[:, 0]) > np.abs(robot.A - domain[:, 1]), domain[:, 0], domain[:, 1]
+    )
     dmax = np.linalg.norm(robot.A - far, axis=1)
     lo = np.maximum(np.maximum(lo_t, dmin), 0.0)
     hi = np.minimum(hi_t, dmax)
@@ -243,8 +246,9 @@ def _points_formulation(
     pts, _ = robot.attachment_groups()
     candidates = pts
     if k > pts.shape[0]:
-        raise ValueError(f"{name} needs {k} distinct attachment points, the robot has "
-                         f"{pts.shape[0]}")
+        raise ValueError(
+            f"{name} needs {k} distinct attachment points, the robot has {pts.shape[0]}"
+        )
     sel = _choose_points(candidates, k)
     Q = candidates[sel]
     L = _affine_coordinates(Q, robot.B)
@@ -257,13 +261,14 @@ def _points_formulation(
     eqs: list[Expr] = []
     B = [[_lin(L[i], P, c) for c in range(d)] for i in range(robot.m)]
     if reduced:  # ρ_i = |A_i - B_i| eliminated: coordinates are the only unknowns
-        rho = [sqrt(esum(sqr(B[i][c] - float(robot.A[i, c])) for c in range(d)))
-               for i in range(robot.m)]
+        rho = [
+            sqrt(esum(sqr(B[i][c] - float(robot.A[i, c])) for c in range(d)))
+            for i in range(robot.m)
+        ]
     else:
         rho = [var(f"rho{i + 1}") for i in range(robot.m)]
         for i in range(robot.m):  # lengths
-            eqs.append(esum(sqr(B[i][c] - float(robot.A[i, c])) for c in range(d))
-                       - sqr(rho[i]))
+            eqs.append(esum(sqr(B[i][c] - float(robot.A[i, c])) for c in range(d)) - sqr(rho[i]))
     for a, b in itertools.combinations(range(k), 2):  # rigidity
         dab = float(np.sum((Q[a] - Q[b]) ** 2))
         eqs.append(esum(sqr(P[a][c] - P[b][c]) for c in range(d)) - dab)
@@ -290,8 +295,10 @@ def _points_formulation(
                 mom_terms[c].append(mg[c])
         eqs.extend(esum(t) for t in mom_terms)
     else:
-        terms = [w[i] * (rel[i][0] * float(arel[i, 1]) - rel[i][1] * float(arel[i, 0]))
-                 for i in range(robot.m)]
+        terms = [
+            w[i] * (rel[i][0] * float(arel[i, 1]) - rel[i][1] * float(arel[i, 0]))
+            for i in range(robot.m)
+        ]
         eqs.append(esum(terms))
 
     constraints: list[Constraint] = []
@@ -306,8 +313,9 @@ def _points_formulation(
             signed = E[0][0] * E[1][1] - E[0][1] * E[1][0]
         s0 = float(np.linalg.det(Eq))
         constraints.append(Constraint(signed, s0, s0, redundant=True))
-        constraints.append(Constraint(signed, 0.0, np.inf) if s0 > 0 else
-                           Constraint(signed, -np.inf, 0.0))
+        constraints.append(
+            Constraint(signed, 0.0, np.inf) if s0 > 0 else Constraint(signed, -np.inf, 0.0)
+        )
     # other platform points (attachments, centre of mass) inside the domain
     extra = [L[i] for i in range(robot.m)] + [lG]
     seen = {tuple(np.eye(k)[j]) for j in range(k)}
@@ -325,7 +333,7 @@ def _points_formulation(
     groups: dict[tuple, list[int]] = {}
     for i in range(robot.m):
         groups.setdefault(tuple(np.round(L[i], 15)), []).append(i)
-    for members in ([] if reduced else groups.values()):
+    for members in [] if reduced else groups.values():
         for a, b in zip(members, members[1:]):
             Aa, Ab = robot.A[a], robot.A[b]
             lhs = esum(2.0 * float(Aa[c] - Ab[c]) * B[a][c] for c in range(d))
@@ -345,19 +353,31 @@ def _points_formulation(
         domain = np.tile(dom, (k, 1))
     else:
         names += [f"rho{i + 1}" for i in range(robot.m)]
-        domain = _with_rho(np.vstack([np.tile(dom, (k, 1)), np.zeros((robot.m, 2))]), robot,
-                           np.zeros(robot.m), d, k)
-    system = System(names, domain, eqs, constraints, name=name,
-                    parameters={f"u{i + 1}": 0.0 for i in range(robot.m)})
-    return FKFormulation(name, robot, system, "points", Q=Q, L=L, lG=lG,
-                         info={"points": [int(i) for i in sel]})
+        domain = _with_rho(
+            np.vstack([np.tile(dom, (k, 1)), np.zeros((robot.m, 2))]),
+            robot,
+            np.zeros(robot.m),
+            d,
+            k,
+        )
+    system = System(
+        names,
+        domain,
+        eqs,
+        constraints,
+        name=name,
+        parameters={f"u{i + 1}": 0.0 for i in range(robot.m)},
+    )
+    return FKFormulation(
+        name, robot, system, "points", Q=Q, L=L, lG=lG, info={"points": [int(i) for i in sel]}
+    )
 
 
 def _with_rho(domain, robot, u, d, k):
     lo, hi = _rho_domain(robot, np.asarray(u, dtype=float), robot.domain)
     out = domain.copy()
-    out[k * d:, 0] = lo
-    out[k * d:, 1] = np.maximum(hi, lo)  # an empty range is handled by the caller
+    out[k * d :, 0] = lo
+    out[k * d :, 1] = np.maximum(hi, lo)  # an empty range is handled by the caller
     return out
 
 
@@ -386,11 +406,19 @@ def _pose_formulation(robot: Robot) -> FKFormulation:
     if d == 3:
         p = [var("x"), var("y"), var("z")]
         ang = [var("yaw"), var("pitch"), var("roll")]
-        cz, sz, cy, sy, cx, sx = (cos(ang[0]), sin(ang[0]), cos(ang[1]), sin(ang[1]),
-                                  cos(ang[2]), sin(ang[2]))
-        R = [[cz * cy, cz * sy * sx - sz * cx, cz * sy * cx + sz * sx],
-             [sz * cy, sz * sy * sx + cz * cx, sz * sy * cx - cz * sx],
-             [-sy, cy * sx, cy * cx]]
+        cz, sz, cy, sy, cx, sx = (
+            cos(ang[0]),
+            sin(ang[0]),
+            cos(ang[1]),
+            sin(ang[1]),
+            cos(ang[2]),
+            sin(ang[2]),
+        )
+        R = [
+            [cz * cy, cz * sy * sx - sz * cx, cz * sy * cx + sz * sx],
+            [sz * cy, sz * sy * sx + cz * cx, sz * sy * cx - cz * sx],
+            [-sy, cy * sx, cy * cx],
+        ]
         names = ["x", "y", "z", "yaw", "pitch", "roll"]
         ang_dom = [[-np.pi, np.pi], [-np.pi / 2, np.pi / 2], [-np.pi, np.pi]]
     else:
@@ -401,13 +429,19 @@ def _pose_formulation(robot: Robot) -> FKFormulation:
         ang_dom = [[-np.pi, np.pi]]
 
     def world(b):
-        return [p[r] + esum(float(b[c]) * R[r][c] for c in range(d) if b[c] != 0.0)
-                if np.any(b != 0) else p[r] for r in range(d)]
+        return [
+            p[r] + esum(float(b[c]) * R[r][c] for c in range(d) if b[c] != 0.0)
+            if np.any(b != 0)
+            else p[r]
+            for r in range(d)
+        ]
 
     B = [world(robot.B[i]) for i in range(robot.m)]
     G = world(robot.com)
-    eqs = [esum(sqr(B[i][c] - float(robot.A[i, c])) for c in range(d)) - sqr(rho[i])
-           for i in range(robot.m)]
+    eqs = [
+        esum(sqr(B[i][c] - float(robot.A[i, c])) for c in range(d)) - sqr(rho[i])
+        for i in range(robot.m)
+    ]
     w = _wire_weights(robot, rho)
     W = robot.weight
     O = dom.mean(axis=1)
@@ -430,8 +464,12 @@ def _pose_formulation(robot: Robot) -> FKFormulation:
                 mom[c].append(mg[c])
         eqs.extend(esum(t) for t in mom)
     else:
-        eqs.append(esum(w[i] * (rel[i][0] * float(arel[i, 1]) - rel[i][1] * float(arel[i, 0]))
-                        for i in range(robot.m)))
+        eqs.append(
+            esum(
+                w[i] * (rel[i][0] * float(arel[i, 1]) - rel[i][1] * float(arel[i, 0]))
+                for i in range(robot.m)
+            )
+        )
     constraints = []
     for i in range(robot.m):
         for c in range(d):
@@ -444,8 +482,14 @@ def _pose_formulation(robot: Robot) -> FKFormulation:
     domain[offset:, 0] = lo
     domain[offset:, 1] = np.maximum(hi, lo)
     del k
-    system = System(names, domain, eqs, constraints, name="pose",
-                    parameters={f"u{i + 1}": 0.0 for i in range(robot.m)})
+    system = System(
+        names,
+        domain,
+        eqs,
+        constraints,
+        name="pose",
+        parameters={f"u{i + 1}": 0.0 for i in range(robot.m)},
+    )
     return FKFormulation("pose", robot, system, "pose")
 
 
@@ -471,8 +515,10 @@ def build_formulation(robot: Robot, name: str = "auto") -> FKFormulation:
         return _points_formulation(robot, name, 4)
     pts, _ = robot.attachment_groups()
     if not _is_coplanar(np.vstack([pts, robot.com[None]])):
-        raise ValueError(f"{name} needs a planar platform (attachments and centre of mass "
-                         "coplanar); use general-19")
+        raise ValueError(
+            f"{name} needs a planar platform (attachments and centre of mass "
+            "coplanar); use general-19"
+        )
     return _points_formulation(robot, name, 3)
 
 

@@ -21,6 +21,19 @@ and controls within the strokes ``[u_min, u_max]``.  Three methods,
     a 1 µm box around the point holds exactly one solution (:mod:`.ik_enclose`).  Tension and
     stroke violations of the result are reported.
 
+**Algorithm 1, design** (details in :mod:`.ik_search`): ``τ_i`` depends on ``u_i`` alone and
+is increasing, so boxes of ``u`` and boxes of ``τ`` correspond one to one and the equations are
+*linear* in ``τ``.  The branch and prune runs on tension boxes (image of the strokes or window,
+intersected with the tension limits): a preconditioned interval Gauss–Seidel contraction
+(proves boxes empty), then a certification attempt per box -- the ``m - w`` parametric wires
+(left out of the basis by a pivoted QR of ``H``) are fixed at the controls of the box's
+mid-tensions, the other controls follow from one linear solve, and the Krawczyk test proves
+that exactly one solution of the square system in the other controls lies in a 1e-6 cm box,
+inside the strokes/window with tensions within limits -- then bisection.  The fixed controls
+are exact floats, so the certified point is an exact solution of the under-constrained system.
+For MARIONET the contraction is nearly exact and the root box is certified (or proved empty)
+in one round.
+
 Certificates are proofs about the equations for the pose *as given in floating point*
 (position ``p`` and the float rotation matrix ``R``) and the robot's floats: every rounding
 error of the geometry, of eq. (6) and of the Krawczyk operator is bounded.
@@ -328,14 +341,6 @@ def _overdetermined_note(robot: Robot, w: int) -> str:
     )
 
 
-def _status(feasible_eq: bool, violations, certified: bool | None) -> str:
-    if not feasible_eq:
-        return "not-equilibrium"
-    if certified is False:
-        return "uncertified"
-    return "limits-violated" if violations else "ok"
-
-
 # -- tension first -----------------------------------------------------------------------------
 def ik_tension_first(
     robot: Robot,
@@ -346,12 +351,15 @@ def ik_tension_first(
 ) -> IKResult:
     """Max-margin tensions, then ``u`` by eq. (5) (see the module docstring)."""
     t0 = time.perf_counter()
-    rho, H, wg = float_geometry(robot, pose.position, pose.rotation)
+    with np.errstate(all="ignore"):
+        rho, H, wg = float_geometry(robot, pose.position, pose.rotation)
+        if not (rho.min() > 0.0 and np.isfinite(H).all()):
+            _check_pose(pose, enclose_pose(robot, pose.position, pose.rotation))
     ch = distribute_tensions(
         H, wg, robot.tau_min, robot.tau_max, mode=distribution, check_lp=check_lp
     )
     messages = list(ch.notes)
-    elastic = robot.is_elastic
+    elastic = is_elastic(robot)
     tau = ch.tau if np.all(np.isfinite(ch.tau)) else None
     u = None
     if elastic and tau is not None:
@@ -447,20 +455,29 @@ def _fixed_wires(H, fixed_wire, count: int) -> list[int]:
 
 
 def _newton_u(robot, rho, H_S, c, S, u0, max_iter=30):
-    """Classical Newton on ``H_S τ_S(u_S) + c = 0``; Jacobian ``H_S diag(τ')``."""
+    """Classical Newton on ``H_S τ_S(u_S) + c = 0``; Jacobian ``H_S diag(τ')``.
+
+    Returns ``(u, iterations, converged)``; a singular Jacobian or a wire length <= 0 along
+    the way stops it (not converged).
+    """
     k, K, V, L0 = robot.k[S], robot.K[S], robot.V[S], robot.L0[S]
     W = rho[S] + V
     u = np.array(u0, dtype=float)
     for it in range(1, max_iter + 1):
         L = W + K * u
-        if np.any(L <= 0):
+        if not (L.min() > 0.0):
             return u, it, False
         tau = k * (L - L0) / L
         f = H_S @ tau + c
         J = H_S * (k * L0 * K / (L * L))
-        step = np.linalg.solve(J, f)
+        try:
+            step = np.linalg.solve(J, f)
+        except np.linalg.LinAlgError:
+            return u, it, False
         u = u - step
-        if np.all(np.abs(step) <= 1e-13 * (1.0 + np.abs(u))):
+        if not np.isfinite(u).all():
+            return u, it, False
+        if (np.abs(step) <= 1e-13 * (1.0 + np.abs(u))).all():
             return u, it, True
     return u, max_iter, False
 
@@ -592,6 +609,10 @@ def _alg2(robot, pose, t0, fixed_wire, tau_fixed, u_fixed, solve, u_last, window
         details["iterations"] = its
         if not conv:
             messages.append(f"Newton did not converge in {its} iterations")
+            tau_S = sq.G @ -c
+            if not (tau_S < robot.k[S]).all():
+                bad = [int(S[i]) + 1 for i in np.flatnonzero(~(tau_S < robot.k[S]))]
+                messages.append(f"no control exists: wires {bad} would need a tension >= k")
             return result("no-solution", None, None, [])
     u[S] = u_S
     cert = None
@@ -711,7 +732,8 @@ def ik_algorithm1(
     if u_last is not None and window is None:
         window = 0.1
     ulo, uhi, u_last = _window(robot, u_last, window)
-    enc = enclose_pose(robot, pose.position, pose.rotation)
+    with np.errstate(all="ignore"):
+        enc = enclose_pose(robot, pose.position, pose.rotation)
     _check_pose(pose, enc)
     rho, H, wg = enc.rho, enc.H, enc.wg
     w, m = H.shape

@@ -28,7 +28,8 @@ Why not :mod:`certsolve.interval`?  The same proofs with endpoint interval opera
 30-70 µs per operation on small arrays (``errstate``, ``nextafter``, NaN handling) and the
 whole Algorithm 2 should fit in 0.5 ms; here an operation is one numpy call.  The Krawczyk
 test (:func:`krawczyk_mr`) uses the bounds of :func:`certsolve.solver.newton.krawczyk`
-(tests check that they agree) without its per-call overhead (~0.4 ms for one 6x6 box).
+(tests check that they agree) without its per-call overhead (0.26-0.45 ms for one 6x6 box
+on this 2-core machine, more than the whole Algorithm 2 budget).
 """
 
 from __future__ import annotations
@@ -53,7 +54,6 @@ __all__ = [
     "jacobian_mr",
     "krawczyk_mr",
     "box_around",
-    "certify_points",
     "SquareSystem",
     "is_elastic",
 ]
@@ -367,41 +367,6 @@ def krawczyk_mr(c, lo, hi, fc, fr, Jc, Jr):
 def box_around(c, rad):
     """``[c - rad, c + rad]`` rounded outward (contains ``c``)."""
     return np.nextafter(c - rad, -np.inf), np.nextafter(c + rad, np.inf)
-
-
-def certify_points(robot: Robot, enc: PoseEnclosure, cols, u, rad, tau=None):
-    """Krawczyk test around candidate solutions of the square system in ``u[:, cols]``.
-
-    ``u`` ``(B, m)`` are float controls; the wires outside ``cols`` are *fixed* at their
-    (exact) values, the unknowns ``u[:, cols]`` vary in ``X = [u - rad, u + rad]``.  Returns
-    ``(xlo, xhi, klo, khi, proven, tau)`` (over ``cols``; ``tau`` the float tensions at ``u``):
-    ``proven[b]`` means that, with the other wires fixed, ``X[b]`` holds exactly one solution
-    of ``H τ(u) + w_g = 0``, and it lies in ``K[b]``.
-    """
-    u = np.asarray(u, dtype=float)
-    uc = u[:, cols]
-    xlo, xhi = box_around(uc, rad)
-    tc, te = tension_mr(robot, enc, u)
-    fc, fr = residual_mr(enc, tc, te)
-    # dτ/du over X: only the columns `cols` vary
-    r = np.maximum(xhi - uc, uc - xlo) * (1.0 + 4.0 * _U)
-    cs = _consts(robot)
-    Lc, eLc = _length_mr(cs, enc, u)
-    Kc = cs.K[cols]
-    spread = Kc * r * (1.0 + 4.0 * _U)
-    Lc, eLc = Lc[:, cols], eLc[:, cols]
-    lmin = (Lc - eLc - spread) * (1.0 - 8.0 * _U)
-    lmax = (Lc + eLc + spread) * (1.0 + 8.0 * _U)
-    num = cs.kL0K[cols]
-    dhi = num / (lmin * lmin) * (1.0 + 16.0 * _U)
-    dlo = num / (lmax * lmax) * (1.0 - 16.0 * _U)
-    if not (lmin.min() > 0.0):
-        dhi = np.where(lmin > 0.0, dhi, np.inf)
-    dc = 0.5 * (dlo + dhi)
-    dr = (0.5 * SAFE) * (dhi - dlo) + (4.0 * _U) * dc
-    Jc, Jr = jacobian_mr(enc, cols, dc, dr)
-    klo, khi, proven = krawczyk_mr(uc, xlo, xhi, fc, fr, Jc, Jr)
-    return xlo, xhi, klo, khi, proven, tc
 
 
 class SquareSystem:

@@ -119,8 +119,9 @@ class SolutionSet:
         le = hi[:, None, :] <= self._uhi[None]
         inside = np.all(ge & le, axis=2)
         keep = ~np.any(inside, axis=1)
-        overlap = np.all((lo[:, None, :] < self._uhi[None]) & (hi[:, None, :] > self._ulo[None]),
-                         axis=2)
+        overlap = np.all(
+            (lo[:, None, :] < self._uhi[None]) & (hi[:, None, :] > self._ulo[None]), axis=2
+        )
         uncovered = np.sum(~(ge & le), axis=2)  # directions where U does not cover the box
         clip = keep[:, None] & overlap & (uncovered == 1)
         if not np.any(clip):
@@ -164,8 +165,6 @@ class Certifier:
         tighten_steps: int = 4,
     ):
         self.csys = csys
-        self.dom_lo = csys.system.domain[:, 0]
-        self.dom_hi = csys.system.domain[:, 1]
         self.newton_iterations = newton_iterations
         self.scales = scales
         self.tighten_steps = tighten_steps
@@ -260,8 +259,9 @@ class Certifier:
         chi = (s[:, None, :] + rad).reshape(S * F, -1)
         lin = linearize(self.csys, clo, chi)
         _, _, proven = krawczyk(lin)
-        contains = np.all((clo <= np.repeat(elo, F, axis=0)) & (chi >= np.repeat(ehi, F, axis=0)),
-                          axis=1)
+        contains = np.all(
+            (clo <= np.repeat(elo, F, axis=0)) & (chi >= np.repeat(ehi, F, axis=0)), axis=1
+        )
         ok = (proven & contains).reshape(S, F)
         out_lo, out_hi = ulo.copy(), uhi.copy()
         for j in range(S):
@@ -293,8 +293,10 @@ class Certifier:
     def classify(self, elo, ehi) -> list[str]:
         """``ok`` / ``boundary`` / ``constraint`` / ``rejected`` for proven existence boxes."""
         B = elo.shape[0]
-        inside = np.all((elo >= self.dom_lo) & (ehi <= self.dom_hi), axis=1)
-        outside = np.any((ehi < self.dom_lo) | (elo > self.dom_hi), axis=1)
+        dom = self.csys.system.domain  # read now: a compiled system may be re-used
+        dlo, dhi = dom[:, 0], dom[:, 1]
+        inside = np.all((elo >= dlo) & (ehi <= dhi), axis=1)
+        outside = np.any((ehi < dlo) | (elo > dhi), axis=1)
         kinds = np.where(inside, "ok", np.where(outside, "rejected", "boundary")).astype(object)
         if self._checked.size and B:
             glo, ghi = self.csys.eval_constraints(elo, ehi)

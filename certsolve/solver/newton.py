@@ -42,6 +42,7 @@ __all__ = [
     "linearization_from_bounds",
     "krawczyk",
     "krawczyk_box",
+    "krawczyk_single",
     "hansen_sengupta",
     "batched_inverse",
 ]
@@ -152,6 +153,47 @@ def krawczyk_box(lo, hi, flo, fhi, jlo, jhi, c=None):
     if c is None:
         c = midpoint(lo, hi)
     return krawczyk(linearization_from_bounds(lo, hi, c, flo, fhi, jlo, jhi))
+
+
+def krawczyk_single(lo, hi, c, flo, fhi, jlo, jhi):
+    """Krawczyk test for one box (1-D / 2-D arrays), with few numpy calls: ``(klo, khi, ok)``.
+
+    The same operator and rounding bounds as :func:`krawczyk`, specialised to a single box
+    for real-time callers (tracking).
+    """
+    n = lo.shape[0]
+    Jc = 0.5 * jlo + 0.5 * jhi
+    Jr = np.maximum(up(jhi - Jc), up(Jc - jlo))
+    try:
+        Y = np.linalg.inv(Jc)
+    except np.linalg.LinAlgError:
+        return lo, hi, False
+    if not (
+        np.all(np.isfinite(Y))
+        and np.all(np.isfinite(Jr))
+        and np.all(np.isfinite(flo))
+        and np.all(np.isfinite(fhi))
+    ):
+        return lo, hi, False
+    g = gamma(n + 4)
+    aY = np.abs(Y)
+    # M = Y J: midpoint Mc and radius Mr (a priori rounding bound of Y @ Jc included)
+    Mc = Y @ Jc
+    Mr = (aY @ (gamma(n) * np.abs(Jc) + Jr)) * (1.0 + 2.0 * g) + (n + 2) * 2.0**-1000
+    # b = Y f(c)
+    fc = 0.5 * flo + 0.5 * fhi
+    fr = np.maximum(up(fhi - fc), up(fc - flo))
+    bc = Y @ fc
+    br = (aY @ (gamma(n) * np.abs(fc) + fr)) * (1.0 + 2.0 * g) + (n + 2) * 2.0**-1000
+    mag = np.abs(np.eye(n) - Mc) * (1.0 + 4 * _U) + Mr
+    rad = np.maximum(up(hi - c), up(c - lo))
+    v = (mag @ rad) * (1.0 + 2.0 * gamma(n + 2)) + (n + 2) * 2.0**-1000
+    centre = c - bc
+    rr = br + v
+    rr = rr * (1.0 + 4 * _U)
+    klo = down(down(centre) - rr)
+    khi = up(up(centre) + rr)
+    return klo, khi, bool(np.all((klo > lo) & (khi < hi)))
 
 
 def hansen_sengupta(lin: Linearization) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

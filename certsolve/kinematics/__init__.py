@@ -1,0 +1,49 @@
+"""Kinematics of wire-driven robots with elastic wires (Merlet 2007).
+
+* :mod:`.ik`, :mod:`.ik_tension`, :mod:`.ik_enclose`, :mod:`.ik_search` -- inverse
+  kinematics: tension-first, Algorithm 1 (interval search, first certified solution),
+  Algorithm 2 (fixed wire, Newton, Krawczyk certificate)
+* :mod:`.fk_systems` -- the forward-kinematics equation systems (10/13/16/19 equations,
+  pose parameters), built from a robot file
+* :mod:`.fk`         -- all-solutions forward kinematics (:func:`forward_kinematics`)
+* :mod:`.seeding`    -- planar seeding of the almost-planar case
+* :mod:`.tracking`   -- real-time certified tracking near a known pose
+"""
+
+from .fk import FKPose, FKResult, FKSolver, forward_kinematics, with_tau_max
+from .fk_systems import FORMULATIONS, build_formulation
+from .ik import (
+    METHODS,
+    Certificate,
+    IKResult,
+    Violation,
+    ik_algorithm1,
+    ik_algorithm2,
+    ik_tension_first,
+    inverse_kinematics,
+)
+from .seeding import planar_counterpart, seeded_forward_kinematics
+from .tracking import Tracker, TrackResult, track
+
+__all__ = [
+    "FORMULATIONS",
+    "METHODS",
+    "Certificate",
+    "FKPose",
+    "FKResult",
+    "FKSolver",
+    "IKResult",
+    "TrackResult",
+    "Tracker",
+    "Violation",
+    "build_formulation",
+    "forward_kinematics",
+    "ik_algorithm1",
+    "ik_algorithm2",
+    "ik_tension_first",
+    "inverse_kinematics",
+    "planar_counterpart",
+    "seeded_forward_kinematics",
+    "track",
+    "with_tau_max",
+]
