@@ -119,6 +119,11 @@ class CompiledSystem:
         J[:, self._jac_flat] = V[self._fj_jac].T
         return V[self._fj_f].T, J.reshape(B, self.n, self.n)
 
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_scalar"] = None  # generated functions are rebuilt on demand (not picklable)
+        return state
+
     # -- one box at a time (generated straight-line code, see :mod:`.scalar`) -------------
     def scalar(self):
         """``(f, fj)`` :class:`~.scalar.ScalarProgram` objects, built on first use."""
