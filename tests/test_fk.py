@@ -229,8 +229,11 @@ def test_seeded_search_equals_the_plain_search():
 @pytest.mark.parametrize("name", ["marionet", "marionet-t", "planar"])
 def test_tracking_certifies_the_ik_pose(name):
     robot = load(name)
-    start = {"marionet": (111, 58, 107, 0, 0, 0), "marionet-t": (115, 60, 118, 0, 0, 0),
-             "planar": (90, 60, 0)}[name]
+    start = {
+        "marionet": (111, 58, 107, 0, 0, 0),
+        "marionet-t": (115, 60, 118, 0, 0, 0),
+        "planar": (90, 60, 0),
+    }[name]
     tr = Tracker(robot)
     rng = np.random.default_rng(1)
     prev = Pose.from_params(robot.dof, start)
@@ -259,15 +262,22 @@ def test_tracking_never_certifies_a_non_solution():
 
 
 def test_cli_fk_json_and_errors():
-    cmd = [sys.executable, "-m", "certsolve.cli", "fk", f"{ROBOTS}/planar.json",
-           "--u", "0.5,0.5,0.5,0.5", "--json"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "certsolve.cli",
+        "fk",
+        f"{ROBOTS}/planar.json",
+        "--u",
+        "0.5,0.5,0.5,0.5",
+        "--json",
+    ]
     out = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     assert data["status"] == "complete" and len(data["solutions"]) == 1
     sol = data["solutions"][0]
-    for key in ("position", "rotation", "euler", "platform_points", "rho", "tau",
-                "certificate"):
+    for key in ("position", "rotation", "euler", "platform_points", "rho", "tau", "certificate"):
         assert key in sol
     bad = subprocess.run(cmd[:5] + ["--u", "1,2"], capture_output=True, text=True, timeout=60)
     assert bad.returncode == 2
