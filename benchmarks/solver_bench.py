@@ -1,0 +1,59 @@
+"""Solver benchmark: every system of ``examples/systems`` (or those named), serial and with
+worker processes.
+
+    python benchmarks/solver_bench.py [--runs 3] [--workers 1,2] [--timeout 300] [names...]
+
+Prints one row per system and worker count: variables, status, solutions, undecided, boxes,
+median wall time and CPU time (of the main process) over ``--runs`` runs.  Run it on an
+otherwise idle machine; note the machine in any report.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import statistics
+import time
+from pathlib import Path
+
+from certsolve.expr.minibex import load_minibex
+from certsolve.solver import Solver
+
+HERE = Path(__file__).resolve().parent.parent / "examples" / "systems"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("names", nargs="*", help="system names (default: all)")
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--workers", default="1,2")
+    ap.add_argument("--timeout", type=float, default=300.0)
+    ap.add_argument("--eps", type=float, default=1e-8)
+    args = ap.parse_args()
+    files = sorted(HERE.glob("*.mbx"))
+    if args.names:
+        files = [f for f in files if f.stem in args.names]
+    workers = [int(w) for w in args.workers.split(",")]
+    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+          f"python {platform.python_version()}; median of {args.runs} runs")
+    print(f"{'system':<20} {'vars':>4} {'w':>2} {'status':<10} {'sols':>4} {'und':>4} "
+          f"{'boxes':>8} {'wall s':>8} {'cpu s':>8}")
+    for f in files:
+        system = load_minibex(f)
+        for w in workers:
+            walls, cpus, res = [], [], None
+            for _ in range(args.runs):
+                solver = Solver(system, eps=args.eps)
+                t, c = time.perf_counter(), time.process_time()
+                res = solver.solve(workers=w, timeout=args.timeout)
+                walls.append(time.perf_counter() - t)
+                cpus.append(time.process_time() - c)
+            print(f"{f.stem:<20} {system.n:>4} {w:>2} {res.status:<10} {len(res.solutions):>4} "
+                  f"{len(res.undecided):>4} {res.stats.boxes:>8} "
+                  f"{statistics.median(walls):>8.3f} {statistics.median(cpus):>8.3f}",
+                  flush=True)
+
+
+if __name__ == "__main__":
+    main()
