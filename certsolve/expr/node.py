@@ -115,8 +115,8 @@ class Expr:
         return pow(self, n)
 
     # -- inspection ------------------------------------------------------------------
-    def variables(self) -> set[str]:
-        """Names of the variables this expression depends on."""
+    def _leaves(self, op: str) -> set[str]:
+        """Names of the leaves of kind ``op`` ("var" or "param") below this node."""
         out: set[str] = set()
         stack = [self]
         seen: set[int] = set()
@@ -125,25 +125,18 @@ class Expr:
             if id(e) in seen:
                 continue
             seen.add(id(e))
-            if e.op == "var":
+            if e.op == op:
                 out.add(e.param)
             stack.extend(e.args)
         return out
 
+    def variables(self) -> set[str]:
+        """Names of the variables this expression depends on."""
+        return self._leaves("var")
+
     def parameters(self) -> set[str]:
         """Names of the parameters this expression depends on."""
-        out: set[str] = set()
-        stack = [self]
-        seen: set[int] = set()
-        while stack:
-            e = stack.pop()
-            if id(e) in seen:
-                continue
-            seen.add(id(e))
-            if e.op == "param":
-                out.add(e.param)
-            stack.extend(e.args)
-        return out
+        return self._leaves("param")
 
     def __repr__(self) -> str:
         return to_string(self)
