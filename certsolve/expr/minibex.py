@@ -85,9 +85,12 @@ _SECTIONS = {"constants", "variables", "constraints", "end"}
 
 
 def decimal_enclosure(text: str) -> tuple[float, float]:
-    """Tightest float interval containing the exact decimal ``text``."""
+    """Tightest float interval containing the exact decimal ``text``.
+
+    Raises ``OverflowError`` for a decimal beyond the float range.
+    """
     exact = Fraction(text)
-    f = float(exact)
+    f = float(exact)  # OverflowError beyond ~1.8e308
     fx = Fraction(f)
     if fx == exact:
         return f, f
@@ -152,8 +155,15 @@ class _Parser:
     def expect(self, text: str, what: str):
         if not self.at(text):
             found = self.tok.text or "end of file"
-            self.error(f"expected {text!r} {what}, found {found!r}")
+            self.error(f"expected {text!r} {what}, found {found!r}", self._after_previous())
         return self.next()
+
+    def _after_previous(self) -> Token:
+        """Where a missing terminator belongs: just after the previous token."""
+        if self.i == 0:
+            return self.tok
+        prev = self.toks[self.i - 1]
+        return Token(prev.kind, prev.text, prev.line, prev.col + len(prev.text))
 
     # -- grammar --------------------------------------------------------------------------
     def parse(self) -> System:
@@ -262,11 +272,11 @@ class _Parser:
             self.error("strict inequalities are not supported; use <= or >=")
         else:
             found = self.tok.text or "end of file"
-            self.error(f"expected '=', '==', '<=' or '>=' in constraint, found {found!r}", start)
+            self.error(f"expected '=', '==', '<=' or '>=' in constraint, found {found!r}")
         if self.at(";"):
             self.next()
         elif not (self.at_keyword("end") or self.tok.kind == "EOF"):
-            self.error("expected ';' after the constraint")
+            self.error("expected ';' after the constraint", self._after_previous())
 
     # expression := term (('+'|'-') term)*
     def expr(self) -> Expr:
@@ -328,7 +338,10 @@ class _Parser:
         t = self.tok
         if t.kind == "NUM":
             self.next()
-            return N.const(*decimal_enclosure(t.text))
+            try:
+                return N.const(*decimal_enclosure(t.text))
+            except OverflowError:
+                self.error(f"number {t.text} is beyond the double-precision range", t)
         if self.at("("):
             self.next()
             e = self.expr()

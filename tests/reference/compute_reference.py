@@ -1,11 +1,16 @@
 """Independent reference solutions for the test systems in ``examples/systems/``.
 
-Run by hand (it is not part of the test suite; it needs sympy and takes minutes)::
+Run by hand (it is not part of the test suite; it needs sympy and takes about 20 minutes,
+mostly the sympy Groebner bases of katsura-6 and eco-7)::
 
     /tmp/venv/bin/pip install sympy
     /tmp/venv/bin/python tests/reference/compute_reference.py               # every system
     /tmp/venv/bin/python tests/reference/compute_reference.py eco-7 kin2-6r # some systems
     /tmp/venv/bin/python tests/reference/compute_reference.py --list
+
+    # optional second computer-algebra system, to cross-check every Groebner basis:
+    apt-get install --no-install-recommends singular-ui singular-modules singular-data
+    /tmp/venv/bin/python tests/reference/compute_reference.py --cross-check
 
 It rewrites ``tests/reference/reference.json``, replacing only the entries of the systems
 computed.  Nothing here uses certsolve (neither its parser nor its solver): every system is
@@ -31,6 +36,20 @@ Methods
     double-root system) are first replaced by their radical (Seidenberg: add the
     square-free part of the univariate eliminant of every variable).
     Finally the original equations are evaluated at every solution (residual check).
+    With ``--cross-check`` the lex basis is computed a second time by Singular
+    (``modStd(I, 1)``: multi-modular, verified; then ``fglm``) and the real solutions
+    must agree.
+``newton-multistart-krawczyk (certified lower bound) + literature count``  (kin2)
+    The exact method is out of reach here: kin2 has 64 complex solutions and 9-digit decimal
+    coefficients, and neither sympy nor Singular's modStd finished its basis over Q within
+    40 minutes (over a prime field Singular gives dim 0, vdim 64 in 0.1 s).  So: Newton on
+    the four joint angles from 100000 random starts (fixed seed) finds 10 distinct real
+    solutions (in trial runs all 10 already within the first 5000 starts); each is refined in mpmath
+    on the 8-variable polynomial system and certified by a Krawczyk test in ``mpmath.iv``
+    on a box of radius 1e-50 (exactly one solution in it).  That there are no others is the
+    literature count (10, Van Hentenryck, McAllester and Kapur 1997).  Every real solution
+    is in the domain since x1^2 + x2^2 = 1 etc.  ``--kin2-singular SECONDS`` tries the exact
+    method as well.
 ``interval-1d``  (trig-exp)
     The system is reduced to one equation ``h(x) = 0`` in one variable (the other one is an
     explicit function of it); ``[lo, hi]`` is subdivided recursively with ``mpmath.iv``: a
@@ -52,7 +71,10 @@ from __future__ import annotations
 import argparse
 import json
 import re
+import shutil
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -224,12 +246,15 @@ def _radical(eqs, gens):
     return list(eqs) + extra
 
 
-def solve_polynomial(eqs, gens, domain, log=print):
-    """Real solutions of a zero-dimensional polynomial system over Q inside ``domain``."""
+def solve_polynomial(eqs, gens, domain, log=print, lex_basis=None):
+    """Real solutions of a zero-dimensional polynomial system over Q inside ``domain``.
+
+    ``lex_basis``: a function computing the reduced lex Groebner basis (default: sympy).
+    """
     eqs = [sp.nsimplify(sp.expand(e), rational=True) for e in eqs]
     info = {}
     t0 = time.perf_counter()
-    G = _lex_basis(eqs, gens)
+    G = (lex_basis or _lex_basis)(eqs, gens)
     if len(str(G)) < 300:
         info["lex_basis"] = str(G)
     if G == [1]:
@@ -269,13 +294,15 @@ def solve_polynomial(eqs, gens, domain, log=print):
     # (so coordinates that are exactly 0 or 1/3 come out exact)
     sols = []
     n_real = 0
-    for q, mult in sp.factor_list(p)[1]:
+    small = max(len(str(c)) for c in p.all_coeffs()) < 1000
+    factors = sp.factor_list(p)[1] if small else [(p, 1)]  # factoring huge p is too slow
+    for q, mult in factors:
         assert mult == 1
-        rems = [c.rem(q) for c in coords]
+        rems = [c.rem(q) for c in coords] if small else coords
         for (a, b), m in q.intervals(eps=sp.Rational(1, 10 ** (2 * DIGITS))):
             assert m == 1
             n_real += 1
-            point = _enclose_point(rems, a, b)
+            point = _enclose_point(q, rems, a, b)
             if _in_domain(point, domain):
                 mp.dps = 3 * DIGITS  # convert while iv.dps is still that of the enclosure
                 sols.append([_mpf(v) for v in point])
@@ -299,10 +326,15 @@ def _mpf(v):
     return mpmath.mpf(v.mid.a)
 
 
-def _enclose_point(rems, a, b):
-    """Exact values (constant remainders) or tight iv enclosures of every coordinate."""
-    for dps in (3 * DIGITS, 6 * DIGITS, 12 * DIGITS, 24 * DIGITS, 48 * DIGITS):
-        iv.dps = dps
+def _enclose_point(q, rems, a, b):
+    """Exact values (constant remainders) or tight iv enclosures of every coordinate.
+
+    ``[a, b]`` isolates a root of ``q``; it is refined along with the precision.
+    """
+    for k in range(6):
+        iv.dps = 3 * DIGITS * 2**k
+        if k:
+            a, b = q.refine_root(a, b, eps=sp.Rational(1, 10 ** (2 * DIGITS * 2**k)))
         T = iv.mpf([_iv_rational(a).a, _iv_rational(b).b])
         point = []
         for r in rems:
@@ -335,6 +367,160 @@ def _in_domain(point, domain) -> bool:
         else:
             raise RuntimeError(f"solution enclosure {e} straddles a domain bound")
     return all(inside)
+
+
+# ---------------------------------------------------------------------------------------------
+# Singular backend (for kin2: sympy's Groebner bases are far too slow on its 64 solutions with
+# 9-digit decimal coefficients)
+# ---------------------------------------------------------------------------------------------
+def lex_basis_singular(eqs, gens, timeout=None):
+    """Reduced lex basis computed by Singular (Debian package ``singular-ui``).
+
+    ``modStd(I, 1)`` (modstd.lib): multi-modular Groebner basis over Q with the final
+    verification tests switched on (exactness 1: the result is a Groebner basis of I, not
+    only probably), then FGLM to lex.
+    """
+    exe = shutil.which("Singular")
+    if exe is None:
+        raise FileNotFoundError("Singular is not installed (apt-get install singular-ui)")
+    names = ", ".join(map(str, gens))
+    polys = ",\n  ".join(str(sp.expand(e)).replace("**", "^") for e in eqs)
+    with tempfile.TemporaryDirectory() as d:
+        out = Path(d) / "lex.txt"
+        script = Path(d) / "run.sing"
+        script.write_text(
+            'LIB "modstd.lib";\n'
+            f"ring r = 0, ({names}), dp;\nshort = 0;\noption(redSB);\n"
+            f"ideal i =\n  {polys};\n"
+            "ideal g = modStd(i, 1);\n"
+            f"ring s = 0, ({names}), lp;\nshort = 0;\n"
+            "ideal l = fglm(r, g);\n"
+            f'write(":w {out}", l);\nquit;\n'
+        )
+        subprocess.run([exe, "-q", str(script)], check=True, timeout=timeout, capture_output=True)
+        text = out.read_text()
+    return [_parse_singular(t, list(gens)) for t in text.split(",")]
+
+
+def _parse_singular(text, gens):
+    """A polynomial printed by Singular over Q (``-3/7*x1*x8^2+...``) as a sympy expression."""
+    index = {str(g): k for k, g in enumerate(gens)}
+    poly = {}
+    for term in re.findall(r"[+-]?[^+-]+", re.sub(r"\s", "", text)):
+        sign = -1 if term[0] == "-" else 1
+        coef = sp.Integer(sign)
+        exps = [0] * len(gens)
+        for f in term.lstrip("+-").split("*"):
+            if f[0].isdigit():
+                coef *= sp.Rational(f)
+            else:
+                name, _, e = f.partition("^")
+                exps[index[name]] += int(e or 1)
+        poly[tuple(exps)] = poly.get(tuple(exps), 0) + coef
+    return sp.Poly.from_dict(poly, *gens).as_expr()
+
+
+# ---------------------------------------------------------------------------------------------
+# Certified numerics (kin2 without Singular): multistart Newton + Krawczyk in mpmath.iv
+# ---------------------------------------------------------------------------------------------
+def _iv_polys(polys, gens):
+    """Polynomials as lists of (iv coefficient, exponents), for interval evaluation."""
+    out = []
+    for e in polys:
+        P = sp.Poly(e, *gens)
+        out.append([(_iv_rational(c), m) for m, c in zip(P.monoms(), P.coeffs())])
+    return out
+
+
+def _iv_eval(terms, X):
+    acc = iv.mpf(0)
+    for c, m in terms:
+        t = c
+        for x, k in zip(X, m):
+            if k:
+                t = t * x**k
+        acc += t
+    return acc
+
+
+def krawczyk(eqs, gens, x0, radius):
+    """True if the box ``x0 +- radius`` holds exactly one solution (Krawczyk, mpmath.iv)."""
+    n = len(gens)
+    F = _iv_polys(eqs, gens)
+    Jt = [_iv_polys([sp.diff(e, v) for v in gens], gens) for e in eqs]
+    m = [iv.mpf(v) for v in x0]
+    B = [iv.mpf([v - radius, v + radius]) for v in x0]
+    Jm = mp.matrix([[_iv_eval(Jt[i][j], m).mid for j in range(n)] for i in range(n)])
+    Y = mp.inverse(Jm)
+    Fm = [_iv_eval(f, m) for f in F]
+    JB = [[_iv_eval(Jt[i][j], B) for j in range(n)] for i in range(n)]
+    for i in range(n):
+        k = m[i] - sum((iv.mpf(Y[i, q]) * Fm[q] for q in range(n)), iv.mpf(0))
+        for j in range(n):
+            c = iv.mpf(1 if i == j else 0)
+            for q in range(n):
+                c -= iv.mpf(Y[i, q]) * JB[q][j]
+            k += c * (B[j] - m[j])
+        if not (B[i].a < k.a and k.b < B[i].b):
+            return False
+    return True
+
+
+def kin2_numeric(log=print, starts=100_000, seed=1):
+    """Real solutions of kin2 by multistart Newton on the angles, each certified by Krawczyk.
+
+    A certified lower bound; that there are no others rests on the literature count.
+    """
+    import numpy as np
+
+    eqs, gens, _ = sys_kin2()
+    A = np.array([[float(v) for v in row.split()] for row in KIN2_ROWS])
+
+    def F(th):
+        C, S = np.cos(th), np.sin(th)
+        x1, x3, x5, x7 = C.T
+        x2, x4, x6, x8 = S.T
+        one = np.ones_like(x1)
+        M = np.stack([x1 * x3, x1 * x4, x2 * x3, x2 * x4, x5 * x7, x5 * x8, x6 * x7, x6 * x8,
+                      x1, x2, x3, x4, x5, x6, x7, x8, one], 1)  # fmt: skip
+        return M @ A.T
+
+    rng = np.random.default_rng(seed)
+    found = []
+    for _ in range(starts // 5000):
+        th = rng.uniform(-np.pi, np.pi, (5000, 4))
+        with np.errstate(all="ignore"):
+            for _ in range(60):
+                J = np.empty((th.shape[0], 4, 4))
+                for k in range(4):
+                    e = np.zeros(4)
+                    e[k] = 1e-7
+                    J[:, :, k] = (F(th + e) - F(th - e)) / 2e-7
+                ok = np.abs(np.linalg.det(J)) > 1e-14
+                th, J = th[ok], J[ok]
+                d = np.linalg.solve(J, F(th)[..., None])[..., 0]
+                th = th - np.clip(d, -0.5, 0.5)
+        good = np.max(np.abs(F(th)), 1) < 1e-12
+        for p in np.angle(np.exp(1j * th[good])):
+            if not any(np.max(np.abs(np.angle(np.exp(1j * (p - q))))) < 1e-6 for q in found):
+                found.append(p)
+    log(f"  multistart Newton: {len(found)} distinct real solutions from {starts} starts")
+    mp.dps = 3 * DIGITS
+    iv.dps = 3 * DIGITS
+    f = sp.lambdify(gens, eqs, modules="mpmath")
+    jac = sp.lambdify(gens, sp.Matrix(eqs).jacobian(gens), modules="mpmath")
+    sols = []
+    for p in found:
+        x = mp.matrix([v for a in p for v in (mp.cos(a), mp.sin(a))])
+        for _ in range(12):  # Newton in mpmath on the 8-variable polynomial system
+            x = x - mp.lu_solve(mp.matrix(jac(*x)), mp.matrix(f(*x)))
+        x = [x[i] for i in range(8)]
+        if not krawczyk(eqs, gens, x, mpmath.mpf(10) ** -(DIGITS + 10)):
+            raise RuntimeError(f"Krawczyk failed at {x}")
+        sols.append(x)
+    iv.dps = 15
+    log(f"  Krawczyk: {len(sols)} certified, each alone in its box")
+    return sols, {"starts": starts, "seed": seed}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -384,6 +570,11 @@ def solve_trig_exp(log=print):
     for a, b in pieces:
         r = mp.findroot(lambda x: _trig_h(x, mp), (a + b) / 2)
         assert a <= r <= b
+        # the digits are right: h changes sign (rigorously) within 1e-(DIGITS+5) of r
+        iv.dps = 3 * DIGITS
+        d = mpmath.mpf(10) ** (-DIGITS - 5)
+        h1, h2 = _trig_h(iv.mpf(r - d), iv), _trig_h(iv.mpf(r + d), iv)
+        assert (h1.b < 0 < h2.a) or (h2.b < 0 < h1.a)
         sols.append([r, _trig_y(r, mp)])
     # every y(x) is inside [-2, 2] (bound in the .mbx comment), checked here too
     Yr = _trig_y(iv.mpf([lo, hi]), iv)
@@ -483,10 +674,37 @@ def solve_broyden(n=10, log=print):
 # ---------------------------------------------------------------------------------------------
 # Driver
 # ---------------------------------------------------------------------------------------------
+# command-line options (see main)
+OPTIONS = {"cross_check": False, "kin2_singular": None}
+
+
+def _singular_basis(timeout):
+    return lambda e, g: lex_basis_singular(e, g, timeout=timeout)
+
+
+def _same_points(a, b, what):
+    assert len(a) == len(b), f"{what}: {len(a)} != {len(b)} solutions"
+    tol = mpmath.mpf(10) ** (-DIGITS + 5)
+    for p in a:
+        close = [
+            q for q in b if max(abs(mpmath.mpf(u) - mpmath.mpf(v)) for u, v in zip(p, q)) < tol
+        ]
+        assert len(close) == 1, f"{what}: solution {p} matched {len(close)} times"
+
+
 def _entry_poly(builder, citation):
     def run(log):
         eqs, gens, dom = builder()
         sols, info = solve_polynomial(eqs, gens, dom, log=log)
+        if OPTIONS["cross_check"]:
+            t0 = time.perf_counter()
+            other, _ = solve_polynomial(eqs, gens, dom, log=log, lex_basis=_singular_basis(3600))
+            _same_points(sols, other, "Singular cross-check")
+            info["cross_check"] = (
+                "Singular modStd + fglm basis, same isolation: same real solutions "
+                f"({time.perf_counter() - t0:.1f} s)"
+            )
+            log("  Singular cross-check: same solutions")
         return [str(v) for v in gens], dom, sols, "groebner-lex", citation, info
 
     return run
@@ -504,6 +722,36 @@ def _entry_broyden(log):
     return names, [(-1, 1)] * 10, sols, "interval-contraction-krawczyk", CITE["broyden"], info
 
 
+def _entry_kin2(log):
+    """Certified numerics (+ the literature count), or Singular's exact lex basis if asked.
+
+    With ``--kin2-singular SECONDS`` the exact method is tried too (over Q, the 64-solution
+    basis with 9-digit decimal coefficients did not finish in 40 min on 2 shared cores);
+    the multistart + Krawczyk solutions are then a cross-check.
+    """
+    eqs, gens, dom = sys_kin2()
+    names = [str(v) for v in gens]
+    num, num_info = kin2_numeric(log=log)
+    exact = None
+    timeout = OPTIONS["kin2_singular"]
+    if timeout:
+        try:
+            basis = _singular_basis(timeout)
+            exact, info = solve_polynomial(eqs, gens, dom, log=log, lex_basis=basis)
+        except subprocess.TimeoutExpired:
+            log(f"  Singular did not finish in {timeout} s: numeric method only")
+    if exact is not None:
+        # same solutions both ways
+        assert len(exact) == len(num)
+        for p in num:
+            assert sum(max(abs(a - b) for a, b in zip(p, q)) < 1e-30 for q in exact) == 1
+        info["numeric_cross_check"] = f"{len(num)} Krawczyk-certified multistart solutions agree"
+        return names, dom, exact, "groebner-lex (Singular modStd + fglm)", CITE["kin2"], info
+    cite = CITE["kin2"] + "; the count (no solution missed) rests on this citation"
+    method = "newton-multistart-krawczyk (certified lower bound) + literature count"
+    return names, dom, num, method, cite, num_info
+
+
 SYSTEMS = {
     "circle-line": _entry_poly(sys_circle_line, "constructed: circle and line"),
     "brown-5": _entry_poly(sys_brown, CITE["brown"]),
@@ -512,7 +760,7 @@ SYSTEMS = {
     "katsura-6": _entry_poly(lambda: sys_katsura(6), CITE["katsura"]),
     "eco-6": _entry_poly(lambda: sys_eco(6, (-100, 100)), CITE["eco"]),
     "eco-7": _entry_poly(lambda: sys_eco(7, (-100, 100)), CITE["eco"]),
-    "kin2-6r": _entry_poly(sys_kin2, CITE["kin2"]),
+    "kin2-6r": _entry_kin2,
     "double-root": _entry_poly(sys_double_root, "constructed: tangent line y = 1"),
     "infeasible": _entry_poly(sys_infeasible, "constructed: circle and hyperbola xy = 0.501"),
     "trig-exp": _entry_trig,
@@ -546,7 +794,20 @@ def main(argv=None) -> int:
     ap.add_argument("systems", nargs="*", help="system names (default: all)")
     ap.add_argument("--list", action="store_true")
     ap.add_argument("--dry-run", action="store_true", help="do not write reference.json")
+    ap.add_argument(
+        "--cross-check",
+        action="store_true",
+        help="also compute the Groebner bases with Singular (apt-get install singular-ui)",
+    )
+    ap.add_argument(
+        "--kin2-singular",
+        type=float,
+        metavar="SECONDS",
+        help="try the exact method on kin2 with Singular, for at most SECONDS",
+    )
     args = ap.parse_args(argv)
+    OPTIONS["cross_check"] = args.cross_check
+    OPTIONS["kin2_singular"] = args.kin2_singular
     if args.list:
         print("\n".join(SYSTEMS))
         return 0
