@@ -257,7 +257,6 @@ class _Parser:
         return g.param[nid]
 
     def constraint(self):
-        start = self.tok
         lhs = self.expr()
         if self.at("=") or self.at("=="):
             self.next()
