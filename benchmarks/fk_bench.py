@@ -1,6 +1,7 @@
 """Forward-kinematics benchmark: all-solutions searches, tracking steps, IK Algorithm 2.
 
     python benchmarks/fk_bench.py [--runs 3] [--workers 1,2] [--timeout 300] [--cases ...]
+                                  [--formulation auto|general-19|T-16|...]
 
 For each system (robot file, tau_max, control vector u) it prints the median wall and CPU
 time of a complete all-solutions search with 1 and 2 worker processes, the status, number of
@@ -48,7 +49,7 @@ def bench_fk(args) -> None:
         for w in args.workers:
             walls, cpus, res = [], [], None
             for _ in range(args.runs):
-                fk = FKSolver(robot)
+                fk = FKSolver(robot, args.formulation)
                 t, c = time.perf_counter(), time.process_time()
                 res = fk.solve(u, timeout=args.timeout, workers=w)
                 walls.append(time.perf_counter() - t)
@@ -113,12 +114,16 @@ def main() -> None:
     ap.add_argument("--timeout", type=float, default=300.0)
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--cases", nargs="*", choices=list(CASES), default=None)
+    ap.add_argument(
+        "--formulation", default="auto", help="auto (platform frame) or a paper system name"
+    )
     ap.add_argument("--skip-fk", action="store_true")
     args = ap.parse_args()
     args.workers = [int(w) for w in args.workers.split(",")]
     print(
         f"# {platform.machine()}, {os.cpu_count()} cores, python "
-        f"{platform.python_version()}; median of {args.runs} runs"
+        f"{platform.python_version()}; median of {args.runs} runs; "
+        f"formulation {args.formulation}"
     )
     if not args.skip_fk:
         bench_fk(args)

@@ -44,25 +44,35 @@ def matching(result, robot, pose, tol=1e-6):
 def local_boxes(fk, robot, pose, radius):
     """The FK search box restricted to chosen points within ``radius`` cm of the pose."""
     form = fk.form
-    P = pose.position + form.Q @ pose.rotation.T
+    c = form.coordinates_of(pose.position + form.Q @ pose.rotation.T)
     dom = fk.csys.system.domain
     lo, hi = dom[:, 0].copy(), dom[:, 1].copy()
-    k = P.size
-    lo[:k] = np.maximum(lo[:k], P.ravel() - radius)
-    hi[:k] = np.minimum(hi[:k], P.ravel() + radius)
+    k = c.size
+    lo[:k] = np.maximum(lo[:k], c - radius)
+    hi[:k] = np.minimum(hi[:k], c + radius)
     return lo[None], hi[None]
 
 
 # -- round trips ------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("params", [(90, 60, 0), (75, 52, 0), (80, 55, 3), (100, 62, -3)])
-def test_planar10_round_trip_full_domain(params):
+@pytest.mark.parametrize(
+    "params, formulation",
+    [
+        ((90, 60, 0), "auto"),
+        ((75, 52, 0), "auto"),
+        ((80, 55, 3), "auto"),
+        ((100, 62, -3), "auto"),
+        ((90, 60, 0), "planar-10"),
+        ((100, 62, -3), "planar-10"),
+    ],
+)
+def test_planar10_round_trip_full_domain(params, formulation):
     robot = load("planar")
     pose = Pose.from_params(3, params)
     u = ik_u(robot, pose)
-    res = forward_kinematics(robot, u, timeout=120)
-    assert res.formulation == "planar-10"
+    res = forward_kinematics(robot, u, formulation=formulation, timeout=120)
+    assert res.formulation == ("frame-planar-10" if formulation == "auto" else "planar-10")
     assert res.status == "complete"
     assert len(matching(res, robot, pose)) == 1
     for s in res.solutions:
@@ -74,7 +84,18 @@ def test_t16_round_trip_full_domain():
     pose = Pose.from_params(6, (112, 58, 115, 4, -3, 2))
     u = ik_u(robot, pose)
     res = forward_kinematics(robot, u, timeout=300)
-    assert res.formulation == "T-16"
+    assert res.formulation == "frame-T-16"
+    assert res.status == "complete"
+    assert len(matching(res, robot, pose)) == 1
+
+
+@pytest.mark.slow
+def test_general19_round_trip_full_domain():
+    robot = load("marionet")
+    pose = Pose.from_params(6, (108, 60, 104, 5, 3, -4))
+    u = ik_u(robot, pose)
+    res = forward_kinematics(robot, u, timeout=1200)
+    assert res.formulation == "frame-general-19"
     assert res.status == "complete"
     assert len(matching(res, robot, pose)) == 1
 
@@ -84,7 +105,9 @@ def test_t16_round_trip_full_domain():
     [
         ("marionet", (111, 58, 107, 0, 0, 0), "general-19", 0.5),
         ("marionet", (108, 60, 104, 5, 3, -4), "general-19", 0.5),
+        ("marionet", (108, 60, 104, 5, 3, -4), "auto", 0.5),
         ("marionet-t", (116, 61, 119, -5, 2, 3), "T-16", 2.0),
+        ("marionet-t", (116, 61, 119, -5, 2, 3), "auto", 2.0),
         ("planar", (70, 45, 5), "planar-10", 2.0),
     ],
 )
@@ -105,7 +128,7 @@ def test_almost_planar13_fk_then_ik_round_trip():
     robot = load("almost-planar")
     u = np.array([0.3, -0.2, 0.25, -0.1])
     fk = FKSolver(robot)
-    assert fk.formulation == "almost-planar-13"
+    assert fk.formulation == "frame-almost-planar-13"
     guess = Pose.from_params(6, (90, 60, -1, 0, 0, 0))
     fk._prepare(u)
     res = fk.solve(u, boxes=local_boxes(fk, robot, guess, 4.0), timeout=120)

@@ -12,22 +12,11 @@ import numpy as np
 import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
+from strategies import finite, interval_and_point, wide
 
 from certsolve.interval import arith, elementary, linalg, projections
 
 mpmath.mp.dps = 60
-
-finite = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False, allow_infinity=False)
-wide = st.floats(min_value=-1e150, max_value=1e150, allow_nan=False, allow_infinity=False)
-
-
-@st.composite
-def interval_and_point(draw, elements=finite):
-    a = draw(elements)
-    b = draw(elements)
-    lo, hi = min(a, b), max(a, b)
-    x = draw(st.floats(min_value=lo, max_value=hi, allow_nan=False))
-    return lo, hi, x
 
 
 def inside(lo, hi, exact) -> bool:

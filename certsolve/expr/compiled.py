@@ -100,6 +100,47 @@ class CompiledSystem:
             return (*out, self.fj.defined_mask(LO, HI))
         return out
 
+    def _column_program(self, cols: tuple[int, ...]):
+        """Program for ``f`` and the Jacobian columns ``cols`` only (built on first use)."""
+        progs = self.__dict__.setdefault("_col_programs", {})
+        if cols not in progs:
+            n = self.n
+            mask = np.zeros((n, n), dtype=bool)
+            mask[:, list(cols)] = self.jac_structure[:, list(cols)]
+            jac = []
+            for i in range(n):
+                for j in range(n):
+                    if mask[i, j]:
+                        jac.append(self.graph.derivative(self.eq_roots[i], j))
+            prog = Program(self.graph, self.eq_roots + jac)
+            progs[cols] = (prog, np.flatnonzero(mask.ravel()))
+        return progs[cols]
+
+    def eval_fj_columns(self, lo, hi, cols):
+        """Enclosures of ``f`` and of the Jacobian *columns* ``cols`` over boxes.
+
+        Returns ``flo, fhi`` ``(B, n)``, ``jlo, jhi`` ``(B, n, n)`` (other columns zero) and
+        the ``(B,)`` mask of boxes on which every evaluated node is defined.  Cheaper than
+        :meth:`eval_fj` when only a few columns are needed (mixed Jacobians).
+        """
+        cols = tuple(sorted(int(c) for c in cols))
+        prog, flat = self._column_program(cols)
+        B = lo.shape[0]
+        LO, HI = prog.eval_interval(lo, hi, self.param_lo, self.param_hi)
+        n = self.n
+        jlo = np.zeros((B, n * n))
+        jhi = np.zeros((B, n * n))
+        out = prog.outputs
+        jlo[:, flat] = LO[out[n:]].T
+        jhi[:, flat] = HI[out[n:]].T
+        return (
+            LO[out[:n]].T,
+            HI[out[:n]].T,
+            jlo.reshape(B, n, n),
+            jhi.reshape(B, n, n),
+            prog.defined_mask(LO, HI),
+        )
+
     def eval_constraints(self, lo, hi):
         """Enclosures of the constraint expressions over boxes: two ``(B, m)`` arrays."""
         LO, HI = self.hc4.eval_interval(lo, hi, self.param_lo, self.param_hi)

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..interval import arith, elementary
+from ..interval import inplace as IP
 from ..interval import projections as P
 from .graph import Graph
 
@@ -63,11 +64,20 @@ _FWD = {
     "cmul": lambda a, b, c, d, p: arith.scale(a, b, p),
 }
 
+# forward ops writing into the node rows (fewer temporaries, see interval.inplace):
+# (xlo, xhi, ylo, yhi, param, out_lo, out_hi)
+_FWD_INTO = {
+    "add": lambda a, b, c, d, p, o, q: IP.add_into(a, b, c, d, o, q),
+    "sub": lambda a, b, c, d, p, o, q: IP.sub_into(a, b, c, d, o, q),
+    "mul": lambda a, b, c, d, p, o, q: IP.mul_into(a, b, c, d, o, q),
+    "cadd": lambda a, b, c, d, p, o, q: IP.shift_into(a, b, p, o, q),
+}
+
 # backward projections: (zlo, zhi, xlo, xhi, ylo, yhi, param) -> narrowed (x[, y]) bounds
 _BWD = {
-    "add": lambda z0, z1, a, b, c, d, p: P.bwd_add(z0, z1, a, b, c, d),
-    "sub": lambda z0, z1, a, b, c, d, p: P.bwd_sub(z0, z1, a, b, c, d),
-    "mul": lambda z0, z1, a, b, c, d, p: P.bwd_mul(z0, z1, a, b, c, d),
+    "add": lambda z0, z1, a, b, c, d, p: IP.bwd_add(z0, z1, a, b, c, d),
+    "sub": lambda z0, z1, a, b, c, d, p: IP.bwd_sub(z0, z1, a, b, c, d),
+    "mul": lambda z0, z1, a, b, c, d, p: IP.bwd_mul(z0, z1, a, b, c, d),
     "div": lambda z0, z1, a, b, c, d, p: P.bwd_div(z0, z1, a, b, c, d),
     "min": lambda z0, z1, a, b, c, d, p: P.bwd_min(z0, z1, a, b, c, d),
     "max": lambda z0, z1, a, b, c, d, p: P.bwd_max(z0, z1, a, b, c, d),
@@ -232,6 +242,15 @@ class Program:
         HI[self.const_slice] = self.const_hi
         with np.errstate(all="ignore"):
             for g in self.groups:
+                into = _FWD_INTO.get(g.op)
+                if into is not None:
+                    b_lo = None if g.b is None else LO[g.b]
+                    b_hi = None if g.b is None else HI[g.b]
+                    into(
+                        LO[g.a], HI[g.a], b_lo, b_hi, g.param,
+                        LO[g.start : g.stop], HI[g.start : g.stop],
+                    )  # fmt: skip
+                    continue
                 if g.b is None:
                     rlo, rhi = _FWD[g.op](LO[g.a], HI[g.a], None, None, g.param)
                 else:

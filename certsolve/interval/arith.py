@@ -87,7 +87,7 @@ def scale(alo, ahi, c):
 
 def mul(alo, ahi, blo, bhi):
     """Product; ``0 * inf`` counts as 0 (``fmin``/``fmax`` ignore the NaN it produces)."""
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore", over="ignore"):
         p1 = alo * blo
         p2 = alo * bhi
         p3 = ahi * blo
@@ -102,7 +102,7 @@ def mul(alo, ahi, blo, bhi):
 def div(alo, ahi, blo, bhi):
     """Quotient with IBEX semantics for divisors containing 0 (see module docstring)."""
     alo, ahi, blo, bhi = np.broadcast_arrays(alo, ahi, blo, bhi)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         q1 = alo / blo
         q2 = alo / bhi
         q3 = ahi / blo
@@ -117,7 +117,7 @@ def div(alo, ahi, blo, bhi):
         b_pos = zb & (blo == 0.0) & (bhi > 0.0)  # [0, d]
         b_neg = zb & (bhi == 0.0) & (blo < 0.0)  # [c, 0]
         b_zero = zb & (blo == 0.0) & (bhi == 0.0)
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             # b = [0, d]: a >= 0 -> [a.lo/d, inf); a <= 0 -> (-inf, a.hi/d]
             bp_lo = np.where(a_pos, down(alo / bhi), -_INF)
             bp_hi = np.where(a_neg, up(ahi / bhi), _INF)
@@ -152,7 +152,7 @@ def sqr(alo, ahi):
 def sqrt(alo, ahi):
     """Square root of the non-negative part (empty if there is none)."""
     lo = np.maximum(alo, 0.0)
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore", over="ignore"):
         rlo = np.maximum(down(np.sqrt(lo)), 0.0)
         rhi = up(np.sqrt(ahi))
     neg_only = ahi < 0.0
@@ -171,14 +171,15 @@ def _pow_pos(alo, ahi, n: int):
     rhi = np.ones_like(ahi)
     blo, bhi = alo, ahi
     k = n
-    while k:
-        if k & 1:
-            rlo = down(rlo * blo)
-            rhi = up(rhi * bhi)
-        k >>= 1
-        if k:
-            blo = down(blo * blo)
-            bhi = up(bhi * bhi)
+    with np.errstate(over="ignore"):  # overflow to inf is a valid upper bound
+        while k:
+            if k & 1:
+                rlo = down(rlo * blo)
+                rhi = up(rhi * bhi)
+            k >>= 1
+            if k:
+                blo = down(blo * blo)
+                bhi = up(bhi * bhi)
     return np.maximum(rlo, 0.0), rhi
 
 

@@ -58,21 +58,41 @@ def _hull_of_meets(xlo, xhi, p1lo, p1hi, p2lo, p2hi):
 def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
     """Narrow ``[x]`` to the hull of ``{t ∈ [x] : ∃ y ∈ [y], t*y ∈ [z]}``.
 
+    * ``0 ∉ [y]``: the ordinary quotient ``[z] / [y]`` (four corner quotients; this is
+      the common case and is computed for the whole batch at once);
     * ``0 ∈ [y]`` and ``0 ∈ [z]``: any ``t`` works (take ``y = 0``): no contraction;
-    * ``0 ∉ [y]``: the ordinary quotient ``[z] / [y]``;
     * ``0 ∈ [y]``, ``0 ∉ [z]``: the quotient set is two half-lines, one per sign of ``y``;
-      each is intersected with ``[x]`` before the hull is taken.
+      each is intersected with ``[x]`` before the hull is taken (only these entries are
+      computed, on the compressed subset).
     """
     zlo, zhi, ylo, yhi, xlo, xhi = np.broadcast_arrays(zlo, zhi, ylo, yhi, xlo, xhi)
-    qlo, qhi = arith.div(zlo, zhi, ylo, yhi)
-    out_lo, out_hi = _meet(xlo, xhi, qlo, qhi)
+    shape = zlo.shape
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        q1 = zlo / ylo
+        q2 = zlo / yhi
+        q3 = zhi / ylo
+        q4 = zhi / yhi
+        qlo = np.minimum(np.minimum(q1, q2), np.minimum(q3, q4))
+        qhi = np.maximum(np.maximum(q1, q2), np.maximum(q3, q4))
+    out_lo = np.maximum(xlo, down(qlo))
+    out_hi = np.minimum(xhi, up(qhi))
     y0 = (ylo <= 0.0) & (yhi >= 0.0)
     if not np.any(y0):
         return out_lo, out_hi
+    out_lo = np.array(out_lo, copy=True).reshape(-1)
+    out_hi = np.array(out_hi, copy=True).reshape(-1)
+    k = np.flatnonzero(y0)
+    glo, ghi = _mul_inverse_zero(*(np.ravel(a)[k] for a in (zlo, zhi, ylo, yhi, xlo, xhi)))
+    out_lo[k] = glo
+    out_hi[k] = ghi
+    return out_lo.reshape(shape), out_hi.reshape(shape)
+
+
+def _mul_inverse_zero(zlo, zhi, ylo, yhi, xlo, xhi):
+    """:func:`mul_inverse` where ``0 ∈ [y]`` (1-D arrays)."""
     z0 = (zlo <= 0.0) & (zhi >= 0.0)
-    gap = y0 & ~z0
     zpos = zlo > 0.0
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         # y in (0, yhi]: z>0 -> [zlo/yhi, inf);  z<0 -> (-inf, zhi/yhi]
         has_p = yhi > 0.0
         p_lo = np.where(zpos, down(zlo / yhi), -_INF)
@@ -86,9 +106,7 @@ def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
         n_lo = np.where(has_n, n_lo, _INF)
         n_hi = np.where(has_n, n_hi, -_INF)
     glo, ghi = _hull_of_meets(xlo, xhi, p_lo, p_hi, n_lo, n_hi)
-    lo = np.where(y0, np.where(gap, glo, xlo), out_lo)
-    hi = np.where(y0, np.where(gap, ghi, xhi), out_hi)
-    return lo, hi
+    return np.where(z0, xlo, glo), np.where(z0, xhi, ghi)
 
 
 def bwd_add(zlo, zhi, xlo, xhi, ylo, yhi):
@@ -117,7 +135,7 @@ def bwd_shift(zlo, zhi, xlo, xhi, c):
 
 def bwd_scale(zlo, zhi, xlo, xhi, c):
     """z = c*x for a float c (no contraction where c == 0)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         p = zlo / c
         q = zhi / c
     lo = np.where(c == 0.0, -_INF, down(np.minimum(p, q)))

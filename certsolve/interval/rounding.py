@@ -16,7 +16,17 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["down", "up", "widen_down", "widen_up", "LIBM_ULPS", "EPS", "TINY"]
+__all__ = [
+    "down",
+    "up",
+    "down_inplace",
+    "up_inplace",
+    "widen_down",
+    "widen_up",
+    "LIBM_ULPS",
+    "EPS",
+    "TINY",
+]
 
 _NEG_INF = -np.inf
 _POS_INF = np.inf
@@ -34,6 +44,16 @@ _BIG = 2.0**1000
 _SMALL = 64  # below this many elements numpy's nextafter is cheaper (one call)
 
 
+def _margin(x, tiny: bool = True) -> np.ndarray:
+    """``min(|x|·2^-52, 2^1000) (+ 2^-1074)``: at least one ulp of ``x`` (a new array)."""
+    a = np.abs(x)
+    a *= EPS
+    np.fmin(a, _BIG, out=a)
+    if tiny:
+        a += TINY
+    return a
+
+
 def up(x):
     """An upper bound, as a float, of any real that rounds to ``x`` (elementwise).
 
@@ -46,26 +66,35 @@ def up(x):
     """
     if np.size(x) < _SMALL:
         return np.nextafter(x, _POS_INF)
-    a = np.abs(x)
-    a *= EPS
-    np.fmin(a, _BIG, out=a)
-    a += TINY
+    a = _margin(x)
     a += x
-    np.maximum(a, -_MAX, out=a)
-    return a
+    return np.maximum(a, -_MAX, out=a)
 
 
 def down(x):
     """A lower bound, as a float, of any real that rounds to ``x`` (mirror of :func:`up`)."""
     if np.size(x) < _SMALL:
         return np.nextafter(x, _NEG_INF)
-    a = np.abs(x)
-    a *= EPS
-    np.fmin(a, _BIG, out=a)
-    a += TINY
+    a = _margin(x)
     np.subtract(x, a, out=a)
-    np.minimum(a, _MAX, out=a)
-    return a
+    return np.minimum(a, _MAX, out=a)
+
+
+def up_inplace(x: np.ndarray, exact_tiny: bool = False) -> np.ndarray:
+    """:func:`up` written into the float array ``x`` (the large-array rule at any size).
+
+    ``exact_tiny=True`` is for results of ``+`` and ``-`` only: a sum or difference of
+    floats that rounds to zero or to a subnormal is exact (gradual underflow), so the
+    ``2^-1074`` term is not needed there.
+    """
+    x += _margin(x, not exact_tiny)
+    return np.maximum(x, -_MAX, out=x)
+
+
+def down_inplace(x: np.ndarray, exact_tiny: bool = False) -> np.ndarray:
+    """:func:`down` written into ``x`` (see :func:`up_inplace`)."""
+    x -= _margin(x, not exact_tiny)
+    return np.minimum(x, _MAX, out=x)
 
 
 def widen_down(x):

@@ -18,6 +18,7 @@ from ..robot.elastic import tension
 from ..robot.geometry import euler_zyx
 from ..robot.model import Robot
 from ..solver import SearchState, Solver
+from ..solver.bisectors import Prioritized
 from ..solver.certify import box_difference
 from ..solver.result import SolveResult
 from .fk_systems import (
@@ -116,17 +117,54 @@ def with_tau_max(robot: Robot, tau_max: float | None) -> Robot:
     return Robot.load(data)
 
 
+def _newton_groups(names) -> list[np.ndarray]:
+    """Variable groups for Hansen's mixed Jacobian: wire lengths, reference point, rest.
+
+    The length columns are then enclosed with the platform at the box midpoint (the
+    ``A_i - B_i`` factor of ``∂(w_i (A_i - B_i))/∂ρ_i`` becomes a point), which doubles the
+    boxes that interval Newton discards in the cluster around a solution.
+    """
+    rho = np.array([v.startswith("rho") for v in names])
+    edge = np.array([v.startswith("e") for v in names])
+    groups = [rho, ~rho & ~edge, edge]
+    return [g for g in groups if g.any()]
+
+
 class FKSolver:
     """Compile a formulation once, solve forward kinematics for many control vectors."""
 
     def __init__(
-        self, robot: Robot, formulation: str = "auto", *, eps: float = 1e-8, batch_size: int = 256
+        self,
+        robot: Robot,
+        formulation: str = "auto",
+        *,
+        eps: float = 1e-8,
+        batch_size: int = 512,
     ):
         self.robot = robot
         self.form: FKFormulation = build_formulation(robot, formulation)
         # wire lengths are auxiliary: fixed by the pose through the length equations
         mask = [not v.startswith("rho") for v in self.form.system.variables]
-        self.solver = Solver(self.form.system, eps=eps, batch_size=batch_size, bisect_mask=mask)
+        sub = self.form.info.get("translation")
+        subsystems = [(sub["equations"], sub["variables"])] if sub else []
+        bisector = None
+        if self.form.kind == "frame":
+            # orientation (edge vectors) first; the reference point only while it is wide
+            names = self.form.system.variables
+            bisector = Prioritized(
+                [v.startswith("e") for v in names],
+                [not v.startswith(("e", "rho")) for v in names],
+                alpha=0.25,
+            )
+        self.solver = Solver(
+            self.form.system,
+            eps=eps,
+            batch_size=batch_size,
+            bisect_mask=mask,
+            subsystems=subsystems,
+            bisector=bisector,
+            newton_groups=_newton_groups(self.form.system.variables),
+        )
         self.csys = self.solver.csys
 
     @property
@@ -142,6 +180,15 @@ class FKSolver:
         self.csys.set_parameters(self.form.parameters_for(u))
         dom, ok = search_domain(self.form, u)
         self.csys.system.domain = dom
+        bis = self.solver.bisector
+        if isinstance(bis, Prioritized) and self.robot.dim == 3:
+            # narrow wire-length ranges (low tension limits) pin the platform position once
+            # its orientation is known: split the orientation first; wide ranges leave
+            # the position free, so it is split sooner (measured: T-16 at 10 N / 60 N; a
+            # planar platform has a single rotation and keeps the default)
+            rho = np.array([v.startswith("rho") for v in self.form.system.variables])
+            width = float(np.mean(dom[rho, 1] - dom[rho, 0])) if rho.any() else 0.0
+            bis.alpha = float(np.clip(width / 25.0, 0.25, 0.75))
         return u, ok
 
     def solve(
@@ -170,15 +217,7 @@ class FKSolver:
             notes.append("no wire length satisfies the tension limits inside the domain")
             res = SolveResult(list(self.form.system.variables), "complete")
             return FKResult(self.robot.name, self.formulation, u, "complete", [], res, notes=notes)
-        if boxes is None and workers == 1:
-            res = self.solver.solve(
-                timeout=timeout,
-                max_boxes=max_boxes,
-                progress=progress,
-                workers=workers,
-                verify=verify,
-            )
-        elif boxes is None:
+        if boxes is None:
             res = self.solver.solve(
                 timeout=timeout,
                 max_boxes=max_boxes,
@@ -202,9 +241,9 @@ class FKSolver:
         r = self.robot
         d, m = r.dim, r.m
         rho = x[-m:].copy()
-        if f.kind == "points":
+        if f.kind in ("points", "frame"):
             k = f.n_points
-            P = x[: k * d].reshape(k, d)
+            P = f.points_from(x)
             points = f.L @ P
             pos, R = rotation_from_points(f, P)
             if x.size == k * d:  # reduced formulation: lengths from the points

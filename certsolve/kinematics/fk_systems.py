@@ -26,6 +26,12 @@ Formulations (sizes for MARIONET's 7 wires):
   attachments and centre of mass are coplanar is its own mirror image, so no sign is needed.
 * ``planar-10``: planar robots (dof 3), 3 points in the plane (6 + 4); the signed area
   fixes the orientation as for ``general-19``.
+* ``frame`` (the default, ``auto``): the paper's system for this robot in a *platform
+  frame*: the reference point ``P_1`` and the edge vectors ``E_j = P_j - P_1`` instead of
+  the points, moments about ``P_1``.  A linear change of variables (same equations, same
+  count, same solutions, named ``frame-<paper system>``) that separates translation from
+  rotation; with partial Newton on the translation sub-system it needs 3-20 times fewer
+  boxes than the paper's variables (see ``benchmarks/fk_bench.py``).
 * ``pose``: position and Z-Y-X Euler angles of the platform + ρ (6 + m unknowns), the
   classical parameterisation, for comparison.
 
@@ -58,6 +64,7 @@ FORMULATIONS = (
     "planar-10",
     "points",
     "reduced",
+    "frame",
     "pose",
 )
 
@@ -69,11 +76,27 @@ class FKFormulation:
     name: str
     robot: Robot
     system: System
-    kind: str  # "points" | "pose"
+    kind: str  # "points" | "frame" | "pose"
     Q: np.ndarray | None = None  # (k, d) chosen points, platform frame
     L: np.ndarray | None = None  # (m, k) affine coefficients of the attachments
     lG: np.ndarray | None = None  # (k,) affine coefficients of the centre of mass
     info: dict = field(default_factory=dict)
+    # kind "frame": the first k*d variables are P_1 and the edge vectors P_j - P_1
+
+    def points_from(self, x) -> np.ndarray:
+        """The chosen points ``(k, d)`` from a vector of the system's variables."""
+        k, d = self.n_points, self.robot.dim
+        P = np.array(x[: k * d], dtype=float).reshape(k, d)
+        if self.kind == "frame":
+            P[1:] = P[0] + P[1:]
+        return P
+
+    def coordinates_of(self, P) -> np.ndarray:
+        """The inverse of :meth:`points_from`: the first ``k*d`` variables for points ``P``."""
+        P = np.array(P, dtype=float)
+        if self.kind == "frame":
+            P[1:] = P[1:] - P[0]
+        return P.ravel()
 
     @property
     def n_points(self) -> int:
@@ -100,6 +123,27 @@ def _affine_coordinates(Q: np.ndarray, X: np.ndarray) -> np.ndarray:
     return coef
 
 
+def _snap_rows(L: np.ndarray, robot: Robot) -> np.ndarray:
+    """Make the affine coefficients of wires sharing an attachment bitwise identical.
+
+    Redundant equations drop the wires attached at a point (zero lever) or subtract the
+    length equations of two such wires; they are exact consequences of the system only if
+    those wires have exactly the same coefficients.  Rows within 1e-12 of a unit vector
+    become that unit vector (the attachment *is* a chosen point).
+    """
+    L = L.copy()
+    k = L.shape[1]
+    for i in range(L.shape[0]):
+        j = int(np.argmax(np.abs(L[i])))
+        if np.max(np.abs(L[i] - np.eye(k)[j])) <= 1e-12:
+            L[i] = np.eye(k)[j]
+    _, gidx = robot.attachment_groups()
+    for g in np.unique(gidx):
+        members = np.flatnonzero(gidx == g)
+        L[members] = L[members[0]]
+    return L
+
+
 def _choose_points(points: np.ndarray, k: int) -> list[int]:
     """The ``k`` points spanning the largest simplex (best conditioned affine frame)."""
     best, best_vol = None, -1.0
@@ -123,7 +167,7 @@ def _is_coplanar(points: np.ndarray) -> bool:
 
 
 def choose_formulation(robot: Robot) -> str:
-    """The paper's formulation for this robot (``auto``)."""
+    """The paper's system for this robot (``auto`` uses it in the platform frame)."""
     if robot.dof == 2:
         raise ValueError(
             "point robots (dof 2) have no rigid platform: forward kinematics of the "
@@ -195,7 +239,7 @@ def _eliminating_moments(robot, B, G, L, w, P, d):
     W = [float(v) for v in robot.weight]
     groups: dict[tuple, list[int]] = {}
     for i in range(robot.m):
-        groups.setdefault(tuple(np.round(L[i], 12)), []).append(i)
+        groups.setdefault(tuple(L[i]), []).append(i)
     keys = list(groups)
     out = []
 
@@ -251,7 +295,7 @@ def _points_formulation(
         )
     sel = _choose_points(candidates, k)
     Q = candidates[sel]
-    L = _affine_coordinates(Q, robot.B)
+    L = _snap_rows(_affine_coordinates(Q, robot.B), robot)
     lG = _affine_coordinates(Q, robot.com[None])[0]
     axes = "xyz"[:d]
     P = [[var(f"{a}{j + 1}") for a in axes] for j in range(k)]
@@ -332,7 +376,7 @@ def _points_formulation(
     # wires sharing an attachment: the difference of their length equations is linear
     groups: dict[tuple, list[int]] = {}
     for i in range(robot.m):
-        groups.setdefault(tuple(np.round(L[i], 15)), []).append(i)
+        groups.setdefault(tuple(L[i]), []).append(i)
     for members in [] if reduced else groups.values():
         for a, b in zip(members, members[1:]):
             Aa, Ab = robot.A[a], robot.A[b]
@@ -360,17 +404,230 @@ def _points_formulation(
             d,
             k,
         )
-    system = System(
-        names,
-        domain,
-        eqs,
-        constraints,
-        name=name,
-        parameters={f"u{i + 1}": 0.0 for i in range(robot.m)},
-    )
+    system = _system(robot, names, domain, eqs, constraints, name)
     return FKFormulation(
         name, robot, system, "points", Q=Q, L=L, lG=lG, info={"points": [int(i) for i in sel]}
     )
+
+
+def _frame_formulation(robot: Robot, name: str, k: int, redundant_moments=("points",)):
+    """The point formulation in a *platform frame*: ``P_1`` and edge vectors ``E_j``.
+
+    The unknowns are the reference point ``P_1`` (the chosen point carrying the most
+    wires) and the vectors ``E_j = P_j - P_1`` (``j = 2..k``), then the wire lengths: a
+    linear change of variables of the paper's system (same equation count, same
+    solutions).  Translation lives in ``P_1`` and rotation in the short ``E_j``, so boxes
+    separate the two; the rigidity equations ``|E_j|² = d²`` have no repeated variable,
+    and the moments are taken about ``P_1``, whose levers ``B_i - P_1 = Σ l_ij E_j`` are
+    platform-sized (and zero for the wires attached at ``P_1``).
+    """
+    robot.require_elastic("forward kinematics")
+    d = robot.dim
+    pts, gidx = robot.attachment_groups()
+    if k > pts.shape[0]:
+        raise ValueError(
+            f"{name} needs {k} distinct attachment points, the robot has {pts.shape[0]}"
+        )
+    sel = _choose_points(pts, k)
+    counts = [int(np.sum(gidx == j)) for j in sel]
+    r0 = int(np.argmax(counts))
+    sel = [sel[r0]] + [s for i, s in enumerate(sel) if i != r0]
+    Q = pts[sel]
+    L = _snap_rows(_affine_coordinates(Q, robot.B), robot)
+    lG = _affine_coordinates(Q, robot.com[None])[0]
+    axes = "xyz"[:d]
+    C = [var(f"{a}1") for a in axes]
+    E = [None] + [[var(f"e{a}{j + 1}") for a in axes] for j in range(1, k)]
+    dom = robot.domain
+    A = robot.A
+
+    def rel(coefs):
+        """``Σ_j coefs_j P_j - P_1`` (affine coefs) as ``Σ_{j>=2} coefs_j E_j``; None = 0."""
+        nz = [j for j in range(1, k) if abs(coefs[j]) > 1e-14]
+        out = []
+        for c in range(d):
+            if not nz:
+                out.append(None)
+            elif len(nz) == 1 and coefs[nz[0]] == 1.0:
+                out.append(E[nz[0]][c])
+            else:
+                out.append(esum(float(coefs[j]) * E[j][c] for j in nz))
+        return out
+
+    def plus(a, b):
+        return a if b is None else a + b
+
+    def minus(a, b):
+        return a if b is None else a - b
+
+    b = [rel(L[i]) for i in range(robot.m)]
+    g = rel(lG)
+    Bw = [[plus(C[c], b[i][c]) for c in range(d)] for i in range(robot.m)]
+    rho = [var(f"rho{i + 1}") for i in range(robot.m)]
+    eqs: list[Expr] = []
+    for i in range(robot.m):  # lengths: |(C - A_i) + b_i|² = ρ_i²
+        eqs.append(esum(sqr(plus(C[c] - float(A[i, c]), b[i][c])) for c in range(d)) - sqr(rho[i]))
+    for a, bb in itertools.combinations(range(k), 2):  # rigidity
+        dab = float(np.sum((Q[a] - Q[bb]) ** 2))
+        if a == 0:
+            eqs.append(esum(sqr(E[bb][c]) for c in range(d)) - dab)
+        else:
+            eqs.append(esum(sqr(E[a][c] - E[bb][c]) for c in range(d)) - dab)
+    w = _wire_weights(robot, rho)
+    W = [float(v) for v in robot.weight]
+    for c in range(d):  # forces: Σ w_i ((A_i - C) - b_i) + W = 0
+        terms = [w[i] * minus(float(A[i, c]) - C[c], b[i][c]) for i in range(robot.m)]
+        if W[c] != 0.0:
+            terms.append(const(W[c]))
+        eqs.append(esum(terms))
+
+    def moment(lever, arm):
+        """``lever × arm`` (3 components, or the scalar in the plane); None entries are 0."""
+
+        def prod(x, y):
+            return None if x is None or y is None else x * y
+
+        def diff(x, y):
+            if x is None:
+                return None if y is None else -y
+            return x if y is None else x - y
+
+        if d == 3:
+            return [
+                diff(prod(lever[1], arm[2]), prod(lever[2], arm[1])),
+                diff(prod(lever[2], arm[0]), prod(lever[0], arm[2])),
+                diff(prod(lever[0], arm[1]), prod(lever[1], arm[0])),
+            ]
+        return [diff(prod(lever[0], arm[1]), prod(lever[1], arm[0]))]
+
+    def moments_about(pref, skip):
+        """Moment of all forces about ``P_1 + rel(pref)``, wires in ``skip`` left out."""
+        p = rel(pref)
+        comps = [[] for _ in range(3 if d == 3 else 1)]
+        for i in range(robot.m):
+            if i in skip:
+                continue
+            lever = [
+                minus(b[i][c], p[c]) if b[i][c] is not None else (None if p[c] is None else -p[c])
+                for c in range(d)
+            ]
+            arm = [minus(float(A[i, c]) - C[c], p[c]) for c in range(d)]
+            for c, mc in enumerate(moment(lever, arm)):
+                if mc is not None:
+                    comps[c].append(w[i] * mc)
+        if any(v != 0.0 for v in W):
+            gl = [
+                minus(g[c], p[c]) if g[c] is not None else (None if p[c] is None else -p[c])
+                for c in range(d)
+            ]
+            for c, mc in enumerate(moment(gl, [const(v) for v in W])):
+                if mc is not None:
+                    comps[c].append(mc)
+        return comps
+
+    groups: dict[tuple, list[int]] = {}
+    for i in range(robot.m):  # rows are snapped: equal rows <=> same attachment point
+        groups.setdefault(tuple(L[i]), []).append(i)
+    ref_key = tuple(np.eye(k)[0])
+    ref_wires = set(groups.get(ref_key, []))
+    for comp in moments_about(np.eye(k)[0], ref_wires):  # moments about P_1
+        eqs.append(esum(comp) if comp else const(0.0))
+
+    constraints: list[Constraint] = []
+    if k == d + 1:  # orientation of the chosen points
+        if d == 3:
+            cr = [
+                E[2][1] * E[3][2] - E[2][2] * E[3][1],
+                E[2][2] * E[3][0] - E[2][0] * E[3][2],
+                E[2][0] * E[3][1] - E[2][1] * E[3][0],
+            ]
+            signed = esum(E[1][c] * cr[c] for c in range(3))
+        else:
+            signed = E[1][0] * E[2][1] - E[1][1] * E[2][0]
+        s0 = float(np.linalg.det(Q[1:] - Q[0]))
+        constraints.append(Constraint(signed, s0, s0, redundant=True))
+        constraints.append(
+            Constraint(signed, 0.0, np.inf) if s0 > 0 else Constraint(signed, -np.inf, 0.0)
+        )
+    extra = [np.eye(k)[j] for j in range(1, k)] + [L[i] for i in range(robot.m)] + [lG]
+    seen = {ref_key}
+    for coefs in extra:  # every platform point inside the domain
+        key = tuple(coefs)
+        if key in seen:
+            continue
+        seen.add(key)
+        p = rel(coefs)
+        for c in range(d):
+            constraints.append(Constraint(plus(C[c], p[c]), float(dom[c, 0]), float(dom[c, 1])))
+    if redundant_moments is True:
+        redundant_moments = ("points", "lines")
+    if redundant_moments:
+        keys = list(groups)
+        for kp in keys:
+            # about another attachment point: worth its cost when it drops a good share
+            # of the wires (general platform: one wire of seven, measured useless)
+            if kp != ref_key and "points" in redundant_moments and 4 * len(groups[kp]) >= robot.m:
+                for comp in moments_about(np.array(kp), set(groups[kp])):
+                    if comp:
+                        constraints.append(Constraint(esum(comp), 0.0, 0.0, redundant=True))
+            if d != 3 or "lines" not in redundant_moments:
+                continue
+            for kq in keys:
+                if kq <= kp:
+                    continue
+                skip = set(groups[kp]) | set(groups[kq])
+                comps = moments_about(np.array(kp), skip)
+                ax = rel(np.array(kq) - np.array(kp) + np.eye(k)[0])
+                terms = [esum(comps[c]) * ax[c] for c in range(3) if comps[c] and ax[c] is not None]
+                if terms:
+                    constraints.append(Constraint(esum(terms), 0.0, 0.0, redundant=True))
+    for members in groups.values():  # wires sharing an attachment: linear difference
+        for a, bb in zip(members, members[1:]):
+            Aa, Ab = A[a], A[bb]
+            lhs = esum(2.0 * float(Aa[c] - Ab[c]) * Bw[a][c] for c in range(d))
+            const_term = float(np.dot(Aa, Aa) - np.dot(Ab, Ab))
+            constraints.append(
+                Constraint(sqr(rho[a]) - sqr(rho[bb]) + lhs - const_term, 0.0, 0.0, redundant=True)
+            )
+
+    names = [f"{a}1" for a in axes]
+    rows = [dom]
+    for j in range(1, k):
+        names += [f"e{a}{j + 1}" for a in axes]
+        dj = float(np.linalg.norm(Q[j] - Q[0]))
+        span = dom[:, 1] - dom[:, 0]
+        # |E_j| = d_j bounds each component; widened so that a solution with an edge
+        # parallel to an axis is not on the boundary of the search box
+        r = np.minimum(1.0625 * dj + 1e-3, span)
+        rows.append(np.stack([-r, r], axis=1))
+    names += [f"rho{i + 1}" for i in range(robot.m)]
+    domain = _with_rho(np.vstack(rows + [np.zeros((robot.m, 2))]), robot, np.zeros(robot.m), d, k)
+    system = _system(robot, names, domain, eqs, constraints, name)
+    return FKFormulation(
+        name,
+        robot,
+        system,
+        "frame",
+        Q=Q,
+        L=L,
+        lG=lG,
+        info={
+            "points": [int(i) for i in sel],
+            # lengths + forces in (P_1, ρ): a square sub-system, well conditioned for a
+            # whole box of orientations (partial Newton, see FKSolver)
+            "translation": {
+                "equations": list(range(robot.m))
+                + [robot.m + k * (k - 1) // 2 + c for c in range(d)],
+                "variables": list(range(d)) + list(range(k * d, k * d + robot.m)),
+            },
+        },
+    )
+
+
+def _system(robot: Robot, names, domain, eqs, constraints, name: str) -> System:
+    """The FK system; the control ``u`` enters as parameters ``u1..um`` (set per solve)."""
+    params = {f"u{i + 1}": 0.0 for i in range(robot.m)}
+    return System(names, domain, eqs, constraints, name=name, parameters=params)
 
 
 def _with_rho(domain, robot, u, d, k):
@@ -476,31 +733,26 @@ def _pose_formulation(robot: Robot) -> FKFormulation:
             constraints.append(Constraint(B[i][c], float(dom[c, 0]), float(dom[c, 1])))
     names = names + [f"rho{i + 1}" for i in range(robot.m)]
     domain = np.vstack([dom, np.array(ang_dom), np.zeros((robot.m, 2))])
-    k = (len(names) - robot.m) // d  # unused by _with_rho beyond the offset
-    offset = len(names) - robot.m
-    lo, hi = _rho_domain(robot, np.zeros(robot.m), dom)
-    domain[offset:, 0] = lo
-    domain[offset:, 1] = np.maximum(hi, lo)
-    del k
-    system = System(
-        names,
-        domain,
-        eqs,
-        constraints,
-        name="pose",
-        parameters={f"u{i + 1}": 0.0 for i in range(robot.m)},
-    )
+    lo, hi = _rho_domain(robot, np.zeros(robot.m), dom)  # set per u by search_domain
+    domain[-robot.m :, 0] = lo
+    domain[-robot.m :, 1] = np.maximum(hi, lo)
+    system = _system(robot, names, domain, eqs, constraints, "pose")
     return FKFormulation("pose", robot, system, "pose")
 
 
 def build_formulation(robot: Robot, name: str = "auto") -> FKFormulation:
-    """Build the named formulation (``auto``: the paper's choice for this robot)."""
+    """Build the named formulation (``auto``: the paper's system for this robot, in the
+    platform frame)."""
     if name not in FORMULATIONS:
         raise ValueError(f"unknown formulation {name!r}; choose from {', '.join(FORMULATIONS)}")
     if name == "auto":
-        name = choose_formulation(robot)
+        name = "frame"
     if name == "pose":
         return _pose_formulation(robot)
+    if name == "frame":
+        base = choose_formulation(robot)
+        k = 4 if base == "general-19" else 3
+        return _frame_formulation(robot, f"frame-{base}", k)
     if name == "reduced":
         base = choose_formulation(robot)
         k = 4 if base == "general-19" else 3

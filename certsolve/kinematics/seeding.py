@@ -89,7 +89,7 @@ def seeded_forward_kinematics(
     t_planar = time.perf_counter() - t0
 
     fk = FKSolver(robot, formulation, eps=eps)
-    if fk.form.kind != "points" or fk.form.n_points != 3:
+    if fk.form.kind not in ("points", "frame") or fk.form.n_points != 3:
         raise ValueError("planar seeding needs a 3-point formulation (almost-planar-13)")
     u, ok = fk._prepare(u)
     dom = fk.csys.system.domain
@@ -101,10 +101,10 @@ def seeded_forward_kinematics(
         R = np.eye(3)
         R[:2, :2] = rotation_2d(th)
         p = np.r_[sol.position, z_plane]
-        P = p + fk.form.Q @ R.T
+        c = fk.form.coordinates_of(p + fk.form.Q @ R.T)
         lo, hi = dom[:, 0].copy(), dom[:, 1].copy()
-        lo[: k * d] = np.maximum(lo[: k * d], (P - radius).ravel())
-        hi[: k * d] = np.minimum(hi[: k * d], (P + radius).ravel())
+        lo[: k * d] = np.maximum(lo[: k * d], c - radius)
+        hi[: k * d] = np.minimum(hi[: k * d], c + radius)
         if np.all(lo <= hi):
             seeds_lo.append(lo)
             seeds_hi.append(hi)

@@ -31,6 +31,7 @@ from ..robot.geometry import Pose
 from ..robot.model import Robot
 from ..solver.newton import krawczyk_single
 from .fk import FKPose, FKSolver
+from .fk_systems import choose_formulation
 
 __all__ = ["Tracker", "TrackResult", "track"]
 
@@ -61,9 +62,11 @@ class Tracker:
     """Newton + Krawczyk steps of forward kinematics near a known pose."""
 
     def __init__(self, robot: Robot, formulation: str = "auto", max_iterations: int = 12):
+        if formulation == "auto":  # the paper's point system: cheapest per-box code
+            formulation = choose_formulation(robot)
         self.fk = FKSolver(robot, formulation)
         if self.fk.form.kind != "points":
-            raise ValueError("tracking uses a point formulation (not 'pose')")
+            raise ValueError("tracking uses one of the paper's point formulations")
         self.robot = robot
         self.csys = self.fk.csys
         self.max_iterations = max_iterations

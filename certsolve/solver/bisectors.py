@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["SmearSumRelative", "LargestFirst", "split"]
+__all__ = ["SmearSumRelative", "LargestFirst", "Prioritized", "split"]
 
 
 def split(lo, hi, var, ratio: float):
@@ -43,8 +43,12 @@ class LargestFirst:
 
 
 class SmearSumRelative:
-    def __init__(self, ratio: float = 0.45):
+    """``weights`` (n,) scale the scores: a variable with a small weight is split only when
+    its share of the variation dominates (e.g. one fixed by a well-conditioned sub-system)."""
+
+    def __init__(self, ratio: float = 0.45, weights=None):
         self.ratio = ratio
+        self.weights = None if weights is None else np.asarray(weights, dtype=float)
 
     def choose(self, lo, hi, jlo, jhi, eps: float = 0.0, mask=None) -> np.ndarray:
         """Variable to split per box; ``mask`` (n,) restricts the choice (default: all)."""
@@ -56,6 +60,8 @@ class SmearSumRelative:
             rel = np.where(rows > 0, smear / rows, 0.0)
             score = np.sum(rel, axis=1)
         score = np.where(np.isfinite(score), score, 0.0)
+        if self.weights is not None:
+            score = score * self.weights
         allowed = w > eps if mask is None else (w > eps) & mask
         score = np.where(allowed, score, -1.0)
         best = np.argmax(score, axis=1)
@@ -64,4 +70,34 @@ class SmearSumRelative:
         if np.any(stuck):
             wa = np.where(allowed[stuck], w[stuck], -1.0)
             best[stuck] = np.argmax(wa, axis=1)
+        return best
+
+
+class Prioritized:
+    """Split ``primary`` variables (by smear) unless a ``secondary`` one is much wider.
+
+    A secondary variable wider than ``1/alpha`` times the widest primary one is split
+    (the widest such); otherwise :class:`SmearSumRelative` chooses among the primary
+    variables.  Forward kinematics in a platform frame: the orientation (edge vectors) is
+    primary, the reference point secondary -- given the orientation, partial Newton on the
+    force balance fixes the position, so it needs splitting only while it is wide.
+    """
+
+    def __init__(self, primary, secondary, alpha: float = 0.25, ratio: float = 0.45):
+        self.primary = np.asarray(primary, dtype=bool)
+        self.secondary = np.asarray(secondary, dtype=bool)
+        self.alpha = float(alpha)
+        self.ratio = ratio
+        self._smear = SmearSumRelative(ratio)
+
+    def choose(self, lo, hi, jlo, jhi, eps: float = 0.0, mask=None) -> np.ndarray:
+        w = hi - lo
+        prim = self.primary if mask is None else self.primary & mask
+        sec = self.secondary if mask is None else self.secondary & mask
+        best = self._smear.choose(lo, hi, jlo, jhi, eps, prim)
+        wp = np.max(np.where(prim & (w > eps), w, 0.0), axis=1)
+        ws = np.where(sec & (w > eps), w, -1.0)
+        js = np.argmax(ws, axis=1)
+        big = self.alpha * ws[np.arange(w.shape[0]), js] > wp
+        best = np.where(big, js, best)
         return best

@@ -30,7 +30,7 @@ from ..expr.system import System
 from .bisectors import SmearSumRelative, split
 from .buffer import BoxStack
 from .certify import Certifier, SolutionSet, box_difference
-from .contractors import HC4, IntervalNewton, log_volume_ratio
+from .contractors import HC4, IntervalNewton, PartialNewton, log_volume_ratio
 from .result import Solution, SolveResult, Stats, Undecided
 
 __all__ = ["Solver", "Progress", "solve"]
@@ -75,6 +75,8 @@ class Solver:
         bisector=None,
         certifier: Certifier | None = None,
         bisect_mask=None,
+        subsystems=(),
+        newton_groups=None,
     ):
         if not eps > 0:
             raise ValueError("eps must be positive")
@@ -84,9 +86,16 @@ class Solver:
         self.eps = float(eps)
         self.batch_size = int(batch_size)
         self.hc4 = HC4(self.csys, max_passes=hc4_passes)
-        self.newton = IntervalNewton(self.csys)
+        self.newton = IntervalNewton(self.csys, newton_groups)
         self.bisector = bisector or SmearSumRelative()
         self.certifier = certifier or Certifier(self.csys)
+        #: square sub-systems ``(equations, variables)`` contracted by partial Newton
+        self.partial = [PartialNewton(self.csys, e, v) for e, v in subsystems]
+        #: further contractors (``contract(lo, hi) -> (lo, hi, empty)``), run after HC4
+        self.contractors: list = []
+        #: CID slices applied to the bisection variable before splitting (0: off)
+        self.cid = None
+        self.cid_gain = _LOG_HALF
         #: variables the bisector may split (None: all); the others are auxiliary
         self.bisect_mask = None if bisect_mask is None else np.asarray(bisect_mask, dtype=bool)
         if self.bisect_mask is not None and self.bisect_mask.shape != (self.n,):
@@ -188,6 +197,11 @@ class Solver:
         lo, hi, lo0, hi0 = lo[~empty], hi[~empty], lo0[~empty], hi0[~empty]
         if lo.shape[0] == 0:
             return
+        for pn in [*self.contractors, *self.partial]:
+            lo, hi, empty = pn.contract(lo, hi)
+            lo, hi, lo0, hi0 = lo[~empty], hi[~empty], lo0[~empty], hi0[~empty]
+            if lo.shape[0] == 0:
+                return
 
         # 2. Newton + Krawczyk on the HC4-contracted boxes
         step = self.newton.contract(lo, hi)
@@ -246,6 +260,14 @@ class Solver:
             var = self.bisector.choose(
                 lo3, hi3, jlo[todo][big], jhi[todo][big], self.eps, self.bisect_mask
             )
+            if self.cid is not None:
+                clo, chi, cemp = self.cid.contract(lo3, hi3, var)
+                gain = log_volume_ratio(lo3, hi3, clo, chi)
+                again = ~cemp & (gain <= self.cid_gain)
+                if np.any(again):
+                    state.stack.push(clo[again], chi[again])
+                keep = ~cemp & ~again
+                lo3, hi3, var = clo[keep], chi[keep], var[keep]
             (alo, ahi), (blo, bhi) = split(lo3, hi3, var, self.bisector.ratio)
             stats.bisections += lo3.shape[0]
             state.stack.push(np.concatenate([alo, blo]), np.concatenate([ahi, bhi]))

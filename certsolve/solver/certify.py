@@ -23,7 +23,7 @@ import numpy as np
 
 from ..expr.compiled import CompiledSystem
 from ..interval.core import is_subset
-from .newton import batched_inverse, krawczyk, linearize
+from .newton import batched_solve, krawczyk, linearize
 
 __all__ = ["Certifier", "SolutionSet", "box_difference"]
 
@@ -175,21 +175,30 @@ class Certifier:
         self._chi = np.array([cons[i].hi for i in checked], dtype=np.float64)
 
     # -- float Newton -----------------------------------------------------------------------
-    def newton_point(self, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Float Newton iterations from ``x0`` (B, n); returns points and a converged mask."""
+    def newton_point(self, x0: np.ndarray, lo=None, hi=None) -> tuple[np.ndarray, np.ndarray]:
+        """Float Newton iterations from ``x0`` (B, n); returns points and a converged mask.
+
+        With ``lo, hi``, iterates that leave the box widened by its width on every side
+        are abandoned (the caller only uses points near the box).
+        """
         x = x0.copy()
         conv = np.zeros(x.shape[0], dtype=bool)
         alive = np.ones(x.shape[0], dtype=bool)
+        if lo is not None:
+            w = hi - lo
+            far_lo, far_hi = lo - w - 1e-9 * (1.0 + np.abs(lo)), hi + w + 1e-9 * (1.0 + np.abs(hi))
         for _ in range(self.newton_iterations):
             idx = np.flatnonzero(alive & ~conv)
             if idx.size == 0:
                 break
             f, J = self.csys.eval_fj_float(x[idx])
-            Y, ok = batched_inverse(J)
+            step, ok = batched_solve(J, f)
             with np.errstate(all="ignore"):
-                step = -np.einsum("bij,bj->bi", np.where(ok[:, None, None], Y, 0.0), f)
+                step = -np.where(ok[:, None], step, 0.0)
                 xn = x[idx] + step
             good = ok & np.all(np.isfinite(xn), axis=1)
+            if lo is not None:
+                good &= np.all((xn >= far_lo[idx]) & (xn <= far_hi[idx]), axis=1)
             x[idx[good]] = xn[good]
             alive[idx[~good]] = False
             small = np.all(np.abs(step) <= 1e-12 * (1.0 + np.abs(xn)), axis=1) & good
@@ -207,15 +216,17 @@ class Certifier:
         if B == 0:
             return empty
         c = 0.5 * lo + 0.5 * hi
-        x, conv = self.newton_point(c)
+        x, conv = self.newton_point(c, lo, hi)
         w = hi - lo
-        near = conv & np.all((x >= lo - 0.25 * w) & (x <= hi + 0.25 * w), axis=1)
+        slack = 0.25 * w + 1e-9 * (1.0 + np.abs(x))  # degenerate boxes: rounding slack
+        near = conv & np.all((x >= lo - slack) & (x <= hi + slack), axis=1)
         todo = np.flatnonzero(near)
         if todo.size == 0:
             return empty
         xs = x[todo]
         r = np.maximum(np.maximum(xs - lo[todo], hi[todo] - xs), 0.0)
-        r = r * (1.0 + 1e-9) + 1e-13 * (1.0 + np.abs(xs))
+        # a box already shrunk to rounding level: prove on a slightly larger U
+        r = np.maximum(r * (1.0 + 1e-9) + 1e-13 * (1.0 + np.abs(xs)), 1e-10 * (1.0 + np.abs(xs)))
         found_idx, found_U = [], []
         remaining = np.arange(todo.size)
         for s in self.scales:

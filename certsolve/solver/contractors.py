@@ -17,16 +17,23 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..expr.compiled import CompiledSystem
-from .newton import Linearization, hansen_sengupta, krawczyk, linearize
+from ..interval.core import midpoint
+from .newton import (
+    Linearization,
+    hansen_sengupta,
+    krawczyk,
+    linearization_from_bounds,
+    linearize,
+)
 
-__all__ = ["HC4", "IntervalNewton", "NewtonStep", "log_volume_ratio"]
+__all__ = ["HC4", "IntervalNewton", "NewtonStep", "PartialNewton", "log_volume_ratio"]
 
 
 def log_volume_ratio(lo0, hi0, lo1, hi1) -> np.ndarray:
     """``Σ_i log(w1_i / w0_i)`` per box (0 for degenerate components): < 0 means it shrank."""
-    w0 = hi0 - lo0
-    w1 = np.maximum(hi1 - lo1, 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(all="ignore"):  # unbounded boxes: infinite widths are fine here
+        w0 = hi0 - lo0
+        w1 = np.maximum(hi1 - lo1, 0.0)
         r = np.where(w0 > 0.0, w1 / w0, 1.0)
         return np.sum(np.log(np.maximum(r, 1e-300)), axis=1)
 
@@ -59,7 +66,7 @@ class HC4:
 class NewtonStep:
     """Outcome of :meth:`IntervalNewton.contract` on a batch."""
 
-    lin: Linearization  # linearisation of the *input* boxes
+    lin: Linearization  # linearisation of the *input* boxes (mixed Jacobian with groups)
     klo: np.ndarray  # Krawczyk image of the input boxes
     khi: np.ndarray
     proven: np.ndarray  # K(X) ⊂ int X: exactly one solution in the input box
@@ -77,15 +84,137 @@ class NewtonStep:
 
 
 class IntervalNewton:
-    """Hansen–Sengupta contraction plus the Krawczyk test on the same linearisation."""
+    """Hansen–Sengupta contraction plus the Krawczyk test on the same linearisation.
 
-    def __init__(self, csys: CompiledSystem):
+    ``groups`` (a list of boolean masks partitioning the variables) switches the
+    Hansen–Sengupta step to Hansen's *mixed* Jacobian: the columns of group ``k`` are
+    enclosed over the box whose groups ``1..k`` span ``X`` and whose later groups sit at the
+    midpoint ``c``.  Every zero ``x*`` of ``X`` still satisfies ``0 ∈ f(c) + M (x* - c)``
+    (mean value theorem along the path that moves one group at a time from ``c`` to ``x*``),
+    so the contraction is sound, and sharper: cross terms with later groups are taken at
+    the midpoint.  The Krawczyk *uniqueness* proof keeps the ordinary ``J(X)``.
+    """
+
+    def __init__(self, csys: CompiledSystem, groups=None):
         self.csys = csys
+        self.groups = None if groups is None else [np.asarray(g, dtype=bool) for g in groups]
+        for g in self.groups or ():  # compile the column programs now, not in the search
+            csys._column_program(tuple(int(j) for j in np.flatnonzero(g)))
+        #: Hansen–Sengupta sweeps per call (mixed Jacobian only), repeated on boxes that
+        #: shrank by at least ``1 - exp(sweep_gain)`` in volume
+        self.sweeps = 1
+        self.sweep_gain = float(np.log(0.9))
+
+    def _mixed(self, lo, hi, c, flo, fhi):
+        """Mixed linearisation: group ``k``'s columns over ``(X_{1..k}, c_{k+1..})``.
+
+        Each group evaluates only its own columns (and ``f``); the last group's box is
+        ``X`` itself, so ``defined`` covers ``f`` on all of ``X``.
+        """
+        B, n = lo.shape
+        mlo = np.zeros((B, n, n))
+        mhi = np.zeros((B, n, n))
+        defined = np.ones(B, dtype=bool)
+        done = np.zeros(n, dtype=bool)
+        for g in self.groups:
+            done |= g
+            blo = np.where(done, lo, c)
+            bhi = np.where(done, hi, c)
+            _, _, jlo, jhi, de = self.csys.eval_fj_columns(blo, bhi, np.flatnonzero(g))
+            mlo[:, :, g] = jlo[:, :, g]
+            mhi[:, :, g] = jhi[:, :, g]
+            defined &= de
+        return linearization_from_bounds(lo, hi, c, flo, fhi, mlo, mhi, defined)
 
     def contract(self, lo, hi) -> NewtonStep:
-        lin = linearize(self.csys, lo, hi)
-        klo, khi, proven = krawczyk(lin)
-        nlo, nhi, empty = hansen_sengupta(lin)
+        if self.groups is None:
+            lin = linearize(self.csys, lo, hi)
+            klo, khi, proven = krawczyk(lin)
+            nlo, nhi, empty = hansen_sengupta(lin)
+        else:
+            c = midpoint(lo, hi)
+            flo, fhi = self.csys.eval_f_at(c)
+            lin = self._mixed(lo, hi, c, flo, fhi)
+            # K with the mixed matrix ⊂ int X proves existence only (it is a slope-like
+            # enclosure); uniqueness needs J(X): run the full test on those boxes alone
+            klo, khi, maybe = krawczyk(lin)
+            proven = np.zeros_like(maybe)
+            if np.any(maybe):
+                k = np.flatnonzero(maybe)
+                _, _, jlo, jhi, defined = self.csys.eval_fj(lo[k], hi[k], check_domain=True)
+                full = linearization_from_bounds(
+                    lo[k], hi[k], c[k], flo[k], fhi[k], jlo, jhi, defined
+                )
+                fklo, fkhi, fp = krawczyk(full)
+                proven[k] = fp
+                klo[k] = np.fmax(klo[k], fklo)
+                khi[k] = np.fmin(khi[k], fkhi)
+            nlo, nhi, empty = hansen_sengupta(lin)
+            # more sweeps on the contracted boxes, re-linearised (cheap relative to a
+            # bisection): while a box keeps shrinking by at least ``sweep_gain``
+            act = np.flatnonzero(~empty & (log_volume_ratio(lo, hi, nlo, nhi) < self.sweep_gain))
+            for _ in range(self.sweeps - 1):
+                if act.size == 0:
+                    break
+                alo, ahi = nlo[act], nhi[act]
+                ac = midpoint(alo, ahi)
+                aflo, afhi = self.csys.eval_f_at(ac)
+                alin = self._mixed(alo, ahi, ac, aflo, afhi)
+                blo, bhi, bemp = hansen_sengupta(alin)
+                empty[act] = bemp
+                nlo[act] = np.where(bemp[:, None], alo, blo)
+                nhi[act] = np.where(bemp[:, None], ahi, bhi)
+                act = act[~bemp & (log_volume_ratio(alo, ahi, blo, bhi) < self.sweep_gain)]
         # a box proven to hold a solution cannot be empty; keep the proof authoritative
         empty &= ~proven
         return NewtonStep(lin, klo, khi, proven, nlo, nhi, empty)
+
+
+class PartialNewton:
+    """Hansen–Sengupta on a square sub-system, the other variables as interval parameters.
+
+    For equations ``S`` and variables ``V`` (``|S| = |V|``) and a box ``X``, every zero
+    ``x`` of ``f`` in ``X`` satisfies, by the mean value theorem in the ``V`` components
+    only,
+
+        0 = f_S(c_V, x_R) + J_SV(ξ) (x_V - c_V),   ξ ∈ X,  x_R ∈ X_R,
+
+    so the interval Gauss–Seidel step with ``f_S(c_V, X_R)`` (``f`` over the box whose
+    ``V`` components are the midpoint) and ``J_SV(X)`` contracts ``X_V``.  The remaining
+    variables ``R`` may stay wide: this contracts well whenever the sub-Jacobian is
+    well conditioned over the box, even if the full one is not (forward kinematics: the
+    translation of the platform and the wire lengths, given a box of orientations, are
+    fixed by the force balance and the wire lengths).
+    """
+
+    def __init__(self, csys: CompiledSystem, equations, variables):
+        self.csys = csys
+        self.S = np.asarray(equations, dtype=np.int64)
+        self.V = np.asarray(variables, dtype=np.int64)
+        if self.S.shape != self.V.shape:
+            raise ValueError("a partial Newton sub-system must be square")
+        csys._column_program(tuple(sorted(int(j) for j in self.V)))
+
+    def contract(self, lo, hi, jlo=None, jhi=None, defined=None):
+        """Contract ``X_V``; ``jlo, jhi`` may be a Jacobian enclosure over a superset of X.
+
+        Returns ``(lo, hi, empty)``.
+        """
+        S, V = self.S, self.V
+        if jlo is None:
+            _, _, jlo, jhi, defined = self.csys.eval_fj_columns(lo, hi, V)
+        c = midpoint(lo[:, V], hi[:, V])
+        plo, phi = lo.copy(), hi.copy()
+        plo[:, V] = c
+        phi[:, V] = c
+        flo, fhi = self.csys.eval_f(plo, phi)
+        sub_jlo = jlo[:, S][:, :, V]
+        sub_jhi = jhi[:, S][:, :, V]
+        lin = linearization_from_bounds(
+            lo[:, V], hi[:, V], c, flo[:, S], fhi[:, S], sub_jlo, sub_jhi, defined
+        )
+        vlo, vhi, empty = hansen_sengupta(lin)
+        nlo, nhi = lo.copy(), hi.copy()
+        nlo[:, V] = vlo
+        nhi[:, V] = vhi
+        return nlo, nhi, empty

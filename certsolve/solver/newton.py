@@ -45,6 +45,7 @@ __all__ = [
     "krawczyk_single",
     "hansen_sengupta",
     "batched_inverse",
+    "batched_solve",
 ]
 
 _U = 2.0**-53
@@ -74,6 +75,31 @@ def batched_inverse(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Y[finite] = Yf
     ok = np.all(np.isfinite(Y), axis=(1, 2))
     return Y, ok
+
+
+def batched_solve(A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Approximate solutions of ``A x = b`` for a stack, and a mask of usable ones.
+
+    Float linear algebra for Newton *points* (no rigour needed there); about twice as fast
+    as forming the inverses.  Singular or non-finite systems give NaN and ``ok = False``.
+    """
+    finite = np.all(np.isfinite(A), axis=(1, 2)) & np.all(np.isfinite(b), axis=1)
+    x = np.full(b.shape, np.nan)
+    if not np.any(finite):
+        return x, finite
+    Af, bf = A[finite], b[finite]
+    try:
+        with np.errstate(all="ignore"):
+            xf = np.linalg.solve(Af, bf[:, :, None])[:, :, 0]
+    except np.linalg.LinAlgError:
+        xf = np.full(bf.shape, np.nan)
+        for k in range(Af.shape[0]):  # rare: some exactly singular matrix in the batch
+            try:
+                xf[k] = np.linalg.solve(Af[k], bf[k])
+            except np.linalg.LinAlgError:
+                pass
+    x[finite] = xf
+    return x, np.all(np.isfinite(x), axis=1)
 
 
 @dataclass

@@ -1,0 +1,169 @@
+"""Fewer-pass interval kernels for the batched evaluator (:mod:`certsolve.expr.program`).
+
+Same enclosures as :mod:`.arith` / :mod:`.projections`, computed with fewer temporary
+arrays and memory passes (``out=`` arguments, results written straight into the
+evaluator's node arrays).  Differences from the general functions, all sound:
+
+* results of ``+`` and ``-`` are rounded without the ``2^-1074`` term: a sum or difference
+  of floats that rounds to zero or to a subnormal is exact (gradual underflow), so only
+  normal results need moving, and for those ``|x|·2^-52`` is at least one ulp;
+* empty operands are not propagated as empty results (the evaluator detects an empty
+  node wherever it occurs; mapping an empty operand to a non-empty result only loses
+  information);
+* a product bound that is NaN (``0 · ∞`` in every corner) is replaced by 0, as in
+  :func:`.arith.mul`, but only after a cheap check.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .projections import _mul_inverse_zero
+from .rounding import down_inplace, up_inplace
+
+__all__ = [
+    "down_",
+    "up_",
+    "down_sum_",
+    "up_sum_",
+    "add_into",
+    "sub_into",
+    "mul_into",
+    "shift_into",
+    "bwd_add",
+    "bwd_sub",
+    "mul_inverse",
+    "bwd_mul",
+]
+
+_INF = np.inf
+
+
+def down_(x):
+    """Round ``x`` down in place (any operation)."""
+    return down_inplace(x)
+
+
+def up_(x):
+    """Round ``x`` up in place (any operation)."""
+    return up_inplace(x)
+
+
+def down_sum_(x):
+    """Round down in place a result of ``+`` or ``-`` (exact when zero or subnormal)."""
+    return down_inplace(x, exact_tiny=True)
+
+
+def up_sum_(x):
+    """Round up in place a result of ``+`` or ``-``."""
+    return up_inplace(x, exact_tiny=True)
+
+
+# -- forward, into preallocated rows -------------------------------------------------------------
+
+
+def add_into(alo, ahi, blo, bhi, olo, ohi):
+    np.add(alo, blo, out=olo)
+    down_sum_(olo)
+    np.add(ahi, bhi, out=ohi)
+    up_sum_(ohi)
+
+
+def sub_into(alo, ahi, blo, bhi, olo, ohi):
+    np.subtract(alo, bhi, out=olo)
+    down_sum_(olo)
+    np.subtract(ahi, blo, out=ohi)
+    up_sum_(ohi)
+
+
+def shift_into(alo, ahi, c, olo, ohi):
+    np.add(alo, c, out=olo)
+    down_sum_(olo)
+    np.add(ahi, c, out=ohi)
+    up_sum_(ohi)
+
+
+def mul_into(alo, ahi, blo, bhi, olo, ohi):
+    with np.errstate(invalid="ignore", over="ignore"):
+        p1 = alo * blo
+        p2 = alo * bhi
+        p3 = ahi * blo
+        p4 = ahi * bhi
+    np.fmax(p1, p2, out=ohi)
+    np.fmax(ohi, p3, out=ohi)
+    np.fmax(ohi, p4, out=ohi)
+    np.fmin(p1, p2, out=olo)
+    np.fmin(olo, p3, out=olo)
+    np.fmin(olo, p4, out=olo)
+    # NaN only where every corner is 0·∞: the product set is {0}
+    for o in (olo, ohi):
+        bad = np.isnan(o)
+        if bad.any():
+            o[bad] = 0.0
+    down_(olo)
+    up_(ohi)
+
+
+# -- backward projections -------------------------------------------------------------------------
+
+
+def bwd_add(zlo, zhi, xlo, xhi, ylo, yhi):
+    """z = x + y: ``x ∩ (z - y)``, then ``y ∩ (z - x')``."""
+    nxlo = down_sum_(zlo - yhi)
+    np.maximum(nxlo, xlo, out=nxlo)
+    nxhi = up_sum_(zhi - ylo)
+    np.minimum(nxhi, xhi, out=nxhi)
+    nylo = down_sum_(zlo - nxhi)
+    np.maximum(nylo, ylo, out=nylo)
+    nyhi = up_sum_(zhi - nxlo)
+    np.minimum(nyhi, yhi, out=nyhi)
+    return nxlo, nxhi, nylo, nyhi
+
+
+def bwd_sub(zlo, zhi, xlo, xhi, ylo, yhi):
+    """z = x - y: ``x ∩ (z + y)``, then ``y ∩ (x' - z)``."""
+    nxlo = down_sum_(zlo + ylo)
+    np.maximum(nxlo, xlo, out=nxlo)
+    nxhi = up_sum_(zhi + yhi)
+    np.minimum(nxhi, xhi, out=nxhi)
+    nylo = down_sum_(nxlo - zhi)
+    np.maximum(nylo, ylo, out=nylo)
+    nyhi = up_sum_(nxhi - zlo)
+    np.minimum(nyhi, yhi, out=nyhi)
+    return nxlo, nxhi, nylo, nyhi
+
+
+def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
+    """``[x] ∩ {t : ∃ y ∈ [y], t·y ∈ [z]}`` (hull), as :func:`.projections.mul_inverse`.
+
+    2-D arrays of one shape.  Corner quotients for the whole batch; the entries with
+    ``0 ∈ [y]`` are recomputed on the compressed subset.
+    """
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        q1 = zlo / ylo
+        q2 = zlo / yhi
+        q3 = zhi / ylo
+        q4 = zhi / yhi
+        hi = np.maximum(q1, q2)
+        np.maximum(hi, q3, out=hi)
+        np.maximum(hi, q4, out=hi)
+        lo = np.minimum(q1, q2, out=q1)
+        np.minimum(lo, q3, out=lo)
+        np.minimum(lo, q4, out=lo)
+    down_(lo)
+    np.maximum(lo, xlo, out=lo)
+    up_(hi)
+    np.minimum(hi, xhi, out=hi)
+    y0 = ylo <= 0.0
+    y0 &= yhi >= 0.0
+    if y0.any():
+        k = np.nonzero(y0)
+        lo[k], hi[k] = _mul_inverse_zero(zlo[k], zhi[k], ylo[k], yhi[k], xlo[k], xhi[k])
+    return lo, hi
+
+
+def bwd_mul(zlo, zhi, xlo, xhi, ylo, yhi):
+    """z = x * y."""
+    nxlo, nxhi = mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi)
+    nylo, nyhi = mul_inverse(zlo, zhi, nxlo, nxhi, ylo, yhi)
+    return nxlo, nxhi, nylo, nyhi

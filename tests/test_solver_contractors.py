@@ -1,0 +1,205 @@
+"""New contractors never lose a solution: partial Newton, mixed-Jacobian Newton, CID,
+parametric Krawczyk on sub-systems; and the forward-kinematics frame formulation.
+
+Soundness is checked against the independent reference solutions of the Minibex systems
+(``tests/reference/reference.json``): for random boxes around each reference point (and
+random boxes anywhere), a contracted box must still hold every reference point it held,
+and a box proven empty must have held none.  Reference points are compared with the float
+bounds widened by a few ulps (they are given to 40 digits).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from certsolve.expr.compiled import CompiledSystem
+from certsolve.expr.minibex import load_minibex
+from certsolve.solver import solve
+from certsolve.solver.contractors import HC4, IntervalNewton, PartialNewton
+from certsolve.solver.shaving import CID
+from certsolve.solver.subsystem import UniqueSubsystem
+
+ROOT = Path(__file__).resolve().parent.parent
+SYSTEMS = ROOT / "examples" / "systems"
+REFERENCE = json.loads((Path(__file__).parent / "reference" / "reference.json").read_text())
+NAMES = ["circle-line", "brown-5", "trig-exp", "eco-6", "kin2-6r"]
+ULPS = 4
+
+
+@cache
+def compiled(name: str):
+    system = load_minibex(SYSTEMS / f"{name}.mbx")
+    pts = np.array([[float(v) for v in s] for s in REFERENCE[name]["solutions"]])
+    return CompiledSystem(system), pts
+
+
+def holds(lo, hi, p) -> bool:
+    """``p`` in ``[lo, hi]`` widened by a few ulps per side."""
+    a = np.array([v - ULPS * math.ulp(v) for v in lo])
+    b = np.array([v + ULPS * math.ulp(v) for v in hi])
+    return bool(np.all((a <= p) & (p <= b)))
+
+
+def random_boxes(pts, dom, rng, count=300):
+    """Boxes around reference points (various widths and offsets) and anywhere."""
+    n = pts.shape[1]
+    span = np.minimum(dom[:, 1] - dom[:, 0], 20.0)
+    out_lo, out_hi = [], []
+    for _ in range(count):
+        w = span * 10.0 ** rng.uniform(-4, -0.5, n)
+        if rng.random() < 0.8 and len(pts):
+            c = pts[rng.integers(len(pts))]
+            lo = c - w * rng.random(n)
+        else:
+            lo = dom[:, 0] + (dom[:, 1] - dom[:, 0] - w) * rng.random(n)
+        lo = np.maximum(lo, dom[:, 0])
+        hi = np.minimum(lo + w, dom[:, 1])
+        out_lo.append(lo)
+        out_hi.append(hi)
+    return np.array(out_lo), np.array(out_hi)
+
+
+def check_contractor(name, contract, seed=0):
+    csys, pts = compiled(name)
+    rng = np.random.default_rng(seed)
+    lo, hi = random_boxes(pts, csys.system.domain, rng)
+    nlo, nhi, empty = contract(csys, lo, hi)
+    kept = 0
+    for k in range(lo.shape[0]):
+        for p in pts:
+            if holds(lo[k], hi[k], p) and np.all((lo[k] < p) & (p < hi[k])):
+                assert not empty[k], f"box {k} holds a solution but was declared empty"
+                assert holds(nlo[k], nhi[k], p), f"box {k} lost solution {p}"
+                kept += 1
+    assert kept > 50  # the test exercised boxes with solutions
+    assert np.all(nlo >= lo) and np.all(nhi <= hi)  # contraction only
+
+
+def _partition(n, rng):
+    perm = rng.permutation(n)
+    cuts = sorted(rng.choice(np.arange(1, n), size=min(2, n - 1), replace=False)) if n > 1 else []
+    groups = []
+    for part in np.split(perm, cuts):
+        g = np.zeros(n, dtype=bool)
+        g[part] = True
+        groups.append(g)
+    return groups
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_mixed_jacobian_newton_keeps_solutions(name):
+    csys, _ = compiled(name)
+    rng = np.random.default_rng(1)
+    for groups in ([np.eye(csys.n, dtype=bool)[j] for j in range(csys.n)], _partition(csys.n, rng)):
+        newton = IntervalNewton(csys, groups)
+
+        def contract(csys, lo, hi, newton=newton):
+            step = newton.contract(lo, hi)
+            # a proven box holds exactly one solution: the Krawczyk image must hold it
+            return step.lo, step.hi, step.empty
+
+        check_contractor(name, contract)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_mixed_newton_proofs_are_unique_solutions(name):
+    """Boxes proven by the mixed-then-full Krawczyk test hold exactly one reference point."""
+    csys, pts = compiled(name)
+    newton = IntervalNewton(csys, [np.eye(csys.n, dtype=bool)[j] for j in range(csys.n)])
+    rng = np.random.default_rng(2)
+    lo, hi = random_boxes(pts, csys.system.domain, rng, count=400)
+    step = newton.contract(lo, hi)
+    for k in np.flatnonzero(step.proven):
+        inside = [p for p in pts if holds(lo[k], hi[k], p)]
+        assert len(inside) == 1
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_partial_newton_keeps_solutions(name):
+    csys, _ = compiled(name)
+    rng = np.random.default_rng(3)
+    n = csys.n
+    for size in sorted({1, max(1, n // 2), n}):
+        S = rng.choice(n, size=size, replace=False)
+        V = rng.choice(n, size=size, replace=False)
+        pn = PartialNewton(csys, S, V)
+        check_contractor(name, lambda csys, lo, hi, pn=pn: pn.contract(lo, hi))
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_cid_keeps_solutions(name):
+    csys, _ = compiled(name)
+    hc4 = HC4(csys, max_passes=2)
+    rng = np.random.default_rng(4)
+    for slices in (2, 3, 5):
+        cid = CID(hc4.contract, slices)
+
+        def contract(csys, lo, hi, cid=cid):
+            var = rng.integers(csys.n, size=lo.shape[0])
+            return cid.contract(lo, hi, var)
+
+        check_contractor(name, contract)
+
+
+def test_cid_on_a_circle_contracts_and_excludes():
+    """x² + y² = 1, y = x: CID on x removes the middle slices HC4 alone keeps."""
+    from certsolve.expr import System, sqr, var
+
+    x, y = var("x"), var("y")
+    system = System(["x", "y"], np.array([[-2.0, 2.0], [-2.0, 2.0]]), [sqr(x) + sqr(y) - 1, y - x])
+    csys = CompiledSystem(system)
+    hc4 = HC4(csys)
+    lo, hi = np.array([[-1.0, -1.0]]), np.array([[1.0, 1.0]])
+    a, b, e = hc4.contract(lo, hi)
+    cid = CID(hc4.contract, 8)
+    c, d, e2 = cid.contract(a, b, np.array([0]))
+    assert not e2[0]
+    r = math.sqrt(0.5)
+    assert c[0, 0] <= -r <= d[0, 0] and c[0, 0] <= r <= d[0, 0]
+    # two solutions at ±(r, r): the hull cannot shrink below them, but x stays inside
+    assert np.all(c >= a) and np.all(d <= b)
+
+
+def test_unique_subsystem_on_a_monotone_system():
+    """x + y³ + y = u_x, y determined uniquely by x: the parametric Krawczyk pins y."""
+    from certsolve.expr import System, sqr, var
+
+    x, y = var("x"), var("y")
+    # for fixed x, y³ + y = 1 - x has exactly one real root (strictly increasing in y)
+    system = System(
+        ["x", "y"],
+        np.array([[-1.0, 1.0], [-3.0, 3.0]]),
+        [y * sqr(y) + y + x - 1.0, sqr(x) + sqr(y) - 1.0],
+    )
+    csys = CompiledSystem(system)
+    us = UniqueSubsystem(csys, [0], [1], lambda: (np.array([-np.inf]), np.array([np.inf])))
+    lo = np.array([[-0.05, -3.0], [0.5, -3.0]])
+    hi = np.array([[0.05, 3.0], [0.52, 3.0]])
+    nlo, nhi, empty = us.contract(lo, hi)
+    for k in range(2):
+        for xv in np.linspace(lo[k, 0], hi[k, 0], 11):
+            root = np.roots([1.0, 0.0, 1.0, xv - 1.0])
+            yv = float(root[np.argmin(np.abs(root.imag))].real)
+            assert nlo[k, 1] <= yv <= nhi[k, 1]
+        assert nhi[k, 1] - nlo[k, 1] < 0.5  # pinned, from a width of 6
+    assert not np.any(empty)
+
+
+@pytest.mark.parametrize("name", ["circle-line", "brown-5", "trig-exp", "kin2-6r"])
+def test_solver_with_mixed_newton_matches_reference(name):
+    system = load_minibex(SYSTEMS / f"{name}.mbx")
+    n = system.n
+    groups = [np.eye(n, dtype=bool)[j] for j in range(n)]
+    res = solve(system, timeout=300, newton_groups=groups)
+    pts = np.array([[float(v) for v in s] for s in REFERENCE[name]["solutions"]])
+    assert res.status == "complete"
+    assert not res.undecided
+    assert len(res.solutions) == len(pts)
+    for p in pts:
+        assert sum(holds(s.lo, s.hi, p) for s in res.solutions) == 1
