@@ -1,5 +1,4 @@
-"""New contractors never lose a solution: partial Newton, mixed-Jacobian Newton, CID,
-parametric Krawczyk on sub-systems; and the forward-kinematics frame formulation.
+"""New contractors never lose a solution: partial Newton, mixed-Jacobian Newton and CID.
 
 Soundness is checked against the independent reference solutions of the Minibex systems
 (``tests/reference/reference.json``): for random boxes around each reference point (and
@@ -23,7 +22,6 @@ from certsolve.expr.minibex import load_minibex
 from certsolve.solver import solve
 from certsolve.solver.contractors import HC4, IntervalNewton, PartialNewton
 from certsolve.solver.shaving import CID
-from certsolve.solver.subsystem import UniqueSubsystem
 
 ROOT = Path(__file__).resolve().parent.parent
 SYSTEMS = ROOT / "examples" / "systems"
@@ -164,31 +162,6 @@ def test_cid_on_a_circle_contracts_and_excludes():
     assert c[0, 0] <= -r <= d[0, 0] and c[0, 0] <= r <= d[0, 0]
     # two solutions at ±(r, r): the hull cannot shrink below them, but x stays inside
     assert np.all(c >= a) and np.all(d <= b)
-
-
-def test_unique_subsystem_on_a_monotone_system():
-    """x + y³ + y = u_x, y determined uniquely by x: the parametric Krawczyk pins y."""
-    from certsolve.expr import System, sqr, var
-
-    x, y = var("x"), var("y")
-    # for fixed x, y³ + y = 1 - x has exactly one real root (strictly increasing in y)
-    system = System(
-        ["x", "y"],
-        np.array([[-1.0, 1.0], [-3.0, 3.0]]),
-        [y * sqr(y) + y + x - 1.0, sqr(x) + sqr(y) - 1.0],
-    )
-    csys = CompiledSystem(system)
-    us = UniqueSubsystem(csys, [0], [1], lambda: (np.array([-np.inf]), np.array([np.inf])))
-    lo = np.array([[-0.05, -3.0], [0.5, -3.0]])
-    hi = np.array([[0.05, 3.0], [0.52, 3.0]])
-    nlo, nhi, empty = us.contract(lo, hi)
-    for k in range(2):
-        for xv in np.linspace(lo[k, 0], hi[k, 0], 11):
-            root = np.roots([1.0, 0.0, 1.0, xv - 1.0])
-            yv = float(root[np.argmin(np.abs(root.imag))].real)
-            assert nlo[k, 1] <= yv <= nhi[k, 1]
-        assert nhi[k, 1] - nlo[k, 1] < 0.5  # pinned, from a width of 6
-    assert not np.any(empty)
 
 
 @pytest.mark.parametrize("name", ["circle-line", "brown-5", "trig-exp", "kin2-6r"])

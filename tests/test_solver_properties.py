@@ -206,10 +206,17 @@ def test_progress_callback_can_cancel():
     assert len(seen) == 3
 
 
-def test_parallel_workers_find_the_same_solutions():
+@pytest.mark.parametrize("serial_seconds", [0.0, 1.0])
+def test_parallel_workers_find_the_same_solutions(serial_seconds):
+    """With no serial warm-up every box goes through the workers; with the default one
+    this small system is done before they are needed (and says so)."""
+    from certsolve.solver import Solver
+    from certsolve.solver.parallel import solve_parallel
+
     system, sols = product_system(True)
     serial = solve(system)
-    par = solve(system, workers=2)
+    par = solve_parallel(Solver(system), workers=2, serial_seconds=serial_seconds)
+    assert par.stats.workers == (2 if serial_seconds == 0.0 else 1)
     assert par.status == serial.status == "complete"
     assert len(par.solutions) == len(serial.solutions) == len(sols)
     for s in serial.solutions:

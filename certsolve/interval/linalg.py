@@ -17,6 +17,8 @@ factor ``1 + gamma_{n+2}`` below its exact value, so we multiply the total radiu
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from .rounding import up
@@ -27,6 +29,7 @@ _U = 2.0**-53
 _UNDERFLOW = 2.0**-1000  # per-summand underflow allowance (<< any meaningful width)
 
 
+@functools.lru_cache(maxsize=256)
 def gamma(n: int) -> float:
     """Upper bound of ``n u / (1 - n u)`` (rounded up generously)."""
     nu = n * _U

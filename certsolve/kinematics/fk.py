@@ -234,9 +234,13 @@ class FKSolver:
         sols = [self.decode(s.lo, s.hi, u, s) for s in res.solutions]
         return FKResult(self.robot.name, self.formulation, u, res.status, sols, res, notes=notes)
 
-    def decode(self, lo, hi, u, sol=None) -> FKPose:
-        """Read a robot pose from a (tight) solution box of the system's variables."""
-        x = 0.5 * np.asarray(lo) + 0.5 * np.asarray(hi)
+    def decode(self, lo, hi, u, sol=None, point=None) -> FKPose:
+        """Read a robot pose from a (tight) solution box of the system's variables.
+
+        The pose is taken at ``point`` if given (e.g. a converged Newton point inside the
+        box), else at the box midpoint.
+        """
+        x = 0.5 * np.asarray(lo) + 0.5 * np.asarray(hi) if point is None else np.asarray(point)
         f = self.form
         r = self.robot
         d, m = r.dim, r.m

@@ -110,27 +110,31 @@ class Tracker:
             hi[self._is_rho] = rhi
         return lo, hi
 
-    def _prove(self, lo, hi, steps: int = 3):
-        """Exactly one zero in ``[lo, hi]``?  Krawczyk, re-applied on ``K(X) ∩ X``.
+    def _prove(self, lo, hi, c, steps: int = 3):
+        """Exactly one zero in ``[lo, hi]``?  Krawczyk about the Newton point ``c``.
 
-        Every zero in ``X`` lies in ``X' = K(X) ∩ X``, so a proof that ``X'`` holds exactly
-        one zero proves it for ``X``; re-testing on the smaller ``X'`` (with its tighter
-        Jacobian) succeeds where a single test narrowly fails.
+        ``K(X) = c - Y f(c) + (I - Y J)(X - c)`` with ``J`` enclosing the Jacobian over the
+        hull of ``X`` and ``c``: ``K(X) ⊂ int X`` proves exactly one zero in ``X`` (the
+        centre need not be the midpoint; the radius used is the distance from ``c`` to the
+        farthest face).  Every zero in ``X`` lies in ``X' = K(X) ∩ X``, so a proof for
+        ``X'`` is a proof for ``X``.  ``X'`` is re-tested with the same ``f(c)`` and the same
+        ``J`` (an enclosure over ``X`` is one over ``X' ⊂ X``): only matrix work, no new
+        evaluation.  If that stalls, ``J`` is evaluated once more over the narrowed box.
         """
         csys = self.csys
-        for _ in range(steps):
-            _, _, jlo, jhi = csys.fj_box(lo, hi)
-            c = 0.5 * lo + 0.5 * hi
-            flo, fhi = csys.f_point(c)
-            klo, khi, ok = krawczyk_single(lo, hi, c, flo, fhi, jlo, jhi)
-            if ok:
-                return True, np.fmax(klo, lo), np.fmin(khi, hi)
-            nlo, nhi = np.fmax(klo, lo), np.fmin(khi, hi)
-            if np.any(nlo > nhi):  # no zero at all in X (cannot happen at a Newton point)
-                return False, lo, hi
-            if np.all(nhi - nlo > 0.9 * (hi - lo)):
-                break  # no progress
-            lo, hi = nlo, nhi
+        flo, fhi = csys.f_point(c)
+        for _ in range(2):
+            _, _, jlo, jhi = csys.fj_box(np.minimum(lo, c), np.maximum(hi, c))
+            for _ in range(steps):
+                klo, khi, ok = krawczyk_single(lo, hi, c, flo, fhi, jlo, jhi)
+                if ok:
+                    return True, np.fmax(klo, lo), np.fmin(khi, hi)
+                nlo, nhi = np.fmax(klo, lo), np.fmin(khi, hi)
+                if np.any(nlo > nhi):  # no zero at all in X (cannot happen at a Newton point)
+                    return False, lo, hi
+                if np.all(nhi - nlo > 0.9 * (hi - lo)):
+                    break  # no progress
+                lo, hi = nlo, nhi
         return False, lo, hi
 
     def step(self, u, near: Pose | FKPose, half_width: float = 0.1) -> TrackResult:
@@ -177,9 +181,11 @@ class Tracker:
             )
         for h in (half_width, 0.5 * half_width, 0.25 * half_width):
             lo, hi = self._box(x, h)
-            ok, elo, ehi = self._prove(lo, hi)
+            ok, elo, ehi = self._prove(lo, hi, x)
             if ok:
-                pose = self.fk.decode(elo, ehi, u)
+                # the Newton point is the best estimate of the zero proven to be in E
+                inside = bool(np.all((elo <= x) & (x <= ehi)))
+                pose = self.fk.decode(elo, ehi, u, point=x if inside else None)
                 msg = "" if h == half_width else f"proven only at half-width {h:g} cm"
                 return TrackResult(True, pose, it, res, h, time.perf_counter() - t0, msg)
         pose = self.fk.decode(x, x, u)

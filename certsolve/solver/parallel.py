@@ -58,15 +58,34 @@ def solve_parallel(
     progress=None,
     rounds_per_task: int = 8,
     task_seconds: float = 1.0,
+    serial_seconds: float = 1.0,
 ) -> SolveResult:
+    """Parallel search; the first ``serial_seconds`` run in this process.
+
+    Starting worker processes costs about a second (spawn, imports, unpickling the
+    compiled system), so a search that ends within ``serial_seconds`` never starts them:
+    small problems cost what they cost serially.  Then the buffer is grown until there is
+    work for every worker.
+    """
     t0 = time.perf_counter()
     n = solver.n
     state = SearchState.start(solver.system.domain, n)
-    # grow the buffer serially until there is enough work to share
+    warm = serial_seconds if timeout is None else min(serial_seconds, timeout)
+    solver.run(state, timeout=warm, max_boxes=max_boxes, progress=progress)
+    if state.stats.stopped_by not in (None, "timeout") or (
+        timeout is not None and time.perf_counter() - t0 >= timeout
+    ):
+        state.stats.workers = 1  # a limit was hit before the workers were needed
+        return solver.result(state)
+    state.stats.stopped_by = None
     while 0 < len(state.stack) < 4 * workers:
         solver.round(state)
         if timeout is not None and time.perf_counter() - t0 >= timeout:
             break
+    if not len(state.stack):  # done before the workers were needed
+        state.stats.workers = 1
+        state.stats.time = time.perf_counter() - t0
+        return solver.result(state)
     stats = state.stats
     ctx = get_context("spawn")
     running = {}
