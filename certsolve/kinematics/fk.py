@@ -164,6 +164,7 @@ class FKSolver:
             subsystems=subsystems,
             bisector=bisector,
             newton_groups=_newton_groups(self.form.system.variables),
+            cid_slices=0,
         )
         self.csys = self.solver.csys
 

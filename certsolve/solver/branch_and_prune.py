@@ -3,14 +3,17 @@
 One *round* takes up to ``batch_size`` boxes from the buffer and, for all of them at once:
 
 1. drops boxes inside the unicity box of a known solution;
-2. contracts with :class:`~.contractors.HC4` (boxes proven empty are dropped);
+2. contracts with :class:`~.contractors.HC4` (boxes proven empty are dropped), then with
+   partial Newton on the given sub-systems, if any;
 3. linearises and runs :class:`~.contractors.IntervalNewton`: the Krawczyk test on the box
-   (``K(X) ⊂ int X`` -> exactly one solution, certified) and a Hansen–Sengupta sweep;
+   (``K(X) ⊂ int X`` -> exactly one solution, certified) and a Hansen–Sengupta sweep (with
+   Hansen's mixed Jacobian by default);
 4. for boxes where Newton is informative but stalled, tries :meth:`.Certifier.inflate`;
    the part of the box outside a proven unicity box goes back to the buffer;
 5. sends boxes that shrank at least as much as a bisection would (log-volume) back for
    another round, reports boxes narrower than ``eps`` as *undecided*, and bisects the rest
-   (:class:`~.bisectors.SmearSumRelative`).
+   (:class:`~.bisectors.SmearSumRelative`), after a CID contraction
+   (:class:`~.shaving.CID`) on the chosen variable.
 
 Limits (time, boxes, a progress callback returning ``False``) stop the search between
 rounds; the boxes still in the buffer are then reported as *pending* and the status is
@@ -32,6 +35,7 @@ from .buffer import BoxStack
 from .certify import Certifier, SolutionSet, box_difference
 from .contractors import HC4, IntervalNewton, PartialNewton, log_volume_ratio
 from .result import Solution, SolveResult, Stats, Undecided
+from .shaving import CID
 
 __all__ = ["Solver", "Progress", "solve"]
 
@@ -63,6 +67,16 @@ class Solver:
         boxes processed per round (per numpy call).
     hc4_passes, bisector, certifier:
         swappable parts (defaults: 4 HC4 passes, smear-sum-relative bisection, Krawczyk).
+    newton_groups:
+        ``"variables"`` (default): Hansen–Sengupta with Hansen's mixed Jacobian, one
+        variable per group; ``None``: the plain interval Jacobian; or a list of boolean
+        masks (see :class:`~.contractors.IntervalNewton`).
+    cid_slices:
+        slices of the CID contraction (HC4 on each slice, hull) applied to the variable
+        chosen for bisection; 0 turns it off.  Measured on ``examples/systems``: mixed
+        Jacobian + CID need 2-3x fewer boxes on Katsura and the 6R system.
+    subsystems:
+        square sub-systems ``(equations, variables)`` also contracted by partial Newton.
     """
 
     def __init__(
@@ -76,7 +90,8 @@ class Solver:
         certifier: Certifier | None = None,
         bisect_mask=None,
         subsystems=(),
-        newton_groups=None,
+        newton_groups="variables",
+        cid_slices: int = 4,
     ):
         if not eps > 0:
             raise ValueError("eps must be positive")
@@ -86,6 +101,10 @@ class Solver:
         self.eps = float(eps)
         self.batch_size = int(batch_size)
         self.hc4 = HC4(self.csys, max_passes=hc4_passes)
+        if isinstance(newton_groups, str):
+            if newton_groups != "variables":
+                raise ValueError("newton_groups: 'variables', None or a list of masks")
+            newton_groups = list(np.eye(self.n, dtype=bool))
         self.newton = IntervalNewton(self.csys, newton_groups)
         self.bisector = bisector or SmearSumRelative()
         self.certifier = certifier or Certifier(self.csys)
@@ -93,8 +112,9 @@ class Solver:
         self.partial = [PartialNewton(self.csys, e, v) for e, v in subsystems]
         #: further contractors (``contract(lo, hi) -> (lo, hi, empty)``), run after HC4
         self.contractors: list = []
-        #: CID slices applied to the bisection variable before splitting (0: off)
-        self.cid = None
+        #: CID on the variable chosen for bisection, before splitting (None: off); a box
+        #: it shrinks as much as a bisection goes round again instead of being split
+        self.cid = CID(self.hc4.contract, cid_slices) if cid_slices else None
         self.cid_gain = _LOG_HALF
         #: variables the bisector may split (None: all); the others are auxiliary
         self.bisect_mask = None if bisect_mask is None else np.asarray(bisect_mask, dtype=bool)
