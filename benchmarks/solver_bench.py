@@ -35,10 +35,14 @@ def main() -> None:
     if args.names:
         files = [f for f in files if f.stem in args.names]
     workers = [int(w) for w in args.workers.split(",")]
-    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"python {platform.python_version()}; median of {args.runs} runs")
-    print(f"{'system':<20} {'vars':>4} {'w':>2} {'status':<10} {'sols':>4} {'und':>4} "
-          f"{'boxes':>8} {'wall s':>8} {'cpu s':>8}")
+    print(
+        f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"python {platform.python_version()}; median of {args.runs} runs"
+    )
+    print(
+        f"{'system':<20} {'vars':>4} {'w':>2} {'status':<10} {'sols':>4} {'und':>4} "
+        f"{'boxes':>8} {'wall s':>8} {'cpu s':>8}"
+    )
     for f in files:
         system = load_minibex(f)
         for w in workers:
@@ -49,10 +53,12 @@ def main() -> None:
                 res = solver.solve(workers=w, timeout=args.timeout)
                 walls.append(time.perf_counter() - t)
                 cpus.append(time.process_time() - c)
-            print(f"{f.stem:<20} {system.n:>4} {w:>2} {res.status:<10} {len(res.solutions):>4} "
-                  f"{len(res.undecided):>4} {res.stats.boxes:>8} "
-                  f"{statistics.median(walls):>8.3f} {statistics.median(cpus):>8.3f}",
-                  flush=True)
+            print(
+                f"{f.stem:<20} {system.n:>4} {w:>2} {res.status:<10} {len(res.solutions):>4} "
+                f"{len(res.undecided):>4} {res.stats.boxes:>8} "
+                f"{statistics.median(walls):>8.3f} {statistics.median(cpus):>8.3f}",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":

@@ -340,6 +340,15 @@ class ScalarProgram:
     def _fast(graph: Graph, order, outputs, n) -> str:
         lines = ["def interval_fast(xlo, xhi, plo, phi):"]
         guard = "    if not (NI < {lo} and {hi} < PI): raise _Bail"
+        # Only the inputs of min/max-based operations and the outputs need the guard: the
+        # NaN that an infinite bound can cause (inf - inf, 0 * inf) passes unchanged
+        # through + - neg and scalings (and nextafter) until it reaches a guarded node,
+        # and an overflowed bound stays a valid, if loose, bound through them.
+        passthrough = {"add", "sub", "neg", "cadd", "cmul"}
+        guarded = {int(o) for o in outputs}
+        for v in order:
+            if graph.op[v] not in passthrough:
+                guarded.update(int(a) for a in graph.args[v])
         for v in order:
             op, args, p = graph.op[v], graph.args[v], graph.param[v]
             lo, hi = f"l{v}", f"h{v}"
@@ -371,7 +380,8 @@ class ScalarProgram:
                     lines.append(f"    {lo}, {hi} = _ipow(l{a}, h{a}, {int(p)})")
                 else:
                     lines.append(f"    {lo}, {hi} = " + _CALL[op].format(**fmt))
-            lines.append(guard.format(lo=lo, hi=hi))
+            if v in guarded:
+                lines.append(guard.format(lo=lo, hi=hi))
         outs = [int(o) for o in outputs]
         lines.append(
             f"    return [{', '.join(f'l{o}' for o in outs)}], [{', '.join(f'h{o}' for o in outs)}]"
