@@ -13,6 +13,8 @@ Everything in it is plain data (arrays, lists), so it pickles to worker processe
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .graph import Graph
@@ -57,14 +59,17 @@ class CompiledSystem:
         """New parameter values: ``{name: value or (lo, hi)}`` (all names required)."""
         lo = np.empty(len(self.param_names))
         hi = np.empty(len(self.param_names))
-        for i, name in enumerate(self.param_names):
+        for i, name in enumerate(self.param_names):  # plain Python: called per tracking step
             if name not in values:
                 raise KeyError(f"missing value for parameter {name!r}")
             v = values[name]
-            a, b = (v, v) if np.isscalar(v) else v
-            if not (np.isfinite(a) and np.isfinite(b) and a <= b):
+            if isinstance(v, (int, float, np.number)):
+                a = b = float(v)
+            else:
+                a, b = (float(t) for t in v)
+            if not (math.isfinite(a) and math.isfinite(b) and a <= b):
                 raise ValueError(f"parameter {name!r} must be finite with lo <= hi")
-            lo[i], hi[i] = float(a), float(b)
+            lo[i], hi[i] = a, b
         self.param_lo, self.param_hi = lo, hi
         self.param_mid = 0.5 * lo + 0.5 * hi
         self.system.parameters = {

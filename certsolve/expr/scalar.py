@@ -246,6 +246,14 @@ _FAST = {
         "{lo} = 0.0 if {a0} <= 0.0 <= {a1} else nd(min(p1, p2), NI); "
         "{hi} = nd(max(p1, p2), PI)"
     ),
+    # divisor away from 0 (the common case) inline, the IBEX cases in the helper
+    "div": (
+        "if {b0} > 0.0 or {b1} < 0.0:\n"
+        "        p1 = {a0} / {b0}; p2 = {a0} / {b1}; p3 = {a1} / {b0}; p4 = {a1} / {b1}; "
+        "{lo} = nd(min(p1, p2, p3, p4), NI); {hi} = nd(max(p1, p2, p3, p4), PI)\n"
+        "    else:\n"
+        "        {lo}, {hi} = _div({a0}, {a1}, {b0}, {b1})"
+    ),
 }
 
 

@@ -29,7 +29,7 @@ from ..expr import esum, sqr, sqrt
 from ..expr.scalar import ScalarProgram
 from ..robot.geometry import Pose
 from ..robot.model import Robot
-from ..solver.newton import krawczyk_single
+from ..solver.newton import KrawczykPoint
 from .fk import FKPose, FKSolver
 from .fk_systems import choose_formulation
 
@@ -125,8 +125,9 @@ class Tracker:
         flo, fhi = csys.f_point(c)
         for _ in range(2):
             _, _, jlo, jhi = csys.fj_box(np.minimum(lo, c), np.maximum(hi, c))
+            kp = KrawczykPoint(c, flo, fhi, jlo, jhi)
             for _ in range(steps):
-                klo, khi, ok = krawczyk_single(lo, hi, c, flo, fhi, jlo, jhi)
+                klo, khi, ok = kp.image(lo, hi)
                 if ok:
                     return True, np.fmax(klo, lo), np.fmin(khi, hi)
                 nlo, nhi = np.fmax(klo, lo), np.fmin(khi, hi)

@@ -43,6 +43,7 @@ __all__ = [
     "krawczyk",
     "krawczyk_box",
     "krawczyk_single",
+    "KrawczykPoint",
     "hansen_sengupta",
     "batched_inverse",
     "batched_solve",
@@ -181,45 +182,72 @@ def krawczyk_box(lo, hi, flo, fhi, jlo, jhi, c=None):
     return krawczyk(linearization_from_bounds(lo, hi, c, flo, fhi, jlo, jhi))
 
 
+class KrawczykPoint:
+    """Krawczyk tests for one centre ``c``, one ``f(c)`` and one Jacobian enclosure ``J``.
+
+    ``K(X) = c - Y f(c) + (I - Y J)(X - c)``, with ``Y = mid(J)^-1``: ``Y``, ``Y f(c)`` and
+    ``|I - Y J|`` are computed once (with the same a priori rounding bounds as
+    :func:`krawczyk`), then :meth:`image` costs one matrix-vector product per box ``X``.
+    Valid for every box ``X`` such that ``J`` encloses the Jacobian over the hull of ``X``
+    and ``c``; ``X - c`` is enclosed by ``[-r, r]``, ``r`` the distance from ``c`` to the
+    farthest face, so ``c`` need not be the midpoint.  For real-time callers (tracking):
+    1-D / 2-D arrays, few numpy calls.
+    """
+
+    def __init__(self, c, flo, fhi, jlo, jhi):
+        n = c.shape[0]
+        self.c = c
+        self.ok = False
+        Jc = 0.5 * jlo + 0.5 * jhi
+        Jr = np.maximum(up(jhi - Jc), up(Jc - jlo))
+        try:
+            Y = np.linalg.inv(Jc)
+        except np.linalg.LinAlgError:
+            return
+        if not (
+            np.all(np.isfinite(Y))
+            and np.all(np.isfinite(Jr))
+            and np.all(np.isfinite(flo))
+            and np.all(np.isfinite(fhi))
+        ):
+            return
+        g = gamma(n + 4)
+        aY = np.abs(Y)
+        # M = Y J: midpoint Mc and radius Mr (a priori rounding bound of Y @ Jc included)
+        Mc = Y @ Jc
+        Mr = (aY @ (gamma(n) * np.abs(Jc) + Jr)) * (1.0 + 2.0 * g) + (n + 2) * 2.0**-1000
+        # b = Y f(c)
+        fc = 0.5 * flo + 0.5 * fhi
+        fr = np.maximum(up(fhi - fc), up(fc - flo))
+        bc = Y @ fc
+        br = (aY @ (gamma(n) * np.abs(fc) + fr)) * (1.0 + 2.0 * g) + (n + 2) * 2.0**-1000
+        self.mag = np.abs(np.eye(n) - Mc) * (1.0 + 4 * _U) + Mr
+        self.centre = c - bc
+        self.br = br
+        self.g2 = 1.0 + 2.0 * gamma(n + 2)
+        self.tiny = (n + 2) * 2.0**-1000
+        self.ok = True
+
+    def image(self, lo, hi):
+        """``(klo, khi, proven)``: ``K(X)`` and whether ``K(X) ⊂ int X``."""
+        if not self.ok:
+            return lo, hi, False
+        c = self.c
+        rad = np.maximum(up(hi - c), up(c - lo))
+        v = (self.mag @ rad) * self.g2 + self.tiny
+        rr = (self.br + v) * (1.0 + 4 * _U)
+        klo = down(down(self.centre) - rr)
+        khi = up(up(self.centre) + rr)
+        return klo, khi, bool(np.all((klo > lo) & (khi < hi)))
+
+
 def krawczyk_single(lo, hi, c, flo, fhi, jlo, jhi):
-    """Krawczyk test for one box (1-D / 2-D arrays), with few numpy calls: ``(klo, khi, ok)``.
+    """Krawczyk test for one box (1-D / 2-D arrays): ``(klo, khi, ok)``.
 
     The same operator and rounding bounds as :func:`krawczyk`, specialised to a single box
-    for real-time callers (tracking).
+    (see :class:`KrawczykPoint`, which reuses the set-up for several boxes).
     """
-    n = lo.shape[0]
-    Jc = 0.5 * jlo + 0.5 * jhi
-    Jr = np.maximum(up(jhi - Jc), up(Jc - jlo))
-    try:
-        Y = np.linalg.inv(Jc)
-    except np.linalg.LinAlgError:
-        return lo, hi, False
-    if not (
-        np.all(np.isfinite(Y))
-        and np.all(np.isfinite(Jr))
-        and np.all(np.isfinite(flo))
-        and np.all(np.isfinite(fhi))
-    ):
-        return lo, hi, False
-    g = gamma(n + 4)
-    aY = np.abs(Y)
-    # M = Y J: midpoint Mc and radius Mr (a priori rounding bound of Y @ Jc included)
-    Mc = Y @ Jc
-    Mr = (aY @ (gamma(n) * np.abs(Jc) + Jr)) * (1.0 + 2.0 * g) + (n + 2) * 2.0**-1000
-    # b = Y f(c)
-    fc = 0.5 * flo + 0.5 * fhi
-    fr = np.maximum(up(fhi - fc), up(fc - flo))
-    bc = Y @ fc
-    br = (aY @ (gamma(n) * np.abs(fc) + fr)) * (1.0 + 2.0 * g) + (n + 2) * 2.0**-1000
-    mag = np.abs(np.eye(n) - Mc) * (1.0 + 4 * _U) + Mr
-    rad = np.maximum(up(hi - c), up(c - lo))
-    v = (mag @ rad) * (1.0 + 2.0 * gamma(n + 2)) + (n + 2) * 2.0**-1000
-    centre = c - bc
-    rr = br + v
-    rr = rr * (1.0 + 4 * _U)
-    klo = down(down(centre) - rr)
-    khi = up(up(centre) + rr)
-    return klo, khi, bool(np.all((klo > lo) & (khi < hi)))
+    return KrawczykPoint(c, flo, fhi, jlo, jhi).image(lo, hi)
 
 
 def hansen_sengupta(lin: Linearization) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
