@@ -58,11 +58,11 @@ def solve_parallel(
     progress=None,
     rounds_per_task: int = 8,
     task_seconds: float = 1.0,
-    serial_seconds: float = 1.0,
+    serial_seconds: float = 2.0,
 ) -> SolveResult:
     """Parallel search; the first ``serial_seconds`` run in this process.
 
-    Starting worker processes costs about a second (spawn, imports, unpickling the
+    Starting worker processes costs 1-2 s (spawn, imports, unpickling the
     compiled system), so a search that ends within ``serial_seconds`` never starts them:
     small problems cost what they cost serially.  Then the buffer is grown until there is
     work for every worker.
