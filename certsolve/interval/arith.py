@@ -80,8 +80,9 @@ def shift(alo, ahi, c):
 
 def scale(alo, ahi, c):
     """``c * [a]`` for a float (array) ``c``."""
-    p = c * alo
-    q = c * ahi
+    with np.errstate(over="ignore"):  # overflow to ±inf is a valid bound
+        p = c * alo
+        q = c * ahi
     return down(np.minimum(p, q)), up(np.maximum(p, q))
 
 
