@@ -30,7 +30,7 @@ Formulations (sizes for MARIONET's 7 wires):
   frame*: the reference point ``P_1`` and the edge vectors ``E_j = P_j - P_1`` instead of
   the points, moments about ``P_1``.  A linear change of variables (same equations, same
   count, same solutions, named ``frame-<paper system>``) that separates translation from
-  rotation; with partial Newton on the translation sub-system it needs 3-20 times fewer
+  rotation; with partial Newton on the translation sub-system it needs 5-8 times fewer
   boxes than the paper's variables (see ``benchmarks/fk_bench.py``).
 * ``pose``: position and Z-Y-X Euler angles of the platform + ρ (6 + m unknowns), the
   classical parameterisation, for comparison.
