@@ -312,6 +312,17 @@ class Graph:
             return N("hull", (da if da is not None else zero, db if db is not None else zero))
         raise NotImplementedError(op)  # pragma: no cover
 
+    def ancestors(self, outputs: Sequence[int]) -> list[int]:
+        """The nodes ``outputs`` depend on, themselves included, in topological order."""
+        needed: set[int] = set()
+        stack = [int(o) for o in outputs]
+        while stack:
+            x = stack.pop()
+            if x not in needed:
+                needed.add(x)
+                stack.extend(self.args[x])
+        return sorted(needed)  # ids are topologically ordered
+
     def jacobian(self, roots: Sequence[int]) -> list[list[int | None]]:
         """``J[i][k] = ∂roots[i]/∂x_k`` as node ids (``None`` for structural zeros)."""
         return [[self.derivative(r, k) for k in range(len(self.variables))] for r in roots]

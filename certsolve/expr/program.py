@@ -157,14 +157,8 @@ class Program:
         self.n_vars = n
         self.n_params = npar
         outputs = [int(o) for o in outputs]
-        needed = set(range(n + npar))
-        stack = list(outputs)
-        while stack:
-            x = stack.pop()
-            if x in needed:
-                continue
-            needed.add(x)
-            stack.extend(graph.args[x])
+        # every variable and parameter has a row, used or not
+        needed = set(range(n + npar)) | set(graph.ancestors(outputs))
         level: dict[int, int] = {}
         for x in sorted(needed):  # ids are topologically ordered
             args = graph.args[x]

@@ -271,16 +271,8 @@ class ScalarProgram:
     """
 
     def __init__(self, graph: Graph, outputs: Sequence[int]):
-        n, npar = len(graph.variables), len(graph.parameters)
-        needed: set[int] = set()
-        stack = [int(o) for o in outputs]
-        while stack:
-            v = stack.pop()
-            if v in needed:
-                continue
-            needed.add(v)
-            stack.extend(graph.args[v])
-        order = sorted(needed)
+        n = len(graph.variables)
+        order = graph.ancestors(outputs)
         self._fast_source = self._fast(graph, order, outputs, n)
         ilines = ["def interval_safe(xlo, xhi, plo, phi):"]
         flines = ["def floats(x, p):"]
@@ -305,29 +297,21 @@ class ScalarProgram:
             if len(args) == 2:
                 fmt.update(b0=f"l{args[1]}", b1=f"h{args[1]}")
             if op == "cadd":
-                rhs = f"_down(l{a} + {p!r}), _up(h{a} + {p!r})"
+                rhs, frhs = f"_down(l{a} + {p!r}), _up(h{a} + {p!r})", f"f{a} + {p!r}"
             elif op == "cmul":
-                rhs = f"_scale(l{a}, h{a}, {p!r})"
+                rhs, frhs = f"_scale(l{a}, h{a}, {p!r})", f"f{a} * {p!r}"
             elif op == "pow":
-                rhs = f"_ipow(l{a}, h{a}, {int(p)})"
+                rhs, frhs = f"_ipow(l{a}, h{a}, {int(p)})", f"f{a} ** {int(p)}"
             else:
                 rhs = _CALL[op].format(**fmt)
-            ilines.append(f"    {lo}, {hi} = {rhs}")
-            if op == "cadd":
-                frhs = f"f{a} + {p!r}"
-            elif op == "cmul":
-                frhs = f"f{a} * {p!r}"
-            elif op == "pow":
-                frhs = f"f{a} ** {int(p)}"
-            else:
                 frhs = _FLOAT[op].format(a=f"f{a}", b=f"f{args[1]}" if len(args) == 2 else "")
+            ilines.append(f"    {lo}, {hi} = {rhs}")
             flines.append(f"    {fv} = {frhs}")
         outs = [int(o) for o in outputs]
         ilines.append(
             f"    return [{', '.join(f'l{o}' for o in outs)}], [{', '.join(f'h{o}' for o in outs)}]"
         )
         flines.append(f"    return [{', '.join(f'f{o}' for o in outs)}]")
-        del npar
         namespace = dict(_HELPERS)
         namespace.update(nd=math.nextafter, NI=-_INF, PI=_INF, _Bail=_Bail)
         exec(compile("\n".join(ilines), "<certsolve-scalar-interval>", "exec"), namespace)

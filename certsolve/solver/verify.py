@@ -26,15 +26,8 @@ def iv_eval(csys: CompiledSystem, nodes: list[int], lo, hi, ctx):
     """mpmath interval values of ``nodes`` for the box ``[lo, hi]`` (node by node)."""
     g = csys.graph
     n = csys.n
-    need: set[int] = set()
-    stack = list(nodes)
-    while stack:
-        v = stack.pop()
-        if v not in need:
-            need.add(v)
-            stack.extend(g.args[v])
     val = {}
-    for v in sorted(need):
+    for v in g.ancestors(nodes):
         op, args, p = g.op[v], g.args[v], g.param[v]
         if op == "var":
             val[v] = _ivl(ctx, lo[p], hi[p])
