@@ -52,6 +52,7 @@ class CompiledSystem:
         self._fj_f = self.fj.outputs[:n]
         self._fj_jac = self.fj.outputs[n:]
         self._jac_flat = np.flatnonzero(self.jac_structure.ravel())
+        self._col_programs: dict = {}  # column subsets -> (Program, flat indices)
         self.set_parameters(system.parameters)
 
     # -- parameters -------------------------------------------------------------------------
@@ -107,7 +108,7 @@ class CompiledSystem:
 
     def _column_program(self, cols: tuple[int, ...]):
         """Program for ``f`` and the Jacobian columns ``cols`` only (built on first use)."""
-        progs = self.__dict__.setdefault("_col_programs", {})
+        progs = self._col_programs
         if cols not in progs:
             n = self.n
             mask = np.zeros((n, n), dtype=bool)

@@ -43,12 +43,8 @@ class LargestFirst:
 
 
 class SmearSumRelative:
-    """``weights`` (n,) scale the scores: a variable with a small weight is split only when
-    its share of the variation dominates (e.g. one fixed by a well-conditioned sub-system)."""
-
-    def __init__(self, ratio: float = 0.45, weights=None):
+    def __init__(self, ratio: float = 0.45):
         self.ratio = ratio
-        self.weights = None if weights is None else np.asarray(weights, dtype=float)
 
     def choose(self, lo, hi, jlo, jhi, eps: float = 0.0, mask=None) -> np.ndarray:
         """Variable to split per box; ``mask`` (n,) restricts the choice (default: all)."""
@@ -60,8 +56,6 @@ class SmearSumRelative:
             rel = np.where(rows > 0, smear / rows, 0.0)
             score = np.sum(rel, axis=1)
         score = np.where(np.isfinite(score), score, 0.0)
-        if self.weights is not None:
-            score = score * self.weights
         allowed = w > eps if mask is None else (w > eps) & mask
         score = np.where(allowed, score, -1.0)
         best = np.argmax(score, axis=1)

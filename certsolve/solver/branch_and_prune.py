@@ -110,8 +110,6 @@ class Solver:
         self.certifier = certifier or Certifier(self.csys)
         #: square sub-systems ``(equations, variables)`` contracted by partial Newton
         self.partial = [PartialNewton(self.csys, e, v) for e, v in subsystems]
-        #: further contractors (``contract(lo, hi) -> (lo, hi, empty)``), run after HC4
-        self.contractors: list = []
         #: CID on the variable chosen for bisection, before splitting (None: off); a box
         #: it shrinks as much as a bisection goes round again instead of being split
         self.cid = CID(self.hc4.contract, cid_slices) if cid_slices else None
@@ -217,7 +215,7 @@ class Solver:
         lo, hi, lo0, hi0 = lo[~empty], hi[~empty], lo0[~empty], hi0[~empty]
         if lo.shape[0] == 0:
             return
-        for pn in [*self.contractors, *self.partial]:
+        for pn in self.partial:
             lo, hi, empty = pn.contract(lo, hi)
             lo, hi, lo0, hi0 = lo[~empty], hi[~empty], lo0[~empty], hi0[~empty]
             if lo.shape[0] == 0:

@@ -100,10 +100,6 @@ class IntervalNewton:
         self.groups = None if groups is None else [np.asarray(g, dtype=bool) for g in groups]
         for g in self.groups or ():  # compile the column programs now, not in the search
             csys._column_program(tuple(int(j) for j in np.flatnonzero(g)))
-        #: Hansen–Sengupta sweeps per call (mixed Jacobian only), repeated on boxes that
-        #: shrank by at least ``1 - exp(sweep_gain)`` in volume
-        self.sweeps = 1
-        self.sweep_gain = float(np.log(0.9))
 
     def _mixed(self, lo, hi, c, flo, fhi):
         """Mixed linearisation: group ``k``'s columns over ``(X_{1..k}, c_{k+1..})``.
@@ -130,7 +126,6 @@ class IntervalNewton:
         if self.groups is None:
             lin = linearize(self.csys, lo, hi)
             klo, khi, proven = krawczyk(lin)
-            nlo, nhi, empty = hansen_sengupta(lin)
         else:
             c = midpoint(lo, hi)
             flo, fhi = self.csys.eval_f_at(c)
@@ -149,22 +144,7 @@ class IntervalNewton:
                 proven[k] = fp
                 klo[k] = np.fmax(klo[k], fklo)
                 khi[k] = np.fmin(khi[k], fkhi)
-            nlo, nhi, empty = hansen_sengupta(lin)
-            # more sweeps on the contracted boxes, re-linearised (cheap relative to a
-            # bisection): while a box keeps shrinking by at least ``sweep_gain``
-            act = np.flatnonzero(~empty & (log_volume_ratio(lo, hi, nlo, nhi) < self.sweep_gain))
-            for _ in range(self.sweeps - 1):
-                if act.size == 0:
-                    break
-                alo, ahi = nlo[act], nhi[act]
-                ac = midpoint(alo, ahi)
-                aflo, afhi = self.csys.eval_f_at(ac)
-                alin = self._mixed(alo, ahi, ac, aflo, afhi)
-                blo, bhi, bemp = hansen_sengupta(alin)
-                empty[act] = bemp
-                nlo[act] = np.where(bemp[:, None], alo, blo)
-                nhi[act] = np.where(bemp[:, None], ahi, bhi)
-                act = act[~bemp & (log_volume_ratio(alo, ahi, blo, bhi) < self.sweep_gain)]
+        nlo, nhi, empty = hansen_sengupta(lin)
         # a box proven to hold a solution cannot be empty; keep the proof authoritative
         empty &= ~proven
         return NewtonStep(lin, klo, khi, proven, nlo, nhi, empty)
