@@ -216,6 +216,32 @@ def _cross(a, b):
     return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 
 
+# sparse arithmetic on expressions: None stands for an exact 0 (no node is built for it)
+def _add0(x, y):
+    return x if y is None else (y if x is None else x + y)
+
+
+def _sub0(x, y):
+    if x is None:
+        return None if y is None else -y
+    return x if y is None else x - y
+
+
+def _mul0(x, y):
+    return None if x is None or y is None else x * y
+
+
+def _cross0(a, b):
+    """``a × b`` (3 components, or the scalar in the plane as one) with None as 0."""
+    if len(a) == 3:
+        return [
+            _sub0(_mul0(a[1], b[2]), _mul0(a[2], b[1])),
+            _sub0(_mul0(a[2], b[0]), _mul0(a[0], b[2])),
+            _sub0(_mul0(a[0], b[1]), _mul0(a[1], b[0])),
+        ]
+    return [_sub0(_mul0(a[0], b[1]), _mul0(a[1], b[0]))]
+
+
 def _lin(coefs: np.ndarray, P: list[list[Expr]], c: int) -> Expr:
     """``Σ_j coefs_j P_j[c]`` (a single point when coefs is a unit vector)."""
     nz = np.flatnonzero(coefs)
@@ -454,19 +480,13 @@ def _frame_formulation(robot: Robot, name: str, k: int, redundant_moments=("poin
                 out.append(esum(float(coefs[j]) * E[j][c] for j in nz))
         return out
 
-    def plus(a, b):
-        return a if b is None else a + b
-
-    def minus(a, b):
-        return a if b is None else a - b
-
     b = [rel(L[i]) for i in range(robot.m)]
     g = rel(lG)
-    Bw = [[plus(C[c], b[i][c]) for c in range(d)] for i in range(robot.m)]
+    Bw = [[_add0(C[c], b[i][c]) for c in range(d)] for i in range(robot.m)]
     rho = [var(f"rho{i + 1}") for i in range(robot.m)]
     eqs: list[Expr] = []
     for i in range(robot.m):  # lengths: |(C - A_i) + b_i|² = ρ_i²
-        eqs.append(esum(sqr(plus(C[c] - float(A[i, c]), b[i][c])) for c in range(d)) - sqr(rho[i]))
+        eqs.append(esum(sqr(_add0(C[c] - float(A[i, c]), b[i][c])) for c in range(d)) - sqr(rho[i]))
     for a, bb in itertools.combinations(range(k), 2):  # rigidity
         dab = float(np.sum((Q[a] - Q[bb]) ** 2))
         if a == 0:
@@ -476,29 +496,10 @@ def _frame_formulation(robot: Robot, name: str, k: int, redundant_moments=("poin
     w = _wire_weights(robot, rho)
     W = [float(v) for v in robot.weight]
     for c in range(d):  # forces: Σ w_i ((A_i - C) - b_i) + W = 0
-        terms = [w[i] * minus(float(A[i, c]) - C[c], b[i][c]) for i in range(robot.m)]
+        terms = [w[i] * _sub0(float(A[i, c]) - C[c], b[i][c]) for i in range(robot.m)]
         if W[c] != 0.0:
             terms.append(const(W[c]))
         eqs.append(esum(terms))
-
-    def moment(lever, arm):
-        """``lever × arm`` (3 components, or the scalar in the plane); None entries are 0."""
-
-        def prod(x, y):
-            return None if x is None or y is None else x * y
-
-        def diff(x, y):
-            if x is None:
-                return None if y is None else -y
-            return x if y is None else x - y
-
-        if d == 3:
-            return [
-                diff(prod(lever[1], arm[2]), prod(lever[2], arm[1])),
-                diff(prod(lever[2], arm[0]), prod(lever[0], arm[2])),
-                diff(prod(lever[0], arm[1]), prod(lever[1], arm[0])),
-            ]
-        return [diff(prod(lever[0], arm[1]), prod(lever[1], arm[0]))]
 
     def moments_about(pref, skip):
         """Moment of all forces about ``P_1 + rel(pref)``, wires in ``skip`` left out."""
@@ -507,20 +508,14 @@ def _frame_formulation(robot: Robot, name: str, k: int, redundant_moments=("poin
         for i in range(robot.m):
             if i in skip:
                 continue
-            lever = [
-                minus(b[i][c], p[c]) if b[i][c] is not None else (None if p[c] is None else -p[c])
-                for c in range(d)
-            ]
-            arm = [minus(float(A[i, c]) - C[c], p[c]) for c in range(d)]
-            for c, mc in enumerate(moment(lever, arm)):
+            lever = [_sub0(b[i][c], p[c]) for c in range(d)]
+            arm = [_sub0(float(A[i, c]) - C[c], p[c]) for c in range(d)]
+            for c, mc in enumerate(_cross0(lever, arm)):
                 if mc is not None:
                     comps[c].append(w[i] * mc)
         if any(v != 0.0 for v in W):
-            gl = [
-                minus(g[c], p[c]) if g[c] is not None else (None if p[c] is None else -p[c])
-                for c in range(d)
-            ]
-            for c, mc in enumerate(moment(gl, [const(v) for v in W])):
+            gl = [_sub0(g[c], p[c]) for c in range(d)]
+            for c, mc in enumerate(_cross0(gl, [const(v) for v in W])):
                 if mc is not None:
                     comps[c].append(mc)
         return comps
@@ -536,11 +531,7 @@ def _frame_formulation(robot: Robot, name: str, k: int, redundant_moments=("poin
     constraints: list[Constraint] = []
     if k == d + 1:  # orientation of the chosen points
         if d == 3:
-            cr = [
-                E[2][1] * E[3][2] - E[2][2] * E[3][1],
-                E[2][2] * E[3][0] - E[2][0] * E[3][2],
-                E[2][0] * E[3][1] - E[2][1] * E[3][0],
-            ]
+            cr = _cross(E[2], E[3])
             signed = esum(E[1][c] * cr[c] for c in range(3))
         else:
             signed = E[1][0] * E[2][1] - E[1][1] * E[2][0]
@@ -558,7 +549,7 @@ def _frame_formulation(robot: Robot, name: str, k: int, redundant_moments=("poin
         seen.add(key)
         p = rel(coefs)
         for c in range(d):
-            constraints.append(Constraint(plus(C[c], p[c]), float(dom[c, 0]), float(dom[c, 1])))
+            constraints.append(Constraint(_add0(C[c], p[c]), float(dom[c, 0]), float(dom[c, 1])))
     if redundant_moments is True:
         redundant_moments = ("points", "lines")
     if redundant_moments:
