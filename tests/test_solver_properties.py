@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from certsolve.expr import CompiledSystem, System, const, esum, sqr, var
 from certsolve.solver import solve
 from certsolve.solver.contractors import HC4, IntervalNewton
-from certsolve.solver.newton import krawczyk, linearize
+from certsolve.solver.newton import KrawczykPoint, krawczyk, linearize
 
 mpmath.mp.dps = 50
 
@@ -157,6 +157,39 @@ def test_krawczyk_never_certifies_zero_or_two_solutions(centre, radii, mix):
     inside = int(np.sum(np.all((sols >= lo) & (sols <= hi), axis=1)))
     if proven[0]:
         assert inside == 1
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(st.floats(-3.0, 3.0), min_size=3, max_size=3),
+    st.lists(st.floats(0.001, 2.0), min_size=3, max_size=3),
+    st.lists(st.floats(0.0, 1.0), min_size=3, max_size=3),
+    st.booleans(),
+)
+def test_krawczyk_about_any_centre_never_certifies_zero_or_two(centre, radii, where, mix):
+    """:class:`KrawczykPoint` (tracking): centre anywhere in X, J over X, then reused on
+    ``K(X) ∩ X`` -- a proof always means exactly one solution, and it lies in ``K``."""
+    system, sols = product_system(mix)
+    csys = CompiledSystem(system)
+    lo, hi = np.array(centre) - np.array(radii), np.array(centre) + np.array(radii)
+    c = lo + np.array(where) * (hi - lo)
+    flo, fhi = csys.f_point(c)
+    _, _, jlo, jhi = csys.fj_box(lo, hi)
+    kp = KrawczykPoint(c, flo, fhi, jlo, jhi)
+    for _ in range(3):
+        klo, khi, proven = kp.image(lo, hi)
+        inside = np.all((sols >= lo) & (sols <= hi), axis=1)
+        if proven:
+            assert int(np.sum(inside)) == 1
+            assert np.all((klo <= sols[inside][0]) & (sols[inside][0] <= khi))
+            break
+        # every solution of X is in K(X) ∩ X: the next test is on that box
+        in_k = np.all((sols >= klo) & (sols <= khi), axis=1)
+        assert np.all(in_k[inside])
+        lo, hi = np.fmax(lo, klo), np.fmin(hi, khi)
+        if np.any(lo > hi):
+            assert not np.any(inside)
+            break
 
 
 def test_krawczyk_certifies_small_boxes_around_simple_roots():

@@ -42,7 +42,6 @@ __all__ = [
     "linearization_from_bounds",
     "krawczyk",
     "krawczyk_box",
-    "krawczyk_single",
     "KrawczykPoint",
     "hansen_sengupta",
     "batched_inverse",
@@ -239,15 +238,6 @@ class KrawczykPoint:
         klo = down(down(self.centre) - rr)
         khi = up(up(self.centre) + rr)
         return klo, khi, bool(np.all((klo > lo) & (khi < hi)))
-
-
-def krawczyk_single(lo, hi, c, flo, fhi, jlo, jhi):
-    """Krawczyk test for one box (1-D / 2-D arrays): ``(klo, khi, ok)``.
-
-    The same operator and rounding bounds as :func:`krawczyk`, specialised to a single box
-    (see :class:`KrawczykPoint`, which reuses the set-up for several boxes).
-    """
-    return KrawczykPoint(c, flo, fhi, jlo, jhi).image(lo, hi)
 
 
 def hansen_sengupta(lin: Linearization) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
