@@ -1,14 +1,19 @@
 """The ``certsolve`` command line.
 
-Each sub-command lives in its own module with a ``register(subparsers)`` function that adds
-its parser and sets ``func`` (called with the parsed arguments, returns an exit code):
+Each sub-command lives in a module with a ``register(subparsers)`` function that adds its
+parser(s) and sets ``func`` (called with the parsed arguments, returns an exit code):
 
 * :mod:`.solve`   -- ``certsolve solve FILE`` (Minibex systems)
 * :mod:`.fk`      -- ``certsolve fk ROBOT --u ...`` (forward kinematics, all solutions; tracking)
 * :mod:`.ik`      -- ``certsolve ik ROBOT --pose ...``
 * :mod:`.force`   -- ``certsolve isotropic`` and ``certsolve workspace``
-* :mod:`.service` -- ``certsolve serve``, ``batch``, ``submit``, ``status``, ``result``
+* :mod:`.service` -- ``certsolve serve`` and ``batch`` (the job service on this machine)
+* :mod:`.remote`  -- ``certsolve submit``, ``status``, ``result``, ``cancel`` (a running service)
 * :mod:`.schema`  -- ``certsolve schema robot`` (JSON Schema of robot files)
+
+Start-up is cheap: :data:`COMMANDS` names each command's module and one-line help, and only
+the chosen command's module is imported (numpy, scipy, the solver, FastAPI ... come with
+it, or later inside its ``run``).  ``certsolve --help`` imports nothing but argparse.
 
 User errors (bad files, bad arguments) print one ``error: ...`` line and exit with status 2,
 never a traceback.
@@ -17,31 +22,130 @@ never a traceback.
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 
-from . import fk, force, ik, schema, service, solve
-from .common import CliError, user_errors
+from .common import CliError, option_names, user_errors
 
-__all__ = ["main", "build_parser", "CliError"]
-
-_MODULES = (solve, fk, ik, force, service, schema)
+__all__ = ["COMMANDS", "Command", "main", "build_parser", "CliError"]
 
 
-def build_parser() -> argparse.ArgumentParser:
+@dataclass(frozen=True, kw_only=True)
+class Command:
+    """A sub-command: its name, the module under :mod:`certsolve.cli` that registers it, and
+    the help line of ``certsolve --help`` (the one place it is written)."""
+
+    name: str
+    module: str
+    help: str
+
+
+COMMANDS: tuple[Command, ...] = (
+    Command(name="solve", module="solve", help="solve a square system written in Minibex"),
+    Command(
+        name="fk",
+        module="fk",
+        help="forward kinematics: all certified equilibrium poses for a control vector u",
+    ),
+    Command(
+        name="ik", module="ik", help="inverse kinematics: controls u (and tensions) holding a pose"
+    ),
+    Command(
+        name="isotropic",
+        module="force",
+        help="maximum isotropic force at a pose or over a grid (Krut et al. 2004)",
+    ),
+    Command(
+        name="workspace",
+        module="force",
+        help="certified workspace where the maximum isotropic force is at least F",
+    ),
+    Command(name="serve", module="service", help="run the HTTP job service"),
+    Command(name="batch", module="service", help="run a JSON-lines file of jobs offline"),
+    Command(name="submit", module="service", help="submit a job to a running service"),
+    Command(
+        name="status", module="service", help="status of a job (or the latest jobs) on a service"
+    ),
+    Command(name="result", module="service", help="result of a job on a service"),
+    Command(name="cancel", module="service", help="cancel a job on a service"),
+    Command(name="schema", module="schema", help="print the JSON Schema of an input format"),
+)
+
+
+def _help_of(name: str) -> str:
+    return next(c.help for c in COMMANDS if c.name == name)
+
+
+class _Formatter(argparse.HelpFormatter):
+    """Option help with its default: ``(default: 1e-08)`` unless the text already says it."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if (
+            action.option_strings
+            and default not in (None, False, argparse.SUPPRESS)
+            and str(default) not in text
+            and "default" not in text
+        ):
+            text += " (default: %(default)s)"
+        return text
+
+
+class _Subcommands:
+    """What a command module's ``register`` sees: ``add_parser`` with the help of
+    :data:`COMMANDS`, so the help line is written once, and defaults in option help."""
+
+    def __init__(self, action):
+        self._action = action
+
+    def add_parser(self, name: str, **kw) -> argparse.ArgumentParser:
+        kw.setdefault("help", _help_of(name))
+        kw.setdefault("formatter_class", _Formatter)
+        return self._action.add_parser(name, **kw)
+
+
+def build_parser(commands: Iterable[str] | None = None) -> argparse.ArgumentParser:
+    """The argument parser with the full options of ``commands`` (every command if None);
+    the other commands are listed with their help only (their modules are not imported)."""
     parser = argparse.ArgumentParser(
         prog="certsolve",
         description="Certified interval solving for wire-driven parallel robots.",
     )
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    sub.required = True
-    for module in _MODULES:
-        module.register(sub)
+    action = parser.add_subparsers(dest="command", metavar="COMMAND")
+    action.required = True
+    wanted = {c.name for c in COMMANDS} if commands is None else set(commands)
+    modules = list(dict.fromkeys(c.module for c in COMMANDS if c.name in wanted))
+    done: set[str] = set()
+    for cmd in COMMANDS:
+        if cmd.name in done:
+            continue
+        if cmd.module in modules:
+            importlib.import_module(f".{cmd.module}", __name__).register(_Subcommands(action))
+            modules.remove(cmd.module)
+            done.update(action.choices)
+        else:
+            action.add_parser(cmd.name, help=cmd.help)
+            done.add(cmd.name)
     return parser
 
 
+def _chosen(argv: Sequence[str]) -> list[str]:
+    """The command named on the command line (the first word that is not an option)."""
+    names = {c.name for c in COMMANDS}
+    for word in argv:
+        if not word.startswith("-"):
+            return [word] if word in names else []
+    return []
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_chosen(argv))
     args = parser.parse_args(argv)
+    args.options = option_names(parser, args.command)
     try:
         return int(args.func(args) or 0)
     except OSError as exc:

@@ -1,12 +1,33 @@
-"""Helpers shared by the sub-commands: user errors, number lists, JSON output, progress."""
+"""Helpers shared by the sub-commands: user errors, option validation, number lists, JSON
+output, progress lines.
+
+Options that the job service also takes are validated by the service's own pydantic models
+(:func:`validated`), so ``certsolve fk --tau-max -5`` is refused exactly as
+``POST /v1/jobs`` refuses ``"tau_max": -5``; the error names the option (``--tau-max``)
+instead of the field (``params.tau_max``).  The field -> option map is argparse's own:
+each option's ``dest`` is the model's field name (:func:`option_names`).
+"""
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
-from typing import Any
+import time
+from collections.abc import Callable, Mapping
+from typing import Any, TypeVar
 
-__all__ = ["CliError", "user_errors", "parse_floats", "print_json", "progress_reporter"]
+__all__ = [
+    "CliError",
+    "user_errors",
+    "option_names",
+    "validated",
+    "parse_floats",
+    "print_json",
+    "progress_reporter",
+]
+
+M = TypeVar("M")
 
 
 class CliError(Exception):
@@ -19,6 +40,88 @@ def user_errors() -> tuple[type[BaseException], ...]:
     from ..robot.schema import RobotFileError
 
     return (CliError, MinibexError, RobotFileError, ValueError)
+
+
+def option_names(parser: argparse.ArgumentParser, command: str) -> dict[str, str]:
+    """``{dest: "--option"}`` of a sub-command's parser (the longest spelling of each)."""
+    sub = None
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            sub = action.choices.get(command)
+    if sub is None:
+        return {}
+    names = {}
+    for action in sub._actions:
+        if action.option_strings:
+            names[action.dest] = max(action.option_strings, key=len)
+        else:
+            names[action.dest] = action.dest.upper()
+    return names
+
+
+def _option_of(field: str, args: argparse.Namespace, option: Mapping[str, str]) -> str:
+    """The command-line spelling of a model field: ``tau_max`` -> ``--tau-max``."""
+    dest = option.get(field, field)
+    return getattr(args, "options", {}).get(dest) or "--" + dest.replace("_", "-")
+
+
+def _where(path: list, args, option: Mapping[str, str]) -> str:
+    if not path:
+        return ""
+    head = _option_of(str(path[0]), args, option)
+    rest = path[1:]
+    if len(rest) == 1 and isinstance(rest[0], int):
+        return f"{head}, number {rest[0] + 1}"
+    return head + "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in rest)
+
+
+def validated(
+    model: type[M],
+    args: argparse.Namespace,
+    values: Mapping[str, Any] | None = None,
+    *,
+    robot: Any = None,
+    option: Mapping[str, str] | None = None,
+) -> M:
+    """The service's parameter model built from the parsed options (one validation for CLI
+    and HTTP).
+
+    Fields are read from ``args`` (same ``dest``) unless ``values`` gives them (parsed
+    lists, poses ...); unset (None) options take the model's defaults.  With ``robot``
+    (a :class:`~certsolve.robot.schema.RobotSpec`), the checks against the robot run too
+    (``u`` has one value per wire, ...).  ``option`` maps a field to the ``dest`` of the
+    option it came from when they differ (``{"pose": "at"}``).  Errors become one
+    :class:`CliError` naming the option.
+    """
+    from pydantic import ValidationError
+
+    from ..jobs.errors import validation_details
+
+    option = option or {}
+    data = {}
+    for name in model.model_fields:  # type: ignore[attr-defined]
+        value = getattr(args, option.get(name, name), None)
+        if value is not None:
+            data[name] = value
+    for name, value in (values or {}).items():
+        if value is None:
+            data.pop(name, None)
+        else:
+            data[name] = value
+    try:
+        params = model.model_validate(data)  # type: ignore[attr-defined]
+        if robot is not None:
+            params.check_robot(robot)
+    except ValidationError as exc:
+        details = validation_details(exc.errors())
+        parts = [f"{_where(d['loc'], args, option)}: {d['msg']}" for d in details[:3]]
+        raise CliError("; ".join(parts)) from None
+    except ValueError as exc:  # check_robot: "field: message"
+        field, sep, msg = str(exc).partition(": ")
+        if sep and field.isidentifier():
+            raise CliError(f"{_option_of(field, args, option)}: {msg}") from None
+        raise CliError(str(exc)) from None
+    return params
 
 
 def parse_floats(text: str, what: str, count: int | None = None) -> list[float]:
@@ -47,24 +150,39 @@ def _default(o):
     raise TypeError(f"not JSON serialisable: {type(o).__name__}")
 
 
-def progress_reporter(enabled: bool, label: str = "solving"):
-    """A solver progress callback drawing a live line on stderr (rich), or None."""
-    if not enabled or not sys.stderr.isatty():
-        return None, lambda: None
-    from rich.console import Console
-    from rich.live import Live
-    from rich.text import Text
-
-    console = Console(stderr=True)
-    live = Live(Text(""), console=console, refresh_per_second=8, transient=True)
-    live.start()
-
-    def update(p):
-        live.update(
-            Text(
-                f"{label}: {p.boxes} boxes, {p.pending} pending, "
-                f"{p.solutions} solutions, {p.undecided} undecided, {p.elapsed:.1f} s"
-            )
+def _solver_line(label: str) -> Callable[[Any], str]:
+    def line(p) -> str:
+        return (
+            f"{label}: {p.boxes} boxes, {p.pending} pending, "
+            f"{p.solutions} solutions, {p.undecided} undecided, {p.elapsed:.1f} s"
         )
 
-    return update, live.stop
+    return line
+
+
+def progress_reporter(
+    enabled: bool, label: str = "solving", line: Callable[[Any], str] | None = None
+) -> tuple[Callable[[Any], None] | None, Callable[[], None]]:
+    """``(progress callback, stop)``: one line on stderr redrawn at most 8 times a second
+    (a terminal only; otherwise ``(None, no-op)``).  ``line(p)`` writes the line from the
+    library's progress object (default: the solver's boxes, pending, solutions ...)."""
+    if not enabled or not sys.stderr.isatty():
+        return None, lambda: None
+    describe = line or _solver_line(label)
+    shown = {"at": 0.0, "width": 0}
+
+    def update(p) -> None:
+        now = time.monotonic()
+        if now - shown["at"] < 0.125:
+            return
+        text = describe(p)
+        sys.stderr.write("\r" + text.ljust(shown["width"]))
+        sys.stderr.flush()
+        shown.update(at=now, width=len(text))
+
+    def stop() -> None:
+        if shown["width"]:
+            sys.stderr.write("\r" + " " * shown["width"] + "\r")
+            sys.stderr.flush()
+
+    return update, stop

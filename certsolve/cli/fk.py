@@ -4,20 +4,14 @@ from __future__ import annotations
 
 import argparse
 
-import numpy as np
-
-from ..kinematics.fk import forward_kinematics, with_tau_max
-from ..kinematics.fk_systems import FORMULATIONS
-from ..kinematics.tracking import Tracker
-from ..robot.geometry import parse_pose
-from ..robot.model import Robot
 from .common import CliError, parse_floats, print_json, progress_reporter
 
 
 def register(sub) -> None:
+    from ..kinematics.fk_systems import FORMULATIONS
+
     p = sub.add_parser(
         "fk",
-        help="forward kinematics: all certified equilibrium poses for a control vector u",
         description="Forward kinematics of an elastic-wire robot (Merlet 2007): every pose in "
         "the search domain where the platform is in equilibrium for the control vector u, "
         "each certified to be the only solution in its box.  With --near, one real-time "
@@ -65,6 +59,10 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..kinematics.fk import forward_kinematics, with_tau_max
+    from ..robot.geometry import parse_pose
+    from ..robot.model import Robot
+
     robot = with_tau_max(Robot.load(args.robot), args.tau_max)
     u = parse_floats(args.u, "--u", robot.m)
     if args.seeded_only and not args.seed_planar:
@@ -74,6 +72,8 @@ def run(args: argparse.Namespace) -> int:
     if args.workers < 1:
         raise CliError("--workers must be at least 1")
     if args.near is not None:
+        from ..kinematics.tracking import Tracker
+
         near = parse_pose(robot.dof, args.near)
         res = Tracker(robot, args.formulation).step(u, near, args.half_width)
         if args.json:
@@ -121,6 +121,8 @@ def _pose_lines(robot, s) -> list[str]:
 
 
 def format_result(robot, res) -> str:
+    import numpy as np
+
     st = res.stats
     lines = [
         f"{robot.name}: {res.formulation}, u = {np.array2string(res.u, precision=4)}",

@@ -12,18 +12,16 @@ from __future__ import annotations
 
 import argparse
 import re
-import sys
 
 import numpy as np
 
 from ..robot import Robot, parse_pose
-from .common import CliError, parse_floats, print_json
+from .common import CliError, parse_floats, print_json, progress_reporter
 
 
 def register(sub) -> None:
     p = sub.add_parser(
         "isotropic",
-        help="maximum isotropic force at a pose or over a grid (Krut et al. 2004)",
         description="Maximum isotropic force: the radius of the largest ball of forces, "
         "centred at the load's bias (-gravity), inside the force polytope at the moment the "
         "load requires. Negative: the pose cannot balance the load.",
@@ -64,7 +62,6 @@ def register(sub) -> None:
 
     w = sub.add_parser(
         "workspace",
-        help="certified workspace where the maximum isotropic force is at least F",
         description="Pave a box of positions into boxes proven inside (f_min >= F at every "
         "pose), proven outside (f_min < F at every pose) and boundary boxes narrower than eps.",
     )
@@ -286,7 +283,7 @@ def run_workspace(args: argparse.Namespace) -> int:
         raise CliError("--box: need finite bounds with min <= max on every axis")
     orientation = _orientation_ranges(robot, args.orientation)
     external = _external(robot, args.external)
-    progress, stop = _progress(not args.json)
+    progress, stop = progress_reporter(not args.json, line=_paving_line)
     try:
         ws = certified_workspace(
             robot,
@@ -331,19 +328,8 @@ def format_workspace(ws, plot) -> str:
     return "\n".join(lines)
 
 
-def _progress(enabled: bool):
-    if not enabled or not sys.stderr.isatty():
-        return None, lambda: None
-
-    def update(p):
-        sys.stderr.write(
-            f"\rpaving: {p.boxes} boxes, {p.pending} pending, {p.inside} inside, "
-            f"{100 * p.inside_share:.1f} % proven, {p.elapsed:.1f} s   "
-        )
-        sys.stderr.flush()
-
-    def stop():
-        sys.stderr.write("\r" + " " * 78 + "\r")
-        sys.stderr.flush()
-
-    return update, stop
+def _paving_line(p) -> str:
+    return (
+        f"paving: {p.boxes} boxes, {p.pending} pending, {p.inside} inside, "
+        f"{100 * p.inside_share:.1f} % proven, {p.elapsed:.1f} s"
+    )

@@ -20,7 +20,6 @@ _POSE_HELP = {
 def register(sub) -> None:
     p = sub.add_parser(
         "ik",
-        help="inverse kinematics: controls u (and tensions) holding a pose",
         description="Controls u and wire tensions that hold the platform at a pose. "
         "Methods: 'tension' (max-margin tensions, then u by eq. 5; strokes checked), "
         "'alg1' (interval branch and prune, first certified solution within the strokes or "

@@ -38,7 +38,6 @@ def register(sub) -> None:
 def _register_serve(sub) -> None:
     p = sub.add_parser(
         "serve",
-        help="run the HTTP job service",
         description="Serve the job API (FastAPI + uvicorn). Jobs run in worker processes and "
         "are kept in DATA_DIR/jobs.sqlite3: a restart loses nothing. API docs at /docs.",
     )
@@ -141,7 +140,6 @@ def run_serve(args: argparse.Namespace) -> int:
 def _register_batch(sub) -> None:
     p = sub.add_parser(
         "batch",
-        help="run a JSON-lines file of jobs offline",
         description="Run every job of FILE (one JSON job per line, as for POST /v1/jobs) on "
         "worker processes and append one JSON result line per job to the output, as jobs "
         "finish. Re-running skips the lines already done.",
@@ -203,7 +201,6 @@ def _server_arg(p) -> None:
 def _register_client(sub) -> None:
     p = sub.add_parser(
         "submit",
-        help="submit a job to a running service",
         description="Submit JOB (a JSON file as for POST /v1/jobs, '-' for stdin; a .jsonl "
         "file is sent as one batch), or a job built from --kind and the options below.",
     )
@@ -225,21 +222,21 @@ def _register_client(sub) -> None:
     _server_arg(p)
     p.set_defaults(func=run_submit)
 
-    p = sub.add_parser("status", help="status of a job (or the latest jobs) on a service")
+    p = sub.add_parser("status")
     p.add_argument("id", nargs="?", help="job id (omit to list the latest jobs)")
     p.add_argument("--status", choices=["queued", "running", "done", "failed", "cancelled"])
     p.add_argument("--limit", type=int, default=20, help="jobs listed (20)")
     _server_arg(p)
     p.set_defaults(func=run_status)
 
-    p = sub.add_parser("result", help="result of a job on a service")
+    p = sub.add_parser("result")
     p.add_argument("id", help="job id")
     p.add_argument("--wait", action="store_true", help="wait until the job has finished")
     p.add_argument("--poll", type=float, default=0.5, help="seconds between polls (0.5)")
     _server_arg(p)
     p.set_defaults(func=run_result)
 
-    p = sub.add_parser("cancel", help="cancel a job on a service")
+    p = sub.add_parser("cancel")
     p.add_argument("id", help="job id")
     _server_arg(p)
     p.set_defaults(func=run_cancel)

@@ -4,15 +4,12 @@ from __future__ import annotations
 
 import argparse
 
-from ..expr.minibex import load_minibex
-from ..solver import Solver
 from .common import print_json, progress_reporter
 
 
 def register(sub) -> None:
     p = sub.add_parser(
         "solve",
-        help="solve a square system written in Minibex",
         description="Find every solution of a square system in its domain, each certified "
         "unique (Krawczyk); report undecided and pending boxes.",
     )
@@ -27,6 +24,9 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..expr.minibex import load_minibex
+    from ..solver import Solver
+
     if not args.eps > 0:
         raise ValueError("--eps must be positive")
     if args.workers < 1:

@@ -8,22 +8,67 @@
 * :mod:`.fk`         -- all-solutions forward kinematics (:func:`forward_kinematics`)
 * :mod:`.seeding`    -- planar seeding of the almost-planar case
 * :mod:`.tracking`   -- real-time certified tracking near a known pose
+
+The names below are imported on first use (PEP 562): ``import certsolve.kinematics.fk``
+does not pay for the IK modules (scipy.linalg, scipy.optimize), which keeps
+``certsolve fk`` quick to start.
 """
 
-from .fk import FKPose, FKResult, FKSolver, forward_kinematics, with_tau_max
-from .fk_systems import FORMULATIONS, build_formulation
-from .ik import (
-    METHODS,
-    Certificate,
-    IKResult,
-    Violation,
-    ik_algorithm1,
-    ik_algorithm2,
-    ik_tension_first,
-    inverse_kinematics,
-)
-from .seeding import planar_counterpart, seeded_forward_kinematics
-from .tracking import Tracker, TrackResult, track
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .fk import FKPose, FKResult, FKSolver, forward_kinematics, with_tau_max
+    from .fk_systems import FORMULATIONS, build_formulation
+    from .ik import (
+        METHODS,
+        Certificate,
+        IKResult,
+        Violation,
+        ik_algorithm1,
+        ik_algorithm2,
+        ik_tension_first,
+        inverse_kinematics,
+    )
+    from .seeding import planar_counterpart, seeded_forward_kinematics
+    from .tracking import Tracker, TrackResult, track
+
+_WHERE = {
+    "FKPose": ".fk",
+    "FKResult": ".fk",
+    "FKSolver": ".fk",
+    "forward_kinematics": ".fk",
+    "with_tau_max": ".fk",
+    "FORMULATIONS": ".fk_systems",
+    "build_formulation": ".fk_systems",
+    "METHODS": ".ik",
+    "Certificate": ".ik",
+    "IKResult": ".ik",
+    "Violation": ".ik",
+    "ik_algorithm1": ".ik",
+    "ik_algorithm2": ".ik",
+    "ik_tension_first": ".ik",
+    "inverse_kinematics": ".ik",
+    "planar_counterpart": ".seeding",
+    "seeded_forward_kinematics": ".seeding",
+    "Tracker": ".tracking",
+    "TrackResult": ".tracking",
+    "track": ".tracking",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _WHERE.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(module, __name__), name)
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)
+
 
 __all__ = [
     "FORMULATIONS",

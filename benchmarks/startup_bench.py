@@ -1,0 +1,83 @@
+"""Start-up cost of the command line: whole-process wall time of short commands.
+
+Targets (issue 10): ``certsolve --help`` <= 0.3 s; ``certsolve fk examples/robots/planar.json
+--u 0.5,0.5,0.5,0.5 --tau-max 10`` <= 0.5 s for the whole process.  Each command runs
+``--repeat`` times as a fresh process (``python -m certsolve.cli``, the console script's
+code path); the median, min and max wall times are printed beside the bare interpreter's
+start-up.  ``--imports`` adds the largest cumulative import costs of each command
+(``python -X importtime``), which is where start-up time goes.
+
+Usage::
+
+    python benchmarks/startup_bench.py [--repeat 7] [--imports]
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+CLI = [sys.executable, "-m", "certsolve.cli"]
+COMMANDS: dict[str, list[str]] = {
+    "python -c pass": [sys.executable, "-c", "pass"],
+    "certsolve --help": [*CLI, "--help"],
+    "certsolve fk --help": [*CLI, "fk", "--help"],
+    "certsolve fk planar (tau <= 10)": [
+        *CLI,
+        "fk",
+        "examples/robots/planar.json",
+        "--u",
+        "0.5,0.5,0.5,0.5",
+        "--tau-max",
+        "10",
+    ],
+    "certsolve solve circle-line": [*CLI, "solve", "examples/systems/circle-line.mbx"],
+}
+
+
+def wall(cmd: list[str]) -> float:
+    t0 = time.perf_counter()
+    subprocess.run(cmd, cwd=ROOT, check=True, stdout=subprocess.DEVNULL)
+    return time.perf_counter() - t0
+
+
+def top_imports(cmd: list[str], n: int = 8) -> list[tuple[float, str]]:
+    """The ``n`` top-level imports with the largest cumulative time (seconds)."""
+    out = subprocess.run(
+        [cmd[0], "-X", "importtime", *cmd[1:]],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    costs = []
+    for line in out.stderr.splitlines():
+        m = re.match(r"import time:\s+\d+ \|\s+(\d+) \| ( *)(\S+)", line)
+        if m and len(m.group(2)) <= 2:  # imported by the program itself, not nested
+            costs.append((int(m.group(1)) / 1e6, m.group(3)))
+    return sorted(costs, reverse=True)[:n]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--repeat", type=int, default=7, help="runs per command (7)")
+    ap.add_argument("--imports", action="store_true", help="also show the largest imports")
+    args = ap.parse_args()
+    print(f"{'command':<34} {'median':>8} {'min':>8} {'max':>8}   ({args.repeat} runs)")
+    for name, cmd in COMMANDS.items():
+        wall(cmd)  # warm the file cache
+        times = [wall(cmd) for _ in range(args.repeat)]
+        print(f"{name:<34} {statistics.median(times):8.3f} {min(times):8.3f} {max(times):8.3f}")
+        if args.imports and name.startswith("certsolve"):
+            for seconds, module in top_imports(cmd):
+                print(f"    {seconds:6.3f} s  import {module}")
+
+
+if __name__ == "__main__":
+    main()
