@@ -179,3 +179,20 @@ def test_queue_limit(store):
     with pytest.raises(QueueFull):
         store.add([new(), new()], max_queued=3)
     assert store.counts()["queued"] == 2  # all or none
+
+
+def test_statuses_are_enum_members(store):
+    from certsolve.jobs.status import FINAL_STATUSES, JobStatus
+
+    (job_id,) = store.add([new()])
+    row = store.get(job_id)
+    assert row.status is JobStatus.QUEUED and not row.final
+    job, lease = store.claim(worker_pid=7)
+    assert job.status is JobStatus.RUNNING
+    with pytest.raises(ValueError):
+        store.finish(job_id, lease, JobStatus.QUEUED)  # not a final status
+    assert store.finish(job_id, lease, JobStatus.DONE, result="{}")
+    row = store.get(job_id)
+    assert row.status is JobStatus.DONE and row.final and row.status in FINAL_STATUSES
+    assert store.counts() == {s: int(s is JobStatus.DONE) for s in JobStatus}
+    assert store.result_text(job_id)[0] is JobStatus.DONE

@@ -1,8 +1,9 @@
 """Jobs: a persistent queue of solver runs executed by supervised worker processes.
 
 * :mod:`.settings` -- :class:`ServiceSettings` (data directory, workers, limits)
-* :mod:`.kinds`    -- the job kinds: request models (shared by HTTP, batch files and the
-  CLI) and the runners calling the library
+* :mod:`.status`   -- :class:`JobStatus` (queued, running, done, failed, cancelled)
+* :mod:`.kinds`    -- the job kinds, one module each: request models (shared by HTTP, batch
+  files and the CLI) and the runners calling the library
 * :mod:`.store`    -- :class:`JobStore`, jobs and results in SQLite (WAL)
 * :mod:`.worker`   -- the worker process loop: claim, run with progress and cancellation
 * :mod:`.pool`     -- :class:`WorkerPool`, the supervisor (dead workers, time limits)
@@ -10,23 +11,55 @@
 * :mod:`.batch`    -- :func:`run_batch`, offline JSON-lines batches (resumable)
 
 This package may import the library (solver, robot, kinematics, force) but never ``api``.
+
+Names are imported on first use (:mod:`certsolve.lazy`): the command line validates its
+options with one kind's models without loading the service, its store and its pool.
 """
 
-from .kinds import KINDS, KindUnavailable, job_request_type, request_adapter
-from .service import JobService, LimitError, ServiceError, job_record
-from .settings import ServiceSettings
-from .store import FINAL_STATUSES, STATUSES, JobRow, JobStore, QueueFull
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ..lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from .kinds import KINDS, KindUnavailable, job_request_type, request_adapter
+    from .service import JobService, LimitError, ServiceError, job_record
+    from .settings import ServiceSettings
+    from .status import FINAL_STATUSES, STATUSES, JobStatus
+    from .store import JobRow, JobStore, QueueFull
+
+_WHERE = {
+    "KINDS": ".kinds",
+    "KindUnavailable": ".kinds",
+    "job_request_type": ".kinds",
+    "request_adapter": ".kinds",
+    "JobService": ".service",
+    "LimitError": ".service",
+    "ServiceError": ".service",
+    "job_record": ".service",
+    "ServiceSettings": ".settings",
+    "FINAL_STATUSES": ".status",
+    "STATUSES": ".status",
+    "JobStatus": ".status",
+    "JobRow": ".store",
+    "JobStore": ".store",
+    "QueueFull": ".store",
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _WHERE)
 
 __all__ = [
     "FINAL_STATUSES",
-    "KINDS",
-    "STATUSES",
     "JobRow",
     "JobService",
+    "JobStatus",
     "JobStore",
+    "KINDS",
     "KindUnavailable",
     "LimitError",
     "QueueFull",
+    "STATUSES",
     "ServiceError",
     "ServiceSettings",
     "job_record",

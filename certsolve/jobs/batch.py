@@ -29,6 +29,7 @@ from pydantic import ValidationError
 from .jsonutil import dumps
 from .service import JobService, LimitError
 from .settings import ServiceSettings
+from .status import JobStatus
 from .store import JobRow
 
 __all__ = ["BatchSummary", "run_batch", "default_output", "line_sha"]
@@ -73,7 +74,7 @@ def _done_lines(out: Path) -> dict[int, str]:
                 line = int(rec["line"])
             except (ValueError, KeyError, TypeError):
                 continue  # a torn last line, or not ours
-            if rec.get("status") == "done" and isinstance(rec.get("input_sha"), str):
+            if rec.get("status") == JobStatus.DONE and isinstance(rec.get("input_sha"), str):
                 done[line] = rec["input_sha"]
             else:
                 done.pop(line, None)
@@ -158,7 +159,7 @@ def run_batch(
                             {
                                 "line": number,
                                 "input_sha": sha,
-                                "status": "failed",
+                                "status": JobStatus.FAILED,
                                 "error": error,
                                 "result": None,
                             }
@@ -178,7 +179,7 @@ def run_batch(
                         if where is None:
                             continue
                         emit(_record(row, *where))
-                        setattr(summary, row.status, getattr(summary, row.status) + 1)
+                        setattr(summary, row.status.value, getattr(summary, row.status.value) + 1)
                     if progress is not None:
                         summary.elapsed = time.monotonic() - t0
                         progress(summary)

@@ -4,6 +4,8 @@ Shared by the HTTP API (422 bodies), the batch runner and the CLI: the discrimin
 pydantic puts in error paths (``fk``, ``solve``) are removed, and model-level messages that
 name their field (``params.u: expected 4 values``, ``wires[3].base: ...``) are moved to
 that field, so a robot error reads ``robot.wires.3.tau: tau_min must be <= tau_max``.
+pydantic's "Input should be ..." reads "must be ..." (``params.eps: must be greater than
+0``), which the command line prints after the option (``--eps: must be greater than 0``).
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ _KIND_TAGS = frozenset(KINDS)
 _SKIP = ("function-after", "function-before", "function-wrap", "function-plain")
 _FIELD_MSG = re.compile(r"^((?:[A-Za-z_]\w*(?:\[\d+\])*)(?:\.[A-Za-z_]\w*(?:\[\d+\])*)*): (.+)$")
 _PREFIXES = ("Value error, ", "Assertion failed, ")
+_SHOULD = re.compile(r"^(?:Input|String|List|Tuple|Dictionary|Value) should (be|have) ")
 
 
 def _json_safe(v: Any) -> Any:
@@ -72,6 +75,7 @@ def validation_details(errors: list[dict], prefix: tuple = ()) -> list[dict]:
         for p in _PREFIXES:
             if msg.startswith(p):
                 msg = msg[len(p) :]
+        msg = _SHOULD.sub(r"must \1 ", msg)
         typ = str(e.get("type", "value_error"))
         if typ == "json_invalid":
             ctx = e.get("ctx") or {}

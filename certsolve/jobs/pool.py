@@ -26,6 +26,7 @@ import time
 from collections import deque
 
 from .settings import ServiceSettings
+from .status import JobStatus
 from .store import JobStore
 from .worker import EXIT_FRESH, worker_main
 
@@ -165,7 +166,7 @@ class WorkerPool:
                 s.cancel_grace
             ):
                 if self.store.force_finish(
-                    job.id, job.lease, "cancelled", "cancelled (the worker was stopped)"
+                    job.id, job.lease, JobStatus.CANCELLED, "cancelled (the worker was stopped)"
                 ):
                     self._kill(proc)
             elif job.started_at is not None and now - job.started_at > (
@@ -175,7 +176,7 @@ class WorkerPool:
                 if self.store.force_finish(
                     job.id,
                     job.lease,
-                    "failed",
+                    JobStatus.FAILED,
                     f"time limit exceeded ({limit:g} s); the worker was stopped",
                 ):
                     self._kill(proc)

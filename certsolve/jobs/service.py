@@ -17,6 +17,7 @@ from typing import Any
 from .kinds import KINDS, JobLimits, request_adapter
 from .pool import WorkerPool
 from .settings import ServiceSettings
+from .status import JobStatus
 from .store import JobRow, JobStore, NewJob, new_job_id
 
 __all__ = ["JobService", "LimitError", "ServiceError", "job_record", "iso_time"]
@@ -66,7 +67,7 @@ def job_record(row: JobRow, *, now: float | None = None) -> dict[str, Any]:
         "limits": row.limits,
         "progress": row.progress,
         "cancel_requested": row.cancel_requested_at is not None,
-        "worker_pid": row.worker_pid if row.status == "running" else None,
+        "worker_pid": row.worker_pid if row.status is JobStatus.RUNNING else None,
         "error": row.error,
     }
 
@@ -198,6 +199,9 @@ class JobService:
                 "alive": self.pool.alive() if self.pool else 0,
                 "restarts": self.pool.restarts if self.pool else 0,
             },
-            "jobs": {"queued": counts["queued"], "running": counts["running"]},
+            "jobs": {
+                "queued": counts[JobStatus.QUEUED],
+                "running": counts[JobStatus.RUNNING],
+            },
             "kinds": [k for k in KINDS if self.settings.enable_test_kinds or not KINDS[k].hidden],
         }

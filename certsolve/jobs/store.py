@@ -29,6 +29,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .status import FINAL_STATUSES, STATUSES, JobStatus
+
 __all__ = [
     "FINAL_STATUSES",
     "JobRow",
@@ -39,10 +41,7 @@ __all__ = [
     "new_job_id",
 ]
 
-STATUSES = ("queued", "running", "done", "failed", "cancelled")
-FINAL_STATUSES = frozenset({"done", "failed", "cancelled"})
-
-_SCHEMA = """
+_SCHEMA = f"""
 CREATE TABLE IF NOT EXISTS jobs (
     seq                 INTEGER PRIMARY KEY AUTOINCREMENT,
     id                  TEXT NOT NULL UNIQUE,
@@ -68,7 +67,7 @@ CREATE TABLE IF NOT EXISTS jobs (
 CREATE INDEX IF NOT EXISTS jobs_status ON jobs(status, seq);
 CREATE INDEX IF NOT EXISTS jobs_batch ON jobs(batch, seq);
 CREATE INDEX IF NOT EXISTS jobs_fseq ON jobs(fseq);
-CREATE INDEX IF NOT EXISTS jobs_worker ON jobs(worker_pid) WHERE status = 'running';
+CREATE INDEX IF NOT EXISTS jobs_worker ON jobs(worker_pid) WHERE status = '{JobStatus.RUNNING}';
 """
 
 _SUMMARY_COLS = (
@@ -107,7 +106,7 @@ class JobRow:
     seq: int
     id: str
     kind: str
-    status: str
+    status: JobStatus
     limits: dict
     batch: str | None
     created_at: float
@@ -127,12 +126,13 @@ class JobRow:
 
     @property
     def final(self) -> bool:
-        return self.status in FINAL_STATUSES
+        return self.status.final
 
     @classmethod
     def _from(cls, row: sqlite3.Row) -> JobRow:
         keys = row.keys()
         d = {k: row[k] for k in keys}
+        d["status"] = JobStatus(d["status"])
         d["limits"] = json.loads(d["limits"])
         d["progress"] = json.loads(d["progress"]) if d["progress"] else None
         return cls(**d)
@@ -203,16 +203,27 @@ class JobStore:
         now = time.time()
         with self._tx() as con:
             if max_queued is not None:
-                (n,) = con.execute("SELECT count(*) FROM jobs WHERE status='queued'").fetchone()
+                (n,) = con.execute(
+                    "SELECT count(*) FROM jobs WHERE status = ?", (JobStatus.QUEUED,)
+                ).fetchone()
                 if n + len(jobs) > max_queued:
                     raise QueueFull(
                         f"the queue holds {n} jobs; at most {max_queued} may wait, try later"
                     )
             con.executemany(
                 "INSERT INTO jobs (id, kind, status, request, limits, batch, created_at, "
-                "max_attempts) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)",
+                "max_attempts) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
                 [
-                    (j.id, j.kind, j.request, json.dumps(j.limits), j.batch, now, j.max_attempts)
+                    (
+                        j.id,
+                        j.kind,
+                        JobStatus.QUEUED,
+                        j.request,
+                        json.dumps(j.limits),
+                        j.batch,
+                        now,
+                        j.max_attempts,
+                    )
                     for j in jobs
                 ],
             )
@@ -224,19 +235,19 @@ class JobStore:
         row = self._conn().execute(f"SELECT {cols} FROM jobs WHERE id = ?", (job_id,)).fetchone()
         return JobRow._from(row) if row else None
 
-    def result_text(self, job_id: str) -> tuple[str, str | None] | None:
+    def result_text(self, job_id: str) -> tuple[JobStatus, str | None] | None:
         """``(status, result JSON text)`` of a job, or None if there is no such job."""
         row = (
             self._conn()
             .execute("SELECT status, result FROM jobs WHERE id = ?", (job_id,))
             .fetchone()
         )
-        return (row[0], row[1]) if row else None
+        return (JobStatus(row[0]), row[1]) if row else None
 
     def list(
         self,
         *,
-        status: str | None = None,
+        status: JobStatus | None = None,
         kind: str | None = None,
         batch: str | None = None,
         limit: int = 50,
@@ -262,7 +273,7 @@ class JobStore:
         rows = rows[:limit]
         return rows, (rows[-1].seq if more and rows else None)
 
-    def counts(self, *, batch: str | None = None) -> dict[str, int]:
+    def counts(self, *, batch: str | None = None) -> dict[JobStatus, int]:
         sql = "SELECT status, count(*) FROM jobs"
         args: tuple = ()
         if batch is not None:
@@ -270,13 +281,16 @@ class JobStore:
             args = (batch,)
         out = dict.fromkeys(STATUSES, 0)
         for status, n in self._conn().execute(sql + " GROUP BY status", args):
-            out[status] = n
+            out[JobStatus(status)] = n
         return out
 
     def running(self) -> list[JobRow]:
         rows = (
             self._conn()
-            .execute(f"SELECT {_SUMMARY_COLS} FROM jobs WHERE status = 'running' ORDER BY seq")
+            .execute(
+                f"SELECT {_SUMMARY_COLS} FROM jobs WHERE status = ? ORDER BY seq",
+                (JobStatus.RUNNING,),
+            )
             .fetchall()
         )
         return [JobRow._from(r) for r in rows]
@@ -299,21 +313,22 @@ class JobStore:
         """Take the oldest queued job: ``(job with its request, lease)`` or None."""
         con = self._conn()
         # a plain read first: idle workers poll without taking the write lock
-        if con.execute("SELECT 1 FROM jobs WHERE status = 'queued' LIMIT 1").fetchone() is None:
+        queued = (JobStatus.QUEUED,)
+        if con.execute("SELECT 1 FROM jobs WHERE status = ? LIMIT 1", queued).fetchone() is None:
             return None
         lease = secrets.token_hex(8)
         now = time.time()
         with self._tx() as con:
             row = con.execute(
-                "SELECT id FROM jobs WHERE status = 'queued' ORDER BY seq LIMIT 1"
+                "SELECT id FROM jobs WHERE status = ? ORDER BY seq LIMIT 1", queued
             ).fetchone()
             if row is None:
                 return None
             con.execute(
-                "UPDATE jobs SET status = 'running', attempts = attempts + 1, started_at = ?, "
+                "UPDATE jobs SET status = ?, attempts = attempts + 1, started_at = ?, "
                 "finished_at = NULL, worker_pid = ?, lease = ?, heartbeat_at = ?, "
                 "progress = NULL WHERE id = ?",
-                (now, worker_pid, lease, now, row[0]),
+                (JobStatus.RUNNING, now, worker_pid, lease, now, row[0]),
             )
         job = self.get(row[0], result=False, request=True)
         assert job is not None
@@ -325,9 +340,15 @@ class JobStore:
             self._conn()
             .execute(
                 "UPDATE jobs SET progress = ?, heartbeat_at = ? "
-                "WHERE id = ? AND lease = ? AND status = 'running' "
+                "WHERE id = ? AND lease = ? AND status = ? "
                 "RETURNING cancel_requested_at",
-                (json.dumps(progress) if progress else None, time.time(), job_id, lease),
+                (
+                    json.dumps(progress) if progress else None,
+                    time.time(),
+                    job_id,
+                    lease,
+                    JobStatus.RUNNING,
+                ),
             )
             .fetchone()
         )
@@ -339,14 +360,14 @@ class JobStore:
         self,
         job_id: str,
         lease: str,
-        status: str,
+        status: JobStatus,
         *,
         result: str | None = None,
         error: str | None = None,
         progress: dict | None = None,
     ) -> bool:
         """End a running job held under ``lease``; False if it is no longer ours."""
-        if status not in FINAL_STATUSES:
+        if not JobStatus(status).final:
             raise ValueError(f"not a final status: {status}")
         sets = f"status = ?, result = ?, error = ?, finished_at = ?, fseq = {_NEXT_FSEQ}"
         args: list[Any] = [status, result, error, time.time()]
@@ -354,8 +375,8 @@ class JobStore:
             sets += ", progress = ?"
             args.append(json.dumps(progress))
         cur = self._conn().execute(
-            f"UPDATE jobs SET {sets} WHERE id = ? AND lease = ? AND status = 'running'",
-            [*args, job_id, lease],
+            f"UPDATE jobs SET {sets} WHERE id = ? AND lease = ? AND status = ?",
+            [*args, job_id, lease, JobStatus.RUNNING],
         )
         return cur.rowcount == 1
 
@@ -366,14 +387,15 @@ class JobStore:
             row = con.execute("SELECT status FROM jobs WHERE id = ?", (job_id,)).fetchone()
             if row is None:
                 return None
-            if row[0] == "queued":
+            status = JobStatus(row[0])
+            if status is JobStatus.QUEUED:
                 con.execute(
-                    "UPDATE jobs SET status = 'cancelled', finished_at = ?, "
+                    "UPDATE jobs SET status = ?, finished_at = ?, "
                     "cancel_requested_at = ?, error = 'cancelled before it started', "
                     f"fseq = {_NEXT_FSEQ} WHERE id = ?",
-                    (now, now, job_id),
+                    (JobStatus.CANCELLED, now, now, job_id),
                 )
-            elif row[0] == "running":
+            elif status is JobStatus.RUNNING:
                 con.execute(
                     "UPDATE jobs SET cancel_requested_at = coalesce(cancel_requested_at, ?) "
                     "WHERE id = ?",
@@ -387,7 +409,7 @@ class JobStore:
         *,
         worker_pids: Iterable[int] | None = None,
         count_attempt: bool = True,
-    ) -> list[tuple[str, str]]:
+    ) -> list[tuple[str, JobStatus]]:
         """Running jobs whose worker is gone (all running jobs if ``worker_pids`` is None).
 
         Each is re-queued if it has attempts left, failed with ``reason`` otherwise, and
@@ -398,28 +420,27 @@ class JobStore:
         out = []
         with self._tx() as con:
             sql = (
-                "SELECT id, attempts, max_attempts, cancel_requested_at FROM jobs "
-                "WHERE status = 'running'"
+                "SELECT id, attempts, max_attempts, cancel_requested_at FROM jobs WHERE status = ?"
             )
-            args: list[Any] = []
+            args: list[Any] = [JobStatus.RUNNING]
             if worker_pids is not None:
                 pids = [int(p) for p in worker_pids]
                 if not pids:
                     return []
                 sql += f" AND worker_pid IN ({', '.join('?' * len(pids))})"
-                args = pids
+                args += pids
             for job_id, attempts, max_attempts, cancel_at in con.execute(sql, args).fetchall():
                 if not count_attempt:
                     attempts = max(0, attempts - 1)
                 if cancel_at is not None:
-                    status, error = "cancelled", f"cancelled ({reason})"
+                    status, error = JobStatus.CANCELLED, f"cancelled ({reason})"
                 elif attempts < max_attempts:
-                    status = "queued"
+                    status = JobStatus.QUEUED
                     error = f"attempt {attempts} interrupted: {reason}" if count_attempt else None
                 else:
-                    status = "failed"
+                    status = JobStatus.FAILED
                     error = f"{reason} (attempt {attempts} of {max_attempts})"
-                final = status != "queued"
+                final = status.final
                 con.execute(
                     "UPDATE jobs SET status = ?, error = ?, attempts = ?, lease = NULL, "
                     f"finished_at = ?, fseq = {_NEXT_FSEQ if final else 'NULL'} WHERE id = ?",
@@ -428,6 +449,6 @@ class JobStore:
                 out.append((job_id, status))
         return out
 
-    def force_finish(self, job_id: str, lease: str, status: str, error: str) -> bool:
+    def force_finish(self, job_id: str, lease: str, status: JobStatus, error: str) -> bool:
         """The supervisor ends a running job itself (then kills its worker)."""
         return self.finish(job_id, lease, status, error=error)

@@ -24,6 +24,7 @@ from typing import Any
 
 from .jsonutil import dumps, plain, truncate_lists
 from .settings import ServiceSettings
+from .status import JobStatus
 from .store import JobRow, JobStore
 
 __all__ = ["worker_main", "run_job", "JobMonitor"]
@@ -174,7 +175,7 @@ def run_job(
     monitor = JobMonitor(
         store, job, lease, interval=settings.progress_interval, parent_pid=parent_pid
     )
-    status, text, error = "failed", None, None
+    status, text, error = JobStatus.FAILED, None, None
     old_limit = None
     try:
         req = request_adapter(True).validate_json(job.request)
@@ -195,9 +196,9 @@ def run_job(
         result = truncate_lists(plain(raw), settings.max_result_items)
         text = dumps(result)
         if monitor.cancelled:
-            status, error = "cancelled", "cancelled while running (partial result)"
+            status, error = JobStatus.CANCELLED, "cancelled while running (partial result)"
         else:
-            status = "done"
+            status = JobStatus.DONE
     except KindUnavailable as exc:
         error = str(exc)
     except MemoryError:
@@ -215,8 +216,8 @@ def run_job(
         error = f"internal error: {type(exc).__name__}: {exc}"[:1000]
     if monitor.lost:
         return exit_after
-    if monitor.cancelled and status != "cancelled":
-        status, error = "cancelled", error or "cancelled while running"
+    if monitor.cancelled and status is not JobStatus.CANCELLED:
+        status, error = JobStatus.CANCELLED, error or "cancelled while running"
     if monitor.stopped_by and monitor.last is not None:
         monitor.last["stopped_by"] = monitor.stopped_by
     try:

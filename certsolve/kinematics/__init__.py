@@ -9,15 +9,16 @@
 * :mod:`.seeding`    -- planar seeding of the almost-planar case
 * :mod:`.tracking`   -- real-time certified tracking near a known pose
 
-The names below are imported on first use (PEP 562): ``import certsolve.kinematics.fk``
-does not pay for the IK modules (scipy.linalg, scipy.optimize), which keeps
-``certsolve fk`` quick to start.
+The names below are imported on first use (:mod:`certsolve.lazy`): ``import
+certsolve.kinematics.fk`` does not pay for the IK modules (scipy.linalg, scipy.optimize),
+which keeps ``certsolve fk`` quick to start.
 """
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from ..lazy import lazy_exports
 
 if TYPE_CHECKING:
     from .fk import FKPose, FKResult, FKSolver, forward_kinematics, with_tau_max
@@ -59,16 +60,7 @@ _WHERE = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    module = _WHERE.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(module, __name__), name)
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
-
+__getattr__, __dir__ = lazy_exports(__name__, _WHERE)
 
 __all__ = [
     "FORMULATIONS",

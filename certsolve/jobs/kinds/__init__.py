@@ -1,0 +1,136 @@
+"""Job kinds: for each, the pydantic model of its request and the function that runs it.
+
+A job request is ``{"kind": ..., "robot": {...} | "system": "...", "params": {...},
+"limits": {...}}``; the same models validate HTTP bodies, lines of ``certsolve batch``
+files, the ``certsolve submit`` command line and the options of the ``certsolve solve /
+fk / ik / isotropic / workspace`` commands.  One module per kind (params model, job model,
+runner, and its quick synchronous call if it has one); :mod:`.base` holds what they share,
+including the one check of parameters against the robot.
+
+==================  ==============================================  =========================
+kind (module)       library call                                    input
+==================  ==============================================  =========================
+solve               ``certsolve.solver.solve``                      ``system`` (Minibex text)
+fk                  ``certsolve.kinematics.forward_kinematics``     ``robot``
+ik                  ``certsolve.kinematics.inverse_kinematics``     ``robot``
+isotropic-map       ``certsolve.force.isotropic_map``               ``robot``
+workspace           ``certsolve.force.certified_workspace``         ``robot``
+==================  ==============================================  =========================
+
+The library modules are imported lazily inside the runners: a build without one of them
+still serves the others, and such jobs fail with "kind X is not available in this build".
+The hidden kind ``sleep`` (test settings only) sleeps, reports progress and can crash.
+
+Names are imported on first use (:mod:`certsolve.lazy`): the command line imports one
+kind's module (``certsolve.jobs.kinds.fk``) without the others.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ...lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from .base import (
+        Job,
+        JobLimits,
+        Kind,
+        KindUnavailable,
+        Params,
+        Request,
+        RunContext,
+        library_function,
+    )
+    from .fk import FkJob, FkParams, TrackCall, TrackParams, call_track
+    from .ik import IkCall, IkJob, IkParams, call_ik
+    from .isotropic_map import (
+        MAX_GRID_POINTS,
+        IsotropicCall,
+        IsotropicMapJob,
+        IsotropicMapParams,
+        PoseParams,
+        call_isotropic,
+    )
+    from .registry import KINDS, job_request_type, public_kinds, request_adapter
+    from .sleep import SleepJob, SleepParams
+    from .solve import MAX_SYSTEM_CHARS, MAX_VARIABLES, SolveJob, SolveParams
+    from .workspace import WorkspaceJob, WorkspaceParams
+
+_WHERE = {
+    "KINDS": ".registry",
+    "job_request_type": ".registry",
+    "public_kinds": ".registry",
+    "request_adapter": ".registry",
+    "Job": ".base",
+    "JobLimits": ".base",
+    "Kind": ".base",
+    "KindUnavailable": ".base",
+    "Params": ".base",
+    "Request": ".base",
+    "RunContext": ".base",
+    "library_function": ".base",
+    "FkJob": ".fk",
+    "FkParams": ".fk",
+    "TrackCall": ".fk",
+    "TrackParams": ".fk",
+    "call_track": ".fk",
+    "IkCall": ".ik",
+    "IkJob": ".ik",
+    "IkParams": ".ik",
+    "call_ik": ".ik",
+    "MAX_GRID_POINTS": ".isotropic_map",
+    "IsotropicCall": ".isotropic_map",
+    "IsotropicMapJob": ".isotropic_map",
+    "IsotropicMapParams": ".isotropic_map",
+    "PoseParams": ".isotropic_map",
+    "call_isotropic": ".isotropic_map",
+    "SleepJob": ".sleep",
+    "SleepParams": ".sleep",
+    "MAX_SYSTEM_CHARS": ".solve",
+    "MAX_VARIABLES": ".solve",
+    "SolveJob": ".solve",
+    "SolveParams": ".solve",
+    "WorkspaceJob": ".workspace",
+    "WorkspaceParams": ".workspace",
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _WHERE)
+
+__all__ = [
+    "FkJob",
+    "FkParams",
+    "IkCall",
+    "IkJob",
+    "IkParams",
+    "IsotropicCall",
+    "IsotropicMapJob",
+    "IsotropicMapParams",
+    "Job",
+    "JobLimits",
+    "KINDS",
+    "Kind",
+    "KindUnavailable",
+    "MAX_GRID_POINTS",
+    "MAX_SYSTEM_CHARS",
+    "MAX_VARIABLES",
+    "Params",
+    "PoseParams",
+    "Request",
+    "RunContext",
+    "SleepJob",
+    "SleepParams",
+    "SolveJob",
+    "SolveParams",
+    "TrackCall",
+    "TrackParams",
+    "WorkspaceJob",
+    "WorkspaceParams",
+    "call_ik",
+    "call_isotropic",
+    "call_track",
+    "job_request_type",
+    "library_function",
+    "public_kinds",
+    "request_adapter",
+]

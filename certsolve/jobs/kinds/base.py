@@ -1,0 +1,231 @@
+"""What every job kind is made of: strict request models, the one check of parameters
+against the robot, the run context, and the lookup of the library function.
+
+Requests are pydantic models with ``extra="forbid"`` and no NaN / Infinity; every bound
+the validation enforces on a single value (finite, range, length) is written as a
+``Field`` constraint, so the published JSON Schema states it.  What needs the robot (``u``
+has one value per wire, a pose has the robot's length ...) is checked in one place:
+:meth:`Params.check_robot`, called by :class:`Request` for every job and quick call that
+carries a robot -- and by the command line, which builds the same parameter models.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import logging
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Annotated, Any
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from ...robot.schema import RobotSpec
+
+__all__ = [
+    "MAX_FORCE",
+    "MAX_COORD",
+    "Angle",
+    "Coord",
+    "Job",
+    "JobLimits",
+    "Kind",
+    "KindUnavailable",
+    "Model",
+    "Orientation",
+    "Params",
+    "Request",
+    "RunContext",
+    "Wrench",
+    "call_supported",
+    "check_count",
+    "check_pose",
+    "check_wires",
+    "library_function",
+    "orientation_arg",
+    "plain_result",
+    "robot_model",
+    "wrench_dim",
+]
+
+log = logging.getLogger("certsolve.jobs")
+
+MAX_COORD = 1e6  # cm, the robot schema's bound
+MAX_FORCE = 1e9  # N
+
+Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD)]
+Angle = Annotated[float, Field(ge=-1e4, le=1e4)]  # degrees
+Wrench = Annotated[
+    list[Annotated[float, Field(ge=-MAX_FORCE, le=MAX_FORCE)]],
+    Field(min_length=2, max_length=6, description="extra constant wrench (N, N*cm)"),
+]
+Orientation = Annotated[
+    Angle | list[Angle | tuple[Angle, Angle]] | None,
+    Field(description="theta (dof 3) or [yaw, pitch, roll] (dof 6), degrees; [lo, hi] ranges"),
+]
+
+
+class KindUnavailable(Exception):
+    """The library function behind a kind is missing from this build."""
+
+
+class Model(BaseModel):
+    """A strict request model: unknown fields and non-finite numbers are refused."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+class Params(Model):
+    """The ``params`` of a kind or quick call."""
+
+    def check_robot(self, robot: RobotSpec) -> None:
+        """Checks that need the robot; raise ``ValueError("field: message")``."""
+
+
+class Request(Model):
+    """A job or quick call; when it has a ``robot``, its ``params`` are checked against it.
+
+    The one validator of parameters against the robot (``params.u: expected 4 values ...``).
+    """
+
+    @model_validator(mode="after")
+    def _fits_robot(self):
+        robot = getattr(self, "robot", None)
+        params = getattr(self, "params", None)
+        if isinstance(robot, RobotSpec) and isinstance(params, Params):
+            try:
+                params.check_robot(robot)
+            except ValueError as exc:
+                raise ValueError(f"params.{exc}") from None
+        return self
+
+
+class JobLimits(Model):
+    """Per-job resource limits; unset ones take the service defaults, within its ceilings."""
+
+    timeout: float | None = Field(default=None, gt=0, description="wall-time limit (s)")
+    max_boxes: int | None = Field(default=None, ge=1, description="limit on processed boxes")
+    memory_mb: int | None = Field(default=None, ge=1, description="address-space limit (MiB)")
+
+
+class Job(Request):
+    """A job request: ``kind``, its input, ``params`` and optional ``limits``."""
+
+    limits: JobLimits | None = Field(default=None, description="resource limits of this job")
+
+
+# -- checks against the robot ---------------------------------------------------------------------
+def check_wires(robot: RobotSpec, u: Sequence[float], name: str) -> None:
+    if len(u) != len(robot.wires):
+        raise ValueError(f"{name}: expected {len(robot.wires)} values (one per wire), got {len(u)}")
+
+
+def check_pose(robot: RobotSpec, values: Sequence[float], name: str) -> None:
+    from ...robot.geometry import Pose
+
+    try:
+        Pose.from_params(robot.dof, values)
+    except ValueError as exc:
+        raise ValueError(f"{name}: {exc}") from None
+
+
+def check_count(values: Sequence | None, count: int, name: str, what: str) -> None:
+    """``values`` (when given) has ``count`` items; ``what`` says what they are."""
+    if values is not None and len(values) != count:
+        raise ValueError(f"{name}: expected {count} {what}, got {len(values)}")
+
+
+def wrench_dim(robot: RobotSpec) -> int:
+    """Components of a wrench: 6 (dof 6), 3 (dof 3), 2 (dof 2)."""
+    return robot.dof
+
+
+# -- running --------------------------------------------------------------------------------------
+@dataclass(kw_only=True)
+class RunContext:
+    """What a runner gets besides its request: limits and the progress callback.
+
+    ``progress(p)`` takes the library's progress object (``boxes``, ``pending``,
+    ``solutions``, ``undecided``, ``elapsed``) and returns False when the job must stop
+    (cancelled, or over its box limit); runners pass it to the library calls.
+    """
+
+    time_limit: float
+    max_boxes: int
+    progress: Callable[[Any], bool] = field(default=lambda p: True)
+
+
+def library_function(kind: str, module: str, name: str) -> Callable:
+    """Import ``module.name`` or raise :class:`KindUnavailable`."""
+    try:
+        mod = importlib.import_module(module)
+        return getattr(mod, name)
+    except Exception as exc:  # ImportError, AttributeError, or a module that does not load
+        if not isinstance(exc, (ImportError, AttributeError)):
+            log.warning("importing %s failed: %s: %s", module, type(exc).__name__, exc)
+        raise KindUnavailable(f"kind {kind} is not available in this build") from None
+
+
+def plain_result(result: Any) -> Any:
+    return result.to_dict() if hasattr(result, "to_dict") else result
+
+
+# passed when the library takes them, else enforced by the worker (progress callback, kill)
+_ADVISORY = frozenset({"timeout", "max_boxes", "progress"})
+
+
+def call_supported(fn: Callable, *args: Any, **options: Any) -> Any:
+    """``fn(*args, **options)`` without the options its signature lacks (when unset)."""
+    try:
+        accepted = inspect.signature(fn).parameters
+    except (TypeError, ValueError):  # pragma: no cover - builtins
+        return fn(*args, **options)
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in accepted.values()):
+        return fn(*args, **options)
+    kwargs = {}
+    for name, value in options.items():
+        if name in accepted:
+            kwargs[name] = value
+        elif value is not None and name not in _ADVISORY:
+            raise ValueError(f"params.{name} is not supported by this build")
+    return fn(*args, **kwargs)
+
+
+def orientation_arg(value: Any) -> Any:
+    """A validated ``orientation`` as the force library takes it (ranges as tuples)."""
+    if isinstance(value, list):
+        return [tuple(v) if isinstance(v, tuple) else v for v in value]
+    return value
+
+
+def robot_model(spec: RobotSpec):
+    from ...robot.model import Robot
+
+    return Robot.from_spec(spec)
+
+
+# -- the registry entry ---------------------------------------------------------------------------
+@dataclass(frozen=True, kw_only=True)
+class Kind:
+    """A job kind: its request model, params model, runner and library function."""
+
+    name: str
+    model: type[Job]
+    params: type[Params]
+    run: Callable[[Any, RunContext], Any]
+    library: tuple[str, str]
+    summary: str
+    hidden: bool = False
+
+    @property
+    def input(self) -> str:
+        """``system`` or ``robot``: what the request carries besides its params."""
+        return "system" if "system" in self.model.model_fields else "robot"
+
+    @property
+    def has_timeout(self) -> bool:
+        return "timeout" in self.params.model_fields
+
+    @property
+    def has_max_boxes(self) -> bool:
+        return "max_boxes" in self.params.model_fields

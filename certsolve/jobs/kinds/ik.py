@@ -1,0 +1,73 @@
+"""Kind ``ik``: actuator values and tensions at a pose
+(``certsolve.kinematics.inverse_kinematics``); the same as the quick call ``POST /v1/ik``."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import Field
+
+from ...robot.schema import RobotSpec
+from .base import (
+    Coord,
+    Job,
+    Kind,
+    Params,
+    Request,
+    RunContext,
+    check_pose,
+    library_function,
+    plain_result,
+    robot_model,
+)
+
+__all__ = ["KIND", "IkCall", "IkJob", "IkParams", "call_ik", "run_ik"]
+
+
+class IkParams(Params):
+    pose: list[Coord] = Field(
+        min_length=2,
+        max_length=6,
+        description="x,y,z,yaw,pitch,roll (dof 6), x,y,theta (dof 3) or x,y (dof 2); cm, deg",
+    )
+    method: Literal["tension", "alg1", "alg2"] = "tension"
+
+    def check_robot(self, robot: RobotSpec) -> None:
+        check_pose(robot, self.pose, "pose")
+
+
+class IkJob(Job):
+    kind: Literal["ik"]
+    robot: RobotSpec
+    params: IkParams
+
+
+def run_ik(job: IkJob, ctx: RunContext) -> Any:
+    ik = library_function("ik", "certsolve.kinematics", "inverse_kinematics")
+    from ...robot.geometry import Pose
+
+    robot = robot_model(job.robot)
+    pose = Pose.from_params(robot.dof, job.params.pose)
+    return plain_result(ik(robot, pose, method=job.params.method))
+
+
+KIND = Kind(
+    name="ik",
+    model=IkJob,
+    params=IkParams,
+    run=run_ik,
+    library=("certsolve.kinematics", "inverse_kinematics"),
+    summary="inverse kinematics: actuator values and tensions at a pose",
+)
+
+
+class IkCall(Request):
+    """Body of ``POST /v1/ik``."""
+
+    robot: RobotSpec
+    params: IkParams
+
+
+def call_ik(req: IkCall) -> Any:
+    job = IkJob(kind="ik", robot=req.robot, params=req.params)
+    return run_ik(job, RunContext(time_limit=0, max_boxes=0))

@@ -1,0 +1,33 @@
+"""The registry of job kinds: ``KINDS`` (name -> :class:`.base.Kind`) and the request
+type, a union of the kinds' job models discriminated by ``kind``."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Union
+
+from pydantic import Field, TypeAdapter
+
+from . import fk, ik, isotropic_map, sleep, solve, workspace
+from .base import Kind
+
+__all__ = ["KINDS", "job_request_type", "public_kinds", "request_adapter"]
+
+KINDS: dict[str, Kind] = {
+    module.KIND.name: module.KIND for module in (solve, fk, ik, isotropic_map, workspace, sleep)
+}
+
+
+def public_kinds(include_hidden: bool = False) -> list[str]:
+    return [k.name for k in KINDS.values() if include_hidden or not k.hidden]
+
+
+def job_request_type(include_hidden: bool = False) -> Any:
+    """The request type: a union of the kinds' models, discriminated by ``kind``."""
+    models = tuple(KINDS[name].model for name in public_kinds(include_hidden))
+    return Annotated[Union[models], Field(discriminator="kind")]  # noqa: UP007
+
+
+def request_adapter(include_hidden: bool = False) -> TypeAdapter:
+    """Validates a job request (dict or JSON) into the kind's model.  Building one costs a
+    few milliseconds: a long-lived caller (the service, a worker) keeps its own."""
+    return TypeAdapter(job_request_type(include_hidden))

@@ -1,0 +1,75 @@
+"""The hidden test kind ``sleep`` (``enable_test_kinds`` only): sleeps, reports progress,
+and on request fails, allocates memory, ignores its limits or crashes the worker."""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+from typing import Any, Literal
+
+from pydantic import Field
+
+from .base import Job, Kind, Params, RunContext
+
+__all__ = ["KIND", "SleepJob", "SleepParams", "run_sleep"]
+
+
+class SleepParams(Params):
+    seconds: float = Field(default=1.0, ge=0, le=3600)
+    crash: bool = Field(default=False, description="exit the worker abruptly halfway")
+    fail: str | None = Field(default=None, max_length=200, description="raise this error")
+    allocate_mb: int = Field(default=0, ge=0, le=1_000_000, description="allocate memory first")
+    cooperative: bool = Field(default=True, description="report progress, honour limits")
+
+
+class SleepJob(Job):
+    kind: Literal["sleep"]
+    params: SleepParams = Field(default_factory=SleepParams)
+
+
+@dataclass(kw_only=True)
+class _SleepProgress:
+    boxes: int
+    pending: int
+    solutions: int
+    undecided: int
+    elapsed: float
+
+
+def run_sleep(job: SleepJob, ctx: RunContext) -> Any:
+    p = job.params
+    ballast = bytearray(p.allocate_mb * 2**20) if p.allocate_mb else None
+    if p.fail:
+        raise ValueError(p.fail)
+    t0 = time.monotonic()
+    ticks = 0
+    stopped = None
+    while (elapsed := time.monotonic() - t0) < p.seconds:
+        if p.crash and elapsed >= p.seconds / 2:
+            os._exit(17)
+        if not p.cooperative:  # like a library call that never checks its limits
+            time.sleep(min(0.02, max(0.0, p.seconds - elapsed)))
+            continue
+        if elapsed >= ctx.time_limit:
+            stopped = "timeout"
+            break
+        ticks += 1
+        progress = _SleepProgress(boxes=ticks, pending=0, solutions=0, undecided=0, elapsed=elapsed)
+        if ctx.progress(progress) is False:
+            stopped = "cancelled"
+            break
+        time.sleep(min(0.02, max(0.0, p.seconds - elapsed)))
+    del ballast
+    return {"slept": time.monotonic() - t0, "ticks": ticks, "stopped_by": stopped}
+
+
+KIND = Kind(
+    name="sleep",
+    model=SleepJob,
+    params=SleepParams,
+    run=run_sleep,
+    library=("time", "sleep"),
+    summary="test kind: sleep, report progress, optionally crash",
+    hidden=True,
+)

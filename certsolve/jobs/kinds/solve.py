@@ -1,0 +1,77 @@
+"""Kind ``solve``: every solution of a Minibex system (``certsolve.solver.solve``)."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import Field, field_validator
+
+from .base import Job, Kind, Params, RunContext, library_function, plain_result
+
+__all__ = ["KIND", "MAX_SYSTEM_CHARS", "MAX_VARIABLES", "SolveJob", "SolveParams", "run_solve"]
+
+MAX_SYSTEM_CHARS = 200_000  # Minibex text of a solve job
+MAX_VARIABLES = 100
+
+
+class SolveParams(Params):
+    eps: float = Field(default=1e-8, gt=0, le=1e9, description="boxes narrower stop")
+    timeout: float | None = Field(default=None, gt=0, description="time limit (s)")
+    max_boxes: int | None = Field(default=None, ge=1, description="limit on processed boxes")
+    verify: bool = Field(default=False, description="re-prove solutions with mpmath")
+
+
+def check_system(text: str) -> str:
+    """Parse the Minibex text (errors with line and column); at most MAX_VARIABLES."""
+    from ...expr.minibex import MinibexError, parse_minibex
+
+    try:
+        system = parse_minibex(text)
+    except MinibexError as exc:
+        raise ValueError(str(exc)) from None
+    except RecursionError:
+        raise ValueError("expression nested too deeply") from None
+    if len(system.variables) > MAX_VARIABLES:
+        raise ValueError(f"{len(system.variables)} variables; at most {MAX_VARIABLES}")
+    return text
+
+
+class SolveJob(Job):
+    kind: Literal["solve"]
+    system: str = Field(
+        min_length=1, max_length=MAX_SYSTEM_CHARS, description="the system, Minibex text"
+    )
+    params: SolveParams = Field(default_factory=SolveParams)
+
+    @field_validator("system")
+    @classmethod
+    def _system(cls, v: str) -> str:
+        return check_system(v)
+
+
+def run_solve(job: SolveJob, ctx: RunContext) -> Any:
+    solve = library_function("solve", "certsolve.solver", "solve")
+    from ...expr.minibex import parse_minibex
+
+    p = job.params
+    system = parse_minibex(job.system)
+    result = solve(
+        system,
+        eps=p.eps,
+        timeout=ctx.time_limit,
+        max_boxes=ctx.max_boxes,
+        workers=1,
+        verify=p.verify,
+        progress=ctx.progress,
+    )
+    return plain_result(result)
+
+
+KIND = Kind(
+    name="solve",
+    model=SolveJob,
+    params=SolveParams,
+    run=run_solve,
+    library=("certsolve.solver", "solve"),
+    summary="all solutions of a Minibex system, certified",
+)
