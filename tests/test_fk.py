@@ -304,4 +304,5 @@ def test_cli_fk_json_and_errors():
         assert key in sol
     bad = subprocess.run(cmd[:5] + ["--u", "1,2"], capture_output=True, text=True, timeout=60)
     assert bad.returncode == 2
-    assert "--u: expected 4 numbers" in bad.stderr and "Traceback" not in bad.stderr
+    assert "--u: expected 4 values (one per wire), got 2" in bad.stderr
+    assert "Traceback" not in bad.stderr

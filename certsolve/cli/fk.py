@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import CliError, parse_floats, print_json, progress_reporter
+from .common import CliError, parse_floats, print_json, progress_reporter, validated
 
 
 def register(sub) -> None:
@@ -59,23 +59,29 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..jobs.kinds.fk import FkParams, TrackParams
     from ..kinematics.fk import forward_kinematics, with_tau_max
-    from ..robot.geometry import parse_pose
+    from ..robot.geometry import Pose
     from ..robot.model import Robot
+    from ..robot.schema import load_robot_spec
 
-    robot = with_tau_max(Robot.load(args.robot), args.tau_max)
-    u = parse_floats(args.u, "--u", robot.m)
+    spec = load_robot_spec(args.robot)
+    u = parse_floats(args.u, "--u")
+    params = validated(FkParams, args, {"u": u}, robot=spec)  # as the fk job checks them
     if args.seeded_only and not args.seed_planar:
         raise CliError("--seeded-only needs --seed-planar")
-    if not args.eps > 0:
-        raise CliError("--eps must be positive")
     if args.workers < 1:
         raise CliError("--workers must be at least 1")
+    robot = with_tau_max(Robot.from_spec(spec), params.tau_max)
     if args.near is not None:
         from ..kinematics.tracking import Tracker
 
-        near = parse_pose(robot.dof, args.near)
-        res = Tracker(robot, args.formulation).step(u, near, args.half_width)
+        near = parse_floats(args.near, "--near")
+        track = validated(
+            TrackParams, args, {"u": u, "near_pose": near}, robot=spec, option={"near_pose": "near"}
+        )
+        pose = Pose.from_params(robot.dof, track.near_pose)
+        res = Tracker(robot, params.formulation).step(track.u, pose, track.half_width)
         if args.json:
             print_json(res.to_dict())
         else:
@@ -85,13 +91,13 @@ def run(args: argparse.Namespace) -> int:
     try:
         res = forward_kinematics(
             robot,
-            u,
-            formulation=args.formulation,
-            eps=args.eps,
-            timeout=args.timeout,
-            max_boxes=args.max_boxes,
-            seed_planar=args.seed_planar,
-            seeded_only=args.seeded_only,
+            params.u,
+            formulation=params.formulation,
+            eps=params.eps,
+            timeout=params.timeout,
+            max_boxes=params.max_boxes,
+            seed_planar=params.seed_planar,
+            seeded_only=params.seeded_only,
             progress=progress,
             workers=args.workers,
             verify=args.verify,

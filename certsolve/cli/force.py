@@ -15,8 +15,8 @@ import re
 
 import numpy as np
 
-from ..robot import Robot, parse_pose
-from .common import CliError, parse_floats, print_json, progress_reporter
+from ..robot import Pose, Robot
+from .common import CliError, parse_floats, print_json, progress_reporter, validated
 
 
 def register(sub) -> None:
@@ -157,13 +157,18 @@ def run_isotropic(args: argparse.Namespace) -> int:
         for opt in ("z", "orientation", "plot"):
             if getattr(args, opt) is not None:
                 raise CliError(f"--{opt} goes with --grid (with --at, put angles in the pose)")
-        try:
-            pose = parse_pose(robot.dof, args.at)
-        except ValueError as exc:
-            raise CliError(f"--at: {exc}") from None
+        from ..jobs.kinds.isotropic_map import PoseParams
+
+        values = {"pose": parse_floats(args.at, "--at"), "external": external}
+        params = validated(PoseParams, args, values, robot=robot.spec, option={"pose": "at"})
+        pose = Pose.from_params(robot.dof, params.pose)
         try:
             res = isotropic_force(
-                robot, pose, algorithm=args.algorithm, external=external, ellipse=args.ellipse
+                robot,
+                pose,
+                algorithm=params.algorithm,
+                external=params.external,
+                ellipse=args.ellipse,
             )
         except ValueError as exc:
             raise CliError(f"--algorithm {args.algorithm}: {exc}") from None
@@ -264,38 +269,33 @@ def format_map(res, plot) -> str:
 # -- workspace -------------------------------------------------------------------------------
 def run_workspace(args: argparse.Namespace) -> int:
     from ..force import certified_workspace
+    from ..jobs.kinds.base import orientation_arg
+    from ..jobs.kinds.workspace import WorkspaceParams
 
     robot = Robot.load(args.robot)
-    if not (np.isfinite(args.min_force) and args.min_force > 0):
-        raise CliError("--min-force must be a positive number of newtons")
-    if not (np.isfinite(args.eps) and args.eps > 0):
-        raise CliError("--eps must be a positive number (cm)")
-    if not (np.isfinite(args.eps_angle) and args.eps_angle > 0):
-        raise CliError("--eps-angle must be a positive number (degrees)")
-    if args.timeout is not None and not args.timeout > 0:
-        raise CliError("--timeout must be positive (seconds)")
-    if args.max_boxes is not None and args.max_boxes < 1:
-        raise CliError("--max-boxes must be at least 1")
-    d = robot.dim
-    box = parse_floats(args.box, "--box", 2 * d)
-    b = np.array(box).reshape(d, 2)
-    if not np.all(np.isfinite(b)) or np.any(b[:, 0] > b[:, 1]):
-        raise CliError("--box: need finite bounds with min <= max on every axis")
-    orientation = _orientation_ranges(robot, args.orientation)
-    external = _external(robot, args.external)
+    vals = parse_floats(args.box, "--box")
+    if len(vals) % 2:
+        raise CliError("--box: expected lo,hi pairs (xmin,xmax,ymin,ymax[,zmin,zmax])")
+    values = {
+        "box": [vals[i : i + 2] for i in range(0, len(vals), 2)],
+        "orientation": _orientation_ranges(robot, args.orientation),
+        "external": parse_floats(args.external, "--external") if args.external else None,
+    }
+    # the workspace job's own checks (min_force, eps, box, timeout ...)
+    params = validated(WorkspaceParams, args, values, robot=robot.spec)
     progress, stop = progress_reporter(not args.json, line=_paving_line)
     try:
         ws = certified_workspace(
             robot,
-            args.min_force,
-            box,
-            args.eps,
+            params.min_force,
+            [list(b) for b in params.box],
+            params.eps,
             progress=progress,
-            timeout=args.timeout,
-            orientation=orientation,
-            eps_angle=args.eps_angle,
-            external=external,
-            max_boxes=args.max_boxes,
+            timeout=params.timeout,
+            orientation=orientation_arg(params.orientation),
+            eps_angle=params.eps_angle,
+            external=params.external,
+            max_boxes=params.max_boxes,
         )
     finally:
         stop()

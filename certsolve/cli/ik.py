@@ -7,14 +7,8 @@ import argparse
 import numpy as np
 
 from ..kinematics.ik import METHODS, IKResult, inverse_kinematics
-from ..robot import Robot, parse_pose
-from .common import CliError, parse_floats, print_json
-
-_POSE_HELP = {
-    6: "x,y,z,yaw,pitch,roll",
-    3: "x,y,theta",
-    2: "x,y",
-}
+from ..robot import Pose, Robot, load_robot_spec
+from .common import CliError, parse_floats, print_json, validated
 
 
 def register(sub) -> None:
@@ -97,11 +91,13 @@ def _options(args: argparse.Namespace, robot: Robot) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
-    robot = Robot.load(args.robot)
-    try:
-        pose = parse_pose(robot.dof, args.pose)
-    except ValueError as exc:
-        raise CliError(f"--pose: {exc} (robot {robot.name!r}: {_POSE_HELP[robot.dof]})") from None
+    from ..jobs.kinds.ik import IkParams
+
+    spec = load_robot_spec(args.robot)
+    values = parse_floats(args.pose, "--pose")
+    params = validated(IkParams, args, {"pose": values}, robot=spec)  # the ik job's checks
+    robot = Robot.from_spec(spec)
+    pose = Pose.from_params(robot.dof, params.pose)
     result = inverse_kinematics(robot, pose, args.method, **_options(args, robot))
     if args.json:
         print_json(result.to_dict())

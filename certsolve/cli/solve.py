@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import print_json, progress_reporter
+from .common import CliError, print_json, progress_reporter, validated
 
 
 def register(sub) -> None:
@@ -25,21 +25,21 @@ def register(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..expr.minibex import load_minibex
+    from ..jobs.kinds.solve import SolveParams
     from ..solver import Solver
 
-    if not args.eps > 0:
-        raise ValueError("--eps must be positive")
+    params = validated(SolveParams, args)  # the solve job's own checks (eps, timeout, ...)
     if args.workers < 1:
-        raise ValueError("--workers must be at least 1")
+        raise CliError("--workers must be at least 1")
     system = load_minibex(args.file)
-    solver = Solver(system, eps=args.eps)
+    solver = Solver(system, eps=params.eps)
     progress, stop = progress_reporter(not args.json)
     try:
         result = solver.solve(
-            timeout=args.timeout,
-            max_boxes=args.max_boxes,
+            timeout=params.timeout,
+            max_boxes=params.max_boxes,
             workers=args.workers,
-            verify=args.verify,
+            verify=params.verify,
             progress=progress,
         )
     finally:
