@@ -64,12 +64,12 @@ COMMANDS: tuple[Command, ...] = (
     ),
     Command(name="serve", module="service", help="run the HTTP job service"),
     Command(name="batch", module="service", help="run a JSON-lines file of jobs offline"),
-    Command(name="submit", module="service", help="submit a job to a running service"),
+    Command(name="submit", module="remote", help="submit a job to a running service"),
     Command(
-        name="status", module="service", help="status of a job (or the latest jobs) on a service"
+        name="status", module="remote", help="status of a job (or the latest jobs) on a service"
     ),
-    Command(name="result", module="service", help="result of a job on a service"),
-    Command(name="cancel", module="service", help="cancel a job on a service"),
+    Command(name="result", module="remote", help="result of a job on a service"),
+    Command(name="cancel", module="remote", help="cancel a job on a service"),
     Command(name="schema", module="schema", help="print the JSON Schema of an input format"),
 )
 

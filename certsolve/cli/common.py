@@ -36,10 +36,11 @@ class CliError(Exception):
 
 def user_errors() -> tuple[type[BaseException], ...]:
     """Exception types that are the user's input, not a bug: no traceback for these."""
+    from ..client import ClientError
     from ..expr.minibex import MinibexError
     from ..robot.schema import RobotFileError
 
-    return (CliError, MinibexError, RobotFileError, ValueError)
+    return (CliError, ClientError, MinibexError, RobotFileError, ValueError)
 
 
 def option_names(parser: argparse.ArgumentParser, command: str) -> dict[str, str]:

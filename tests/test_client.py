@@ -1,0 +1,112 @@
+"""certsolve.client.ServiceClient against a stub HTTP server: requests, token, errors, wait.
+
+(The client against the real service is covered by tests/test_service_e2e.py through the
+``certsolve submit / status / result / cancel`` commands.)
+"""
+
+import json
+import socket
+import threading
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+import pytest
+
+from certsolve.client import ClientError, ServiceClient
+
+
+class Stub(BaseHTTPRequestHandler):
+    """Answers from ``server.replies`` (path -> list of (status, body)); records requests."""
+
+    def _answer(self):
+        length = int(self.headers.get("Content-Length") or 0)
+        body = json.loads(self.rfile.read(length)) if length else None
+        self.server.seen.append((self.command, self.path, dict(self.headers), body))
+        queue = self.server.replies.get(self.path) or [(404, {"error": "Not Found"})]
+        status, reply = queue.pop(0) if len(queue) > 1 else queue[0]
+        data = json.dumps(reply).encode()
+        self.send_response(status)
+        self.send_header("Content-Type", "application/json")
+        self.send_header("Content-Length", str(len(data)))
+        self.end_headers()
+        self.wfile.write(data)
+
+    do_GET = do_POST = do_DELETE = _answer
+
+    def log_message(self, *args):
+        pass
+
+
+@pytest.fixture
+def stub():
+    server = ThreadingHTTPServer(("127.0.0.1", 0), Stub)
+    server.seen, server.replies = [], {}
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    yield server
+    server.shutdown()
+    server.server_close()
+
+
+def url(server) -> str:
+    return f"http://127.0.0.1:{server.server_address[1]}"
+
+
+def record(status: str, result=None) -> dict:
+    return {"id": "j1", "kind": "solve", "status": status, "result": result}
+
+
+def test_submit_sends_json_and_the_bearer_token(stub):
+    stub.replies["/v1/jobs"] = [(202, {"id": "j1", "url": "u", "status": "queued"})]
+    client = ServiceClient(url(stub), token="s3cret")
+    assert client.submit({"kind": "solve", "system": "x"})["id"] == "j1"
+    method, path, headers, body = stub.seen[-1]
+    assert (method, path, body) == ("POST", "/v1/jobs", {"kind": "solve", "system": "x"})
+    assert headers["Authorization"] == "Bearer s3cret"
+    assert headers["Content-Type"] == "application/json"
+    # no token: no header
+    ServiceClient(url(stub)).submit({"kind": "solve", "system": "x"})
+    assert "Authorization" not in stub.seen[-1][2]
+
+
+def test_paths_and_queries(stub):
+    client = ServiceClient(url(stub))
+    stub.replies["/v1/jobs?limit=5&status=running"] = [(200, {"items": [], "next_cursor": None})]
+    assert client.list(status="running", limit=5)["items"] == []
+    stub.replies["/v1/jobs/a%2Fb?result=false"] = [(200, record("queued"))]
+    assert client.status("a/b")["status"] == "queued"  # ids are quoted
+    stub.replies["/v1/jobs/j1"] = [(200, record("cancelled"))]
+    assert client.cancel("j1")["status"] == "cancelled"
+    assert stub.seen[-1][0] == "DELETE"
+
+
+def test_errors_carry_status_and_message(stub):
+    client = ServiceClient(url(stub))
+    with pytest.raises(ClientError) as info:
+        client.job("nope")
+    assert info.value.status == 404 and str(info.value) == "service answered 404: Not Found"
+    stub.replies["/v1/jobs/j1/result"] = [(409, {"error": "job j1 is queued and has no result"})]
+    with pytest.raises(ClientError) as info:
+        client.result("j1")
+    assert info.value.status == 409 and "has no result" in str(info.value)
+    with socket.socket() as s:  # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    with pytest.raises(ClientError) as info:
+        ServiceClient(f"http://127.0.0.1:{port}", timeout=5).health()
+    assert info.value.status is None and "cannot reach" in str(info.value)
+    with pytest.raises(ValueError, match="server"):
+        ServiceClient("localhost:8000")
+
+
+def test_wait_polls_until_final(stub):
+    stub.replies["/v1/jobs/j1"] = [
+        (200, record("queued")),
+        (200, record("running")),
+        (200, record("done", {"status": "complete"})),
+    ]
+    rec = ServiceClient(url(stub)).wait("j1", poll=0.01)
+    assert rec["status"] == "done" and rec["result"] == {"status": "complete"}
+    assert sum(1 for s in stub.seen if s[1] == "/v1/jobs/j1") == 3
+    stub.replies["/v1/jobs/j2"] = [(200, {**record("running"), "id": "j2"})]
+    with pytest.raises(TimeoutError):
+        ServiceClient(url(stub)).wait("j2", poll=0.01, timeout=0.1)
