@@ -152,3 +152,26 @@ def test_results_are_truncated(service):
     res = json.loads(row.result)
     assert row.status == "done" and res["status"] == "incomplete"
     assert len(res["pending"]) == 3 and res["truncated"]["pending"] > 3
+
+
+def test_batch_expansion_in_the_service(service):
+    from certsolve.jobs.service import BatchError, BatchRequest
+
+    sweep = BatchRequest(kind="fk", robot=PLANAR, params=[{"u": [0, 0, 0, i]} for i in range(4)])
+    batch_id, ids = service.submit_batch(sweep)
+    assert len(ids) == 4 and service.store.counts(batch=batch_id)["queued"] == 4
+    bad = sweep.model_copy(update={"params": [{"u": [0, 0, 0, 0]}, {"u": [1, 2]}]})
+    with pytest.raises(BatchError) as info:
+        service.submit_batch(bad)
+    assert [d["field"] for d in info.value.details] == ["params.1.u"]
+    assert not info.value.too_large
+    many = BatchRequest(jobs=[{"kind": "sleep"}] * (service.settings.max_batch + 1))
+    with pytest.raises(BatchError) as info:
+        service.expand_batch(many)
+    assert info.value.too_large
+    with pytest.raises(BatchError, match="either jobs"):
+        service.expand_batch(BatchRequest(jobs=[{"kind": "sleep"}], kind="sleep"))
+    over = BatchRequest(jobs=[{"kind": "sleep", "limits": {"timeout": 1e5}}])
+    with pytest.raises(BatchError) as info:
+        service.expand_batch(over)
+    assert info.value.details[0]["field"] == "jobs.0.limits.timeout"

@@ -1,8 +1,12 @@
 """The job service: validated requests in, job records out; owns the store and the pool.
 
-Used by the HTTP API (:mod:`api.app`) and the offline batch runner.  One service owns a
-data directory at a time (an exclusive ``flock`` on ``service.lock``); on start it re-queues
-the jobs a previous run left ``running`` (or fails those out of attempts).
+Used by the HTTP API (:mod:`certsolve.api`) and the offline batch runner.  One service owns
+a data directory at a time (an exclusive ``flock`` on ``service.lock``); on start it
+re-queues the jobs a previous run left ``running`` (or fails those out of attempts).
+
+A batch (:class:`BatchRequest`) is either full job requests or one kind and input with a
+list of params; :meth:`JobService.submit_batch` expands and validates it (every problem
+reported at its index, ``jobs.1.system`` / ``params.3.u``) and queues all or nothing.
 """
 
 from __future__ import annotations
@@ -14,13 +18,25 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Any
 
-from .kinds import KINDS, JobLimits, request_adapter
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from ..robot.schema import RobotSpec
+from .errors import summary, validation_details
+from .kinds import KINDS, MAX_SYSTEM_CHARS, JobLimits, request_adapter
 from .pool import WorkerPool
 from .settings import ServiceSettings
 from .status import JobStatus
 from .store import JobRow, JobStore, NewJob, new_job_id
 
-__all__ = ["JobService", "LimitError", "ServiceError", "job_record", "iso_time"]
+__all__ = [
+    "BatchError",
+    "BatchRequest",
+    "JobService",
+    "LimitError",
+    "ServiceError",
+    "job_record",
+    "iso_time",
+]
 
 log = logging.getLogger("certsolve.jobs")
 
@@ -38,6 +54,46 @@ class LimitError(ValueError):
 
     def __str__(self) -> str:
         return f"{self.field}: {self.message}"
+
+
+@dataclass
+class BatchError(ValueError):
+    """A batch that cannot be queued; ``details`` are validation details (``loc`` relative
+    to the batch), ``too_large`` when it has more jobs than the service takes at once."""
+
+    message: str
+    details: list[dict] | None = None
+    too_large: bool = False
+
+    def __str__(self) -> str:
+        return self.message
+
+
+_ONE_OF = [
+    {
+        "required": ["jobs"],
+        "not": {"anyOf": [{"required": [k]} for k in ("kind", "robot", "system", "params")]},
+    },
+    {"required": ["kind", "params"], "not": {"required": ["jobs"]}},
+]
+
+
+class BatchRequest(BaseModel):
+    """Either ``jobs`` (full job requests) or one ``kind`` + input with a ``params`` list."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"oneOf": _ONE_OF})
+    jobs: list[dict[str, Any]] | None = Field(
+        default=None, min_length=1, description="job requests, each as for POST /v1/jobs"
+    )
+    kind: str | None = Field(default=None, max_length=32, description="kind of every job")
+    robot: RobotSpec | None = None
+    system: str | None = Field(default=None, max_length=MAX_SYSTEM_CHARS)
+    limits: JobLimits | None = None
+    params: list[dict[str, Any]] | None = Field(
+        default=None,
+        min_length=1,
+        description="one params object per job (with kind and robot/system)",
+    )
 
 
 def iso_time(t: float | None) -> str | None:
@@ -187,6 +243,63 @@ class JobService:
     def new_batch_id() -> str:
         return "b" + new_job_id()[:15]
 
+    def expand_batch(self, batch: BatchRequest) -> list:
+        """The validated job requests of a batch; :class:`BatchError` naming each problem."""
+        shared = batch.kind is not None or batch.robot is not None or batch.system is not None
+        if batch.jobs is not None and (shared or batch.params is not None):
+            raise BatchError("give either jobs, or kind + robot/system + params (a list)")
+        if batch.jobs is None and (batch.kind is None or batch.params is None):
+            raise BatchError("give jobs (a list), or kind + robot/system + params (a list)")
+        items = batch.jobs if batch.jobs is not None else batch.params
+        assert items is not None
+        most = self.settings.max_batch
+        if len(items) > most:
+            raise BatchError(f"{len(items)} jobs in one batch; at most {most}", too_large=True)
+        reqs, details = [], []
+        for i, item in enumerate(items):
+            if batch.jobs is not None:
+                data, prefix = item, ("jobs", i)
+            else:
+                data = {"kind": batch.kind, "params": item}
+                if batch.robot is not None:
+                    data["robot"] = batch.robot.model_dump()
+                if batch.system is not None:
+                    data["system"] = batch.system
+                if batch.limits is not None:
+                    data["limits"] = batch.limits.model_dump()
+                prefix = ()
+            try:
+                req = self.validate(data)
+                self.limits_for(req)
+                reqs.append(req)
+            except ValidationError as exc:
+                errs = exc.errors()
+                if batch.jobs is None:  # params errors belong to params[i]
+                    errs = [_sweep_item(e, i) for e in errs]
+                details.extend(validation_details(errs, prefix))
+            except LimitError as exc:
+                loc = (*prefix, *exc.field.split("."))
+                details.extend(
+                    validation_details([{"loc": loc, "msg": exc.message, "type": "limit"}])
+                )
+            if len(details) >= 50:
+                break
+        if details:
+            seen, unique = set(), []
+            for d in details:
+                key = (d["field"], d["msg"])
+                if key not in seen:
+                    seen.add(key)
+                    unique.append(d)
+            raise BatchError(summary(unique), unique)
+        return reqs
+
+    def submit_batch(self, batch: BatchRequest) -> tuple[str, list[str]]:
+        """Expand, validate and queue a batch (all or none): ``(batch id, job ids)``."""
+        reqs = self.expand_batch(batch)
+        batch_id = self.new_batch_id()
+        return batch_id, self.submit(reqs, batch=batch_id)
+
     def cancel(self, job_id: str) -> JobRow | None:
         return self.store.request_cancel(job_id)
 
@@ -205,3 +318,14 @@ class JobService:
             },
             "kinds": [k for k in KINDS if self.settings.enable_test_kinds or not KINDS[k].hidden],
         }
+
+
+def _sweep_item(e: dict, i: int) -> dict:
+    """An error of the i-th job of a sweep batch, placed at ``params[i]``."""
+    loc = tuple(e.get("loc", ()))
+    if loc[1:2] == ("params",):
+        return {**e, "loc": ("params", i, *loc[2:])}
+    msg = str(e.get("msg", ""))
+    if len(loc) <= 1 and msg.startswith("Value error, params."):
+        return {**e, "msg": msg.replace("params.", f"params[{i}].", 1)}
+    return e

@@ -1,0 +1,42 @@
+"""``/healthz`` and ``/v1/kinds``: what the service is and can do."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import APIRouter
+
+from certsolve.jobs.kinds import KINDS, KindUnavailable, library_function, public_kinds
+
+from ..deps import Service, Settings
+
+router = APIRouter(tags=["service"])
+
+
+@router.get("/healthz")
+def healthz(service: Service) -> dict[str, Any]:
+    """Liveness: workers alive and the queue depth."""
+    return service.health()
+
+
+@router.get("/v1/kinds")
+def list_kinds(settings: Settings) -> dict[str, Any]:
+    """The job kinds, their parameters (JSON Schema) and whether this build has them."""
+    out = []
+    for name in public_kinds(settings.enable_test_kinds):
+        k = KINDS[name]
+        try:
+            library_function(name, *k.library)
+            available = True
+        except KindUnavailable:
+            available = False
+        out.append(
+            {
+                "kind": name,
+                "summary": k.summary,
+                "input": k.input,
+                "available": available,
+                "params": k.params.model_json_schema(),
+            }
+        )
+    return {"kinds": out}
