@@ -9,7 +9,7 @@ from fastapi.testclient import TestClient
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from api.app import create_app
+from certsolve.api.app import create_app
 from certsolve.jobs import ServiceSettings
 
 ROOT = Path(__file__).resolve().parents[1]

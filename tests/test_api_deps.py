@@ -5,8 +5,8 @@ from pathlib import Path
 
 from fastapi.testclient import TestClient
 
-from api.app import create_app
-from api.deps import get_quick
+from certsolve.api.app import create_app
+from certsolve.api.deps import get_quick
 from certsolve.jobs import ServiceSettings
 from certsolve.jobs.quick import Busy
 

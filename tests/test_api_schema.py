@@ -10,7 +10,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis.errors import Unsatisfiable
 
-from api.app import create_app
+from certsolve.api.app import create_app
 from certsolve.jobs import ServiceSettings
 
 N_EXAMPLES = 15

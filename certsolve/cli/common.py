@@ -38,9 +38,10 @@ def user_errors() -> tuple[type[BaseException], ...]:
     """Exception types that are the user's input, not a bug: no traceback for these."""
     from ..client import ClientError
     from ..expr.minibex import MinibexError
+    from ..extras import MissingExtra
     from ..robot.schema import RobotFileError
 
-    return (CliError, ClientError, MinibexError, RobotFileError, ValueError)
+    return (CliError, ClientError, MinibexError, MissingExtra, RobotFileError, ValueError)
 
 
 def option_names(parser: argparse.ArgumentParser, command: str) -> dict[str, str]:

@@ -148,9 +148,18 @@ def _fmt(x) -> str:
 
 
 # -- isotropic ------------------------------------------------------------------------------
+def _check_plot(args: argparse.Namespace) -> None:
+    """Before any work: --plot needs matplotlib (the 'plot' extra)."""
+    if args.plot:
+        from ..extras import require
+
+        require("plot", "--plot")
+
+
 def run_isotropic(args: argparse.Namespace) -> int:
     from ..force import isotropic_force, isotropic_map
 
+    _check_plot(args)
     robot = Robot.load(args.robot)
     external = _external(robot, args.external)
     if args.at is not None:
@@ -272,6 +281,7 @@ def run_workspace(args: argparse.Namespace) -> int:
     from ..jobs.kinds.base import orientation_arg
     from ..jobs.kinds.workspace import WorkspaceParams
 
+    _check_plot(args)
     robot = Robot.load(args.robot)
     vals = parse_floats(args.box, "--box")
     if len(vals) % 2:

@@ -85,10 +85,12 @@ def _check_port(host: str, port: int) -> None:
 def run_serve(args: argparse.Namespace) -> int:
     import logging
 
+    from ..extras import require
+
+    require("service", "the service")
     import uvicorn
 
-    from api.app import create_app
-
+    from ..api.app import create_app
     from ..jobs import JobService, ServiceError
 
     if args.workers is not None and args.workers < 0:

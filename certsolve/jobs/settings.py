@@ -84,7 +84,7 @@ class ServiceSettings:
     @classmethod
     def from_env(cls, environ=None, **overrides) -> ServiceSettings:
         """Settings from ``CERTSOLVE_DATA_DIR``, ``CERTSOLVE_WORKERS``, ``CERTSOLVE_TEST_KINDS``
-        (for ``uvicorn api.app:create_app --factory``), then ``overrides``."""
+        (for ``uvicorn certsolve.api.app:create_app --factory``), then ``overrides``."""
         env = os.environ if environ is None else environ
         values: dict = {}
         if env.get("CERTSOLVE_DATA_DIR"):
