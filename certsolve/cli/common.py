@@ -171,20 +171,21 @@ def progress_reporter(
     if not enabled or not sys.stderr.isatty():
         return None, lambda: None
     describe = line or _solver_line(label)
-    shown = {"at": 0.0, "width": 0}
+    at, width = 0.0, 0  # when the line was last drawn, and how wide it was
 
     def update(p) -> None:
+        nonlocal at, width
         now = time.monotonic()
-        if now - shown["at"] < 0.125:
+        if now - at < 0.125:
             return
         text = describe(p)
-        sys.stderr.write("\r" + text.ljust(shown["width"]))
+        sys.stderr.write("\r" + text.ljust(width))
         sys.stderr.flush()
-        shown.update(at=now, width=len(text))
+        at, width = now, len(text)
 
     def stop() -> None:
-        if shown["width"]:
-            sys.stderr.write("\r" + " " * shown["width"] + "\r")
+        if width:
+            sys.stderr.write("\r" + " " * width + "\r")
             sys.stderr.flush()
 
     return update, stop

@@ -121,11 +121,11 @@ def run_batch(
         service = JobService(settings.with_(data_dir=Path(tmp)))
         pending: dict[str, tuple[int, str]] = {}
         try:
-            with out.open("a", encoding="utf-8") as fh:
+            with out.open("a", encoding="utf-8") as text_out:
 
                 def emit(line: str) -> None:
-                    fh.write(line + "\n")
-                    fh.flush()
+                    text_out.write(line + "\n")
+                    text_out.flush()
 
                 chunk = []
                 for number, raw in enumerate(text.splitlines(), 1):

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from pydantic import ValidationError
@@ -66,7 +67,7 @@ def _field(loc: list) -> str:
     return ".".join(str(p) for p in parts)
 
 
-def validation_details(errors: list[dict], prefix: tuple = ()) -> list[dict]:
+def validation_details(errors: Sequence[Mapping[str, Any]], prefix: tuple = ()) -> list[dict]:
     """pydantic / FastAPI error dicts -> ``{"loc", "field", "msg", "type"}`` dicts."""
     out = []
     for e in errors:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import logging
 import os
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Any
@@ -69,7 +70,7 @@ class BatchError(ValueError):
         return self.message
 
 
-_ONE_OF = [
+_ONE_OF: list[Any] = [
     {
         "required": ["jobs"],
         "not": {"anyOf": [{"required": [k]} for k in ("kind", "robot", "system", "params")]},
@@ -81,7 +82,7 @@ _ONE_OF = [
 class BatchRequest(BaseModel):
     """Either ``jobs`` (full job requests) or one ``kind`` + input with a ``params`` list."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"oneOf": _ONE_OF})
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"oneOf": _ONE_OF})  # type: ignore[dict-item]
     jobs: list[dict[str, Any]] | None = Field(
         default=None, min_length=1, description="job requests, each as for POST /v1/jobs"
     )
@@ -257,6 +258,7 @@ class JobService:
             raise BatchError(f"{len(items)} jobs in one batch; at most {most}", too_large=True)
         reqs, details = [], []
         for i, item in enumerate(items):
+            prefix: tuple = ()
             if batch.jobs is not None:
                 data, prefix = item, ("jobs", i)
             else:
@@ -267,13 +269,12 @@ class JobService:
                     data["system"] = batch.system
                 if batch.limits is not None:
                     data["limits"] = batch.limits.model_dump()
-                prefix = ()
             try:
                 req = self.validate(data)
                 self.limits_for(req)
                 reqs.append(req)
             except ValidationError as exc:
-                errs = exc.errors()
+                errs: list[Mapping[str, Any]] = list(exc.errors())
                 if batch.jobs is None:  # params errors belong to params[i]
                     errs = [_sweep_item(e, i) for e in errs]
                 details.extend(validation_details(errs, prefix))
@@ -320,7 +321,7 @@ class JobService:
         }
 
 
-def _sweep_item(e: dict, i: int) -> dict:
+def _sweep_item(e: Mapping[str, Any], i: int) -> Mapping[str, Any]:
     """An error of the i-th job of a sweep batch, placed at ``params[i]``."""
     loc = tuple(e.get("loc", ()))
     if loc[1:2] == ("params",):

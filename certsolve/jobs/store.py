@@ -17,6 +17,7 @@ Nothing here imports numpy or the solver.
 
 from __future__ import annotations
 
+import builtins
 import json
 import os
 import secrets
@@ -197,7 +198,7 @@ class JobStore:
         return str(self._conn().execute("PRAGMA journal_mode").fetchone()[0]).lower()
 
     # -- submitting -----------------------------------------------------------------------------
-    def add(self, jobs: Iterable[NewJob], *, max_queued: int | None = None) -> list[str]:
+    def add(self, jobs: Iterable[NewJob], *, max_queued: int | None = None) -> builtins.list[str]:
         """Queue jobs atomically (all or none); :class:`QueueFull` beyond ``max_queued``."""
         jobs = list(jobs)
         now = time.time()
@@ -253,9 +254,10 @@ class JobStore:
         limit: int = 50,
         cursor: int | None = None,
         oldest_first: bool = False,
-    ) -> tuple[list[JobRow], int | None]:
+    ) -> tuple[builtins.list[JobRow], int | None]:
         """One page of jobs (newest first unless ``oldest_first``) and the next cursor."""
-        where, args = [], []
+        where: builtins.list[str] = []
+        args: builtins.list[Any] = []
         for col, val in (("status", status), ("kind", kind), ("batch", batch)):
             if val is not None:
                 where.append(f"{col} = ?")
@@ -284,7 +286,7 @@ class JobStore:
             out[JobStatus(status)] = n
         return out
 
-    def running(self) -> list[JobRow]:
+    def running(self) -> builtins.list[JobRow]:
         rows = (
             self._conn()
             .execute(
@@ -295,7 +297,7 @@ class JobStore:
         )
         return [JobRow._from(r) for r in rows]
 
-    def finished_since(self, fseq: int, *, limit: int = 500) -> list[JobRow]:
+    def finished_since(self, fseq: int, *, limit: int = 500) -> builtins.list[JobRow]:
         """Jobs that reached a final status after the one numbered ``fseq``, with results,
         in the order they finished (the batch runner's output loop)."""
         rows = (
@@ -409,7 +411,7 @@ class JobStore:
         *,
         worker_pids: Iterable[int] | None = None,
         count_attempt: bool = True,
-    ) -> list[tuple[str, JobStatus]]:
+    ) -> builtins.list[tuple[str, JobStatus]]:
         """Running jobs whose worker is gone (all running jobs if ``worker_pids`` is None).
 
         Each is re-queued if it has attempts left, failed with ``reason`` otherwise, and
@@ -433,7 +435,8 @@ class JobStore:
                 if not count_attempt:
                     attempts = max(0, attempts - 1)
                 if cancel_at is not None:
-                    status, error = JobStatus.CANCELLED, f"cancelled ({reason})"
+                    status = JobStatus.CANCELLED
+                    error: str | None = f"cancelled ({reason})"
                 elif attempts < max_attempts:
                     status = JobStatus.QUEUED
                     error = f"attempt {attempts} interrupted: {reason}" if count_attempt else None

@@ -178,7 +178,7 @@ def run_job(
     status, text, error = JobStatus.FAILED, None, None
     old_limit = None
     try:
-        req = request_adapter(True).validate_json(job.request)
+        req = request_adapter(True).validate_json(job.request or "")
         kind = KINDS[req.kind]
         if not kind.has_max_boxes:
             monitor.max_boxes = limits.get("max_boxes")
