@@ -12,7 +12,13 @@ from fastapi import APIRouter, Body, Path, Query, Request
 from fastapi.responses import JSONResponse, Response
 
 from certsolve.jobs.jsonutil import dumps
-from certsolve.jobs.service import BatchError, LimitError, job_record
+from certsolve.jobs.service import (
+    BatchError,
+    LimitError,
+    NoResult,
+    NoSuchJob,
+    job_record,
+)
 from certsolve.jobs.status import JobStatus
 from certsolve.jobs.store import JobRow, QueueFull
 
@@ -141,14 +147,12 @@ def router(job_request: Any) -> APIRouter:
     )
     def get_result(job_id: _ID, service: Service):
         """Only the result (the library's JSON); 409 while the job has none."""
-        found = service.store.result_text(job_id)
-        if found is None:
-            raise APIError(404, f"no job {job_id}")
-        status, text = found
-        if text is None:
-            row = service.store.get(job_id, result=False)
-            why = f": {row.error}" if row is not None and row.error else ""
-            raise APIError(409, f"job {job_id} is {status} and has no result{why}")
+        try:
+            text = service.result_text(job_id)
+        except NoSuchJob as exc:
+            raise APIError(404, str(exc)) from None
+        except NoResult as exc:
+            raise APIError(409, str(exc)) from None
         return Response(text, media_type="application/json")
 
     @r.delete(
@@ -172,16 +176,11 @@ def router(job_request: Any) -> APIRouter:
     )
     def get_batch(batch_id: _ID, request: Request, service: Service):
         """How many jobs of a batch are in each status."""
-        counts = service.store.counts(batch=batch_id)
-        total = sum(counts.values())
-        if total == 0:
-            raise APIError(404, f"no batch {batch_id}")
-        return {
-            "batch": batch_id,
-            "total": total,
-            "counts": counts,
-            "finished": not any(n for s, n in counts.items() if not s.final),
-            "jobs_url": str(request.url_for("list_jobs").include_query_params(batch=batch_id)),
-        }
+        try:
+            status = service.batch_status(batch_id)
+        except NoSuchJob as exc:
+            raise APIError(404, str(exc)) from None
+        jobs_url = request.url_for("list_jobs").include_query_params(batch=batch_id)
+        return {**status, "jobs_url": str(jobs_url)}
 
     return r

@@ -34,6 +34,8 @@ __all__ = [
     "BatchRequest",
     "JobService",
     "LimitError",
+    "NoResult",
+    "NoSuchJob",
     "ServiceError",
     "job_record",
     "iso_time",
@@ -55,6 +57,14 @@ class LimitError(ValueError):
 
     def __str__(self) -> str:
         return f"{self.field}: {self.message}"
+
+
+class NoSuchJob(LookupError):
+    """No job (or batch) with that id."""
+
+
+class NoResult(Exception):
+    """The job has no result (yet): queued, running, failed, or cancelled before it ran."""
 
 
 @dataclass
@@ -303,6 +313,27 @@ class JobService:
 
     def cancel(self, job_id: str) -> JobRow | None:
         return self.store.request_cancel(job_id)
+
+    def result_text(self, job_id: str) -> str:
+        """The stored result (JSON text); :class:`NoSuchJob`, or :class:`NoResult` saying why."""
+        found = self.store.result_text(job_id)
+        if found is None:
+            raise NoSuchJob(f"no job {job_id}")
+        status, text = found
+        if text is None:
+            row = self.store.get(job_id, result=False)
+            why = f": {row.error}" if row is not None and row.error else ""
+            raise NoResult(f"job {job_id} is {status} and has no result{why}")
+        return text
+
+    def batch_status(self, batch_id: str) -> dict[str, Any]:
+        """How many jobs of a batch are in each status; :class:`NoSuchJob` if none."""
+        counts = self.store.counts(batch=batch_id)
+        total = sum(counts.values())
+        if total == 0:
+            raise NoSuchJob(f"no batch {batch_id}")
+        finished = all(n == 0 for status, n in counts.items() if not status.final)
+        return {"batch": batch_id, "total": total, "counts": counts, "finished": finished}
 
     def health(self) -> dict[str, Any]:
         counts = self.store.counts()
