@@ -46,6 +46,7 @@ if TYPE_CHECKING:
     from .ik import IkCall, IkJob, IkParams, call_ik
     from .isotropic_map import (
         MAX_GRID_POINTS,
+        MAX_GRID_SIDE,
         IsotropicCall,
         IsotropicMapJob,
         IsotropicMapParams,
@@ -80,6 +81,7 @@ _WHERE = {
     "IkParams": ".ik",
     "call_ik": ".ik",
     "MAX_GRID_POINTS": ".isotropic_map",
+    "MAX_GRID_SIDE": ".isotropic_map",
     "IsotropicCall": ".isotropic_map",
     "IsotropicMapJob": ".isotropic_map",
     "IsotropicMapParams": ".isotropic_map",
@@ -112,6 +114,7 @@ __all__ = [
     "Kind",
     "KindUnavailable",
     "MAX_GRID_POINTS",
+    "MAX_GRID_SIDE",
     "MAX_SYSTEM_CHARS",
     "MAX_VARIABLES",
     "Params",
