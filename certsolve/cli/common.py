@@ -97,8 +97,6 @@ def validated(
     """
     from pydantic import ValidationError
 
-    from ..jobs.errors import validation_details
-
     option = option or {}
     data = {}
     for name in model.model_fields:  # type: ignore[attr-defined]
@@ -115,6 +113,8 @@ def validated(
         if robot is not None:
             params.check_robot(robot)
     except ValidationError as exc:
+        from ..jobs.errors import validation_details  # (imports every kind: errors only)
+
         details = validation_details(exc.errors())
         parts = [f"{_where(d['loc'], args, option)}: {d['msg']}" for d in details[:3]]
         raise CliError("; ".join(parts)) from None
