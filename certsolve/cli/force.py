@@ -17,7 +17,7 @@ import sys
 import numpy as np
 
 from ..robot import Robot, parse_pose
-from .common import CliError, parse_floats, print_json
+from .common import CliError, parse_floats, print_json, print_result
 
 
 def register(sub) -> None:
@@ -199,13 +199,7 @@ def run_isotropic(args: argparse.Namespace) -> int:
         from ..force.plots import plot_map
 
         plot_map(res, args.plot, vmax=args.vmax)
-    if args.json:
-        out = res.to_dict()
-        if args.plot:
-            out["plot"] = args.plot
-        print_json(out)
-    else:
-        print(format_map(res, args.plot))
+    print_result(args.json, res, lambda: format_map(res, args.plot), plot=args.plot)
     return 0
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..plotting import pyplot
 from .certified import CertifiedWorkspace
 from .maps import IsotropicMap
 
@@ -19,12 +20,7 @@ __all__ = ["plot_map", "plot_maps", "plot_paving"]
 
 
 def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    return pyplot()
 
 
 def _draw_map(ax, res: IsotropicMap, vmax=None, title=None, cmap="jet", colorbar=True):
