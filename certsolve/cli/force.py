@@ -1,7 +1,8 @@
 """``certsolve isotropic`` and ``certsolve workspace``: force indexes (Krut et al. 2004).
 
-* ``certsolve isotropic ROBOT --at x,y[,z,...]``: the maximum isotropic force at one pose and
-  the force polytope's facets;
+* ``certsolve isotropic ROBOT --at x,y[,z,...] [--plot pose.png] [--ellipse]``: the maximum
+  isotropic force at one pose and the force polytope's facets, optionally drawn as in the
+  paper's Fig. 4 (:mod:`certsolve.force.picture`);
 * ``certsolve isotropic ROBOT --grid xmin,xmax,ymin,ymax[,nx,ny] [--plot map.png]``: the index
   over a grid of positions (fixed orientation), optionally drawn as a heat map;
 * ``certsolve workspace ROBOT --min-force F --box ... --eps E [--plot paving.png]``: the
@@ -56,7 +57,13 @@ def register(sub) -> None:
     p.add_argument(
         "--ellipse", action="store_true", help="with --at: also the largest centred ellipse"
     )
-    p.add_argument("--plot", metavar="PNG", default=None, help="heat map of the grid (PNG)")
+    p.add_argument(
+        "--plot",
+        metavar="PNG",
+        default=None,
+        help="with --grid: heat map; with --at: the force polytope, isotropic circle (three "
+        "sections through the centre for dof 6), centre and --ellipse (PNG)",
+    )
     p.add_argument("--vmax", type=float, default=None, help="top of the colour scale (N)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run_isotropic)
@@ -157,7 +164,7 @@ def run_isotropic(args: argparse.Namespace) -> int:
     robot = Robot.load(args.robot)
     external = _external(robot, args.external)
     if args.at is not None:
-        for opt in ("z", "orientation", "plot"):
+        for opt in ("z", "orientation", "vmax"):
             if getattr(args, opt) is not None:
                 raise CliError(f"--{opt} goes with --grid (with --at, put angles in the pose)")
         try:
@@ -170,10 +177,12 @@ def run_isotropic(args: argparse.Namespace) -> int:
             )
         except ValueError as exc:
             raise CliError(f"--algorithm {args.algorithm}: {exc}") from None
-        if args.json:
-            print_json(res.to_dict())
-        else:
-            print(format_isotropic(res))
+        if args.plot:
+            from ..force.picture import force_picture
+            from ..force.plots import plot_force_picture
+
+            plot_force_picture(force_picture(res), args.plot)
+        print_result(args.json, res, lambda: format_isotropic(res, args.plot), plot=args.plot)
         return 0
 
     vals = parse_floats(args.grid, "--grid")
@@ -203,7 +212,7 @@ def run_isotropic(args: argparse.Namespace) -> int:
     return 0
 
 
-def format_isotropic(res) -> str:
+def format_isotropic(res, plot: str | None = None) -> str:
     where = ", ".join(f"{v:g}" for v in res.pose)
     lines = [
         f"{res.robot} at ({where}): maximum isotropic force {_fmt(res.isotropic_force)} N "
@@ -240,6 +249,8 @@ def format_isotropic(res) -> str:
             vv = "-" if np.isnan(v[k]).any() else ", ".join(f"{t: .6g}" for t in v[k])
             lines.append(f"    n = ({n})  d = {poly.offsets[k]: .6g}  v = ({vv})")
     lines.append(f"  {res.algorithm}, {1e3 * res.time:.2f} ms")
+    if plot:
+        lines.append(f"  wrote {plot}")
     return "\n".join(lines)
 
 

@@ -1,4 +1,5 @@
-"""Pictures: isotropic-force heat maps (Fig. 9/10 style) and certified pavings.
+"""Pictures: isotropic-force heat maps (Fig. 9/10 style), certified pavings, and the force
+polytope at one pose with its isotropic circle and ellipse (Fig. 4 style).
 
 matplotlib is imported lazily with the non-interactive ``Agg`` backend.  Heat maps draw the
 region ``f_min < 0`` (and degenerate poses) in white as in the paper, the contour
@@ -15,8 +16,9 @@ import numpy as np
 from ..plotting import pyplot
 from .certified import CertifiedWorkspace
 from .maps import IsotropicMap
+from .picture import ForcePicture
 
-__all__ = ["plot_map", "plot_maps", "plot_paving"]
+__all__ = ["plot_map", "plot_maps", "plot_paving", "plot_force_picture"]
 
 
 def _plt():
@@ -163,6 +165,105 @@ def plot_paving(ws: CertifiedWorkspace, path=None, title=None, anchors=None, z=N
         frameon=False,
     )
     fig.tight_layout()
+    if path is not None:
+        fig.savefig(Path(path))
+        plt.close(fig)
+    return fig
+
+
+def _fmt_vec(v) -> str:
+    return "(" + ", ".join(f"{x + 0.0:.4g}" for x in v) + ")"  # + 0.0: no "-0"
+
+
+def _panel_points(panel) -> np.ndarray:
+    pts = [panel.centre[None], panel.origin[None]]
+    if panel.polygon is not None:
+        pts.append(panel.polygon)
+    if panel.radius is not None:
+        pts.append(panel.centre[None] + panel.radius * np.array([[-1, -1], [1, 1]]))
+    if panel.ellipse is not None:
+        pts.append(panel.ellipse)
+    return np.concatenate(pts)
+
+
+def _draw_panel(ax, pic: ForcePicture, panel, half: float):
+    from matplotlib.patches import Circle, Polygon
+
+    handles = []
+    if panel.polygon is not None:
+        what = "force polytope" if pic.dof == 2 else "force section F(μ)"
+        facets = f", {pic.n_facets} facets" if pic.n_facets is not None else ""
+        patch = Polygon(
+            panel.polygon, closed=True, facecolor="#cfe3f3", edgecolor="#1f4e79", lw=1.2,
+            label=f"{what}{facets}",
+        )  # fmt: skip
+        ax.add_patch(patch)
+        handles.append(patch)
+    if panel.radius is not None:
+        what = "isotropic force (sphere)" if pic.dof == 6 else "isotropic force"
+        circle = Circle(
+            panel.centre, panel.radius, fill=False, edgecolor="#c0392b", lw=1.6,
+            label=f"{what} {panel.radius:.5g} N",
+        )  # fmt: skip
+        ax.add_patch(circle)
+        handles.append(circle)
+    if panel.ellipse is not None:
+        semi = pic.ellipse_semi_axes if pic.dof == 6 else panel.ellipse_semi_axes
+        what = "ellipsoid" if pic.dof == 6 else "ellipse"
+        (line,) = ax.plot(
+            panel.ellipse[:, 0], panel.ellipse[:, 1], "--", color="#27ae60", lw=1.3,
+            label=f"{what}, semi-axes " + ", ".join(f"{v:.4g}" for v in semi) + " N",
+        )  # fmt: skip
+        handles.append(line)
+    (c,) = ax.plot(
+        *panel.centre, "x", color="#c0392b", ms=8, mew=2,
+        label=f"centre −w_ext {_fmt_vec(pic.centre)} N",
+    )  # fmt: skip
+    (o,) = ax.plot(*panel.origin, "+", color="k", ms=9, label="zero force")
+    handles += [c, o]
+    if panel.polygon is None:
+        ax.text(
+            0.5, 0.8, "no force polytope to draw:\nempty or flat at this pose",
+            transform=ax.transAxes, ha="center", fontsize=9,
+        )  # fmt: skip
+    mid = 0.5 * (_panel_points(panel).min(axis=0) + _panel_points(panel).max(axis=0))
+    ax.set_xlim(mid[0] - half, mid[0] + half)
+    ax.set_ylim(mid[1] - half, mid[1] + half)
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.3)
+    ax.set_xlabel(f"{panel.axes[0]} (N)")
+    ax.set_ylabel(f"{panel.axes[1]} (N)")
+    if panel.plane:
+        ax.set_title(f"section {panel.plane.replace('-0 N', '0 N')}", fontsize=9)
+    return handles
+
+
+def plot_force_picture(pic: ForcePicture, path=None, title=None):
+    """The force polytope, isotropic circle, centre and ellipse at one pose (Krut Fig. 4).
+
+    Planar robots: one panel; dof 6: the three sections through the centre side by side, on
+    one scale.  Values are in the legend.  Saved as PNG if ``path`` is given.  Returns the
+    figure.
+    """
+    plt = _plt()
+    n = len(pic.panels)
+    fig, axes = plt.subplots(1, n, figsize=(4.6 * n, 5.4), dpi=120, squeeze=False)
+    spans = [np.ptp(_panel_points(p), axis=0).max() for p in pic.panels]
+    big = max(spans)
+    half = 0.54 * big if big > 1e-6 else 1.0
+    handles = []
+    for ax, panel in zip(axes[0], pic.panels):
+        handles = _draw_panel(ax, pic, panel, half)
+    if title is None:
+        pose = ", ".join(f"{v + 0.0:g}" for v in pic.pose)
+        f = "n/a" if pic.isotropic_force is None else f"{pic.isotropic_force:.5g} N"
+        title = f"{pic.robot} at ({pose}): maximum isotropic force {f} [{pic.status}]"
+    fig.suptitle(title, fontsize=10)
+    fig.legend(
+        handles=handles, loc="lower center", ncol=2 if n == 1 else 3, fontsize=8,
+        frameon=False,
+    )  # fmt: skip
+    fig.tight_layout(rect=(0, 0.17 if n == 1 else 0.1, 1, 1))
     if path is not None:
         fig.savefig(Path(path))
         plt.close(fig)
