@@ -7,6 +7,7 @@ its parser and sets ``func`` (called with the parsed arguments, returns an exit 
 * :mod:`.fk`      -- ``certsolve fk ROBOT --u ...`` (forward kinematics, all solutions; tracking)
 * :mod:`.ik`      -- ``certsolve ik ROBOT --pose ...``
 * :mod:`.force`   -- ``certsolve isotropic`` and ``certsolve workspace``
+* :mod:`.design`  -- ``certsolve design SPEC.json`` (certified design of the force index)
 * :mod:`.service` -- ``certsolve serve``, ``batch``, ``submit``, ``status``, ``result``
 * :mod:`.schema`  -- ``certsolve schema robot`` (JSON Schema of robot files)
 
@@ -19,12 +20,12 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import fk, force, ik, schema, service, solve
+from . import design, fk, force, ik, schema, service, solve
 from .common import CliError, user_errors
 
 __all__ = ["main", "build_parser", "CliError"]
 
-_MODULES = (solve, fk, ik, force, service, schema)
+_MODULES = (solve, fk, ik, force, design, service, schema)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -14,6 +14,7 @@ __all__ = [
     "print_json",
     "print_result",
     "progress_reporter",
+    "status_line",
 ]
 
 
@@ -87,3 +88,23 @@ def progress_reporter(enabled: bool, label: str = "solving"):
         )
 
     return update, live.stop
+
+
+def status_line(enabled: bool, text: Callable[[Any], str]):
+    """A progress callback rewriting one line on stderr with ``text(progress)``, and a
+    function that clears it; ``(None, no-op)`` when disabled or stderr is not a terminal."""
+    if not enabled or not sys.stderr.isatty():
+        return None, lambda: None
+    width = [0]
+
+    def update(p):
+        line = text(p)
+        width[0] = max(width[0], len(line))
+        sys.stderr.write("\r" + line.ljust(width[0]))
+        sys.stderr.flush()
+
+    def stop():
+        sys.stderr.write("\r" + " " * width[0] + "\r")
+        sys.stderr.flush()
+
+    return update, stop

@@ -13,12 +13,11 @@ from __future__ import annotations
 
 import argparse
 import re
-import sys
 
 import numpy as np
 
 from ..robot import Robot, parse_pose
-from .common import CliError, parse_floats, print_json, print_result
+from .common import CliError, parse_floats, print_json, print_result, status_line
 
 
 def register(sub) -> None:
@@ -337,18 +336,10 @@ def format_workspace(ws, plot) -> str:
 
 
 def _progress(enabled: bool):
-    if not enabled or not sys.stderr.isatty():
-        return None, lambda: None
-
-    def update(p):
-        sys.stderr.write(
-            f"\rpaving: {p.boxes} boxes, {p.pending} pending, {p.inside} inside, "
-            f"{100 * p.inside_share:.1f} % proven, {p.elapsed:.1f} s   "
-        )
-        sys.stderr.flush()
-
-    def stop():
-        sys.stderr.write("\r" + " " * 78 + "\r")
-        sys.stderr.flush()
-
-    return update, stop
+    return status_line(
+        enabled,
+        lambda p: (
+            f"paving: {p.boxes} boxes, {p.pending} pending, {p.inside} inside, "
+            f"{100 * p.inside_share:.1f} % proven, {p.elapsed:.1f} s"
+        ),
+    )

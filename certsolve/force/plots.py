@@ -1,5 +1,6 @@
-"""Pictures: isotropic-force heat maps (Fig. 9/10 style), certified pavings, and the force
-polytope at one pose with its isotropic circle and ellipse (Fig. 4 style).
+"""Pictures: isotropic-force heat maps (Fig. 9/10 style), certified pavings, the force
+polytope at one pose with its isotropic circle and ellipse (Fig. 4 style), and pavings of
+design parameters.
 
 matplotlib is imported lazily with the non-interactive ``Agg`` backend.  Heat maps draw the
 region ``f_min < 0`` (and degenerate poses) in white as in the paper, the contour
@@ -15,10 +16,11 @@ import numpy as np
 
 from ..plotting import pyplot
 from .certified import CertifiedWorkspace
+from .design import DesignResult
 from .maps import IsotropicMap
 from .picture import ForcePicture
 
-__all__ = ["plot_map", "plot_maps", "plot_paving", "plot_force_picture"]
+__all__ = ["plot_map", "plot_maps", "plot_paving", "plot_force_picture", "plot_design"]
 
 
 def _plt():
@@ -264,6 +266,81 @@ def plot_force_picture(pic: ForcePicture, path=None, title=None):
         frameon=False,
     )  # fmt: skip
     fig.tight_layout(rect=(0, 0.17 if n == 1 else 0.1, 1, 1))
+    if path is not None:
+        fig.savefig(Path(path))
+        plt.close(fig)
+    return fig
+
+
+def plot_design(res: DesignResult, path=None, axes=(0, 1), title=None):
+    """The paving of the design parameters: good green, bad grey, undecided orange, pending
+    blue, the best box outlined with its centre starred.
+
+    Two parameters: the plane of the parameters.  More: the **projection** onto the
+    parameters ``axes``: a point is painted in a class when some box of that class covers
+    it for some value of the other parameters (good drawn last, on top).  Saved as PNG if
+    ``path`` is given.  Returns the figure.
+    """
+    plt = _plt()
+    from matplotlib.collections import PatchCollection
+    from matplotlib.patches import Patch, Rectangle
+
+    i, j = axes
+    k = len(res.names)
+    fig, ax = plt.subplots(figsize=(6.4, 5.8), dpi=120)
+    styles = [
+        ("bad", "#bdbdbd", "proven bad"),
+        ("pending", "#8ecae6", "not processed"),
+        ("undecided", "#ff9f1c", "undecided (< eps)"),
+        ("good", "#2a9d8f", "proven good"),
+    ]
+    handles = []
+    for key, color, label in styles:
+        boxes = getattr(res, key)
+        if len(boxes) == 0:
+            continue
+        rects = [Rectangle((b[i, 0], b[j, 0]), b[i, 1] - b[i, 0], b[j, 1] - b[j, 0]) for b in boxes]
+        pc = PatchCollection(
+            rects, facecolor=color, edgecolor="k" if len(rects) < 3000 else color, linewidth=0.2
+        )
+        ax.add_collection(pc)
+        share = 100 * res.share(key)
+        handles.append(
+            Patch(facecolor=color, edgecolor="k", label=f"{label}: {len(boxes)} ({share:.1f} %)")
+        )
+    if res.best is not None:
+        b = res.good[res.best]
+        ax.add_patch(
+            Rectangle(
+                (b[i, 0], b[j, 0]), b[i, 1] - b[i, 0], b[j, 1] - b[j, 0], fill=False,
+                edgecolor="#c0392b", lw=2.0,
+            )
+        )  # fmt: skip
+        c = 0.5 * (b[:, 0] + b[:, 1])
+        (star,) = ax.plot(
+            c[i], c[j], "*", color="#c0392b", ms=12,
+            label=f"best: margin {res.margin[res.best]:.4g} N "
+            f"(f ≥ {res.min_force + res.margin[res.best]:.4g} N)",
+        )  # fmt: skip
+        handles.append(star)
+    ax.set_xlim(*res.ranges[i])
+    ax.set_ylim(*res.ranges[j])
+    ax.set_xlabel(f"{res.names[i]}  ({res.paths[i]})")
+    ax.set_ylabel(f"{res.names[j]}  ({res.paths[j]})")
+    ws = ", ".join(f"[{lo:g}, {hi:g}]" for lo, hi in res.workspace)
+    if title is None:
+        title = f"{res.robot}: f_min ≥ {res.min_force:g} N on the workspace {ws} cm"
+        if k > 2:
+            others = ", ".join(n for m, n in enumerate(res.names) if m not in (i, j))
+            title += f"\nprojection onto ({res.names[i]}, {res.names[j]}) over {others}"
+        if res.status != "complete":
+            title += f" [{res.status}]"
+    ax.set_title(title, fontsize=9)
+    ax.legend(
+        handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, fontsize=8,
+        frameon=False,
+    )  # fmt: skip
+    fig.tight_layout()
     if path is not None:
         fig.savefig(Path(path))
         plt.close(fig)
