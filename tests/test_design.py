@@ -296,3 +296,10 @@ def test_slack_enclosures_with_interval_robots(path, params, centre, pose):
             assert np.all(f >= F + np.min(glo / nhi) - 1e-9)
         else:
             assert np.all(f < F)
+
+
+def test_cli_help_default_matches_the_library():
+    from certsolve.cli import design as cli_design
+    from certsolve.force.design_spec import DEFAULT_EPS
+
+    assert cli_design.DEFAULT_EPS == DEFAULT_EPS

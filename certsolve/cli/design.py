@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 
-import numpy as np
-
-from ..force.design_spec import DEFAULT_EPS
 from .common import CliError, parse_floats, print_json, status_line
+
+DEFAULT_EPS = 1 / 16  # = certsolve.force.design_spec.DEFAULT_EPS, without importing it here
 
 
 def register(sub) -> None:
@@ -59,7 +59,7 @@ def register(sub) -> None:
         metavar="I,J",
         default="1,2",
         help="with --plot and more than two parameters: the two parameters drawn (1-based; "
-        "the picture is the projection onto them; default 1,2)",
+        "the picture is the section through the centre of the best box; default 1,2)",
     )
     p.add_argument(
         "--emit-robot",
@@ -87,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
     from ..force.design_spec import load_design_spec
 
     for flag, val in (("--eps", args.eps), ("--workspace-eps", args.workspace_eps)):
-        if val is not None and not (np.isfinite(val) and val > 0):
+        if val is not None and not (math.isfinite(val) and val > 0):
             raise CliError(f"{flag} must be a positive number")
     if args.eps is not None and args.eps > 1:
         raise CliError("--eps is a fraction of each parameter range: at most 1")

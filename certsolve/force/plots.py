@@ -272,13 +272,14 @@ def plot_force_picture(pic: ForcePicture, path=None, title=None):
     return fig
 
 
-def plot_design(res: DesignResult, path=None, axes=(0, 1), title=None):
+def plot_design(res: DesignResult, path=None, axes=(0, 1), at=None, title=None):
     """The paving of the design parameters: good green, bad grey, undecided orange, pending
     blue, the best box outlined with its centre starred.
 
-    Two parameters: the plane of the parameters.  More: the **projection** onto the
-    parameters ``axes``: a point is painted in a class when some box of that class covers
-    it for some value of the other parameters (good drawn last, on top).  Saved as PNG if
+    Two parameters: the plane of the parameters.  More: the **section** through the values
+    ``at`` (a ``(k,)`` array; default the centre of the best box, or the middle of the
+    ranges) of the parameters other than ``axes``: the boxes whose ranges contain them, so
+    every point of the picture shows the class of the box holding it.  Saved as PNG if
     ``path`` is given.  Returns the figure.
     """
     plt = _plt()
@@ -295,8 +296,15 @@ def plot_design(res: DesignResult, path=None, axes=(0, 1), title=None):
         ("good", "#2a9d8f", "proven good"),
     ]
     handles = []
+    others = [m for m in range(k) if m not in (i, j)]
+    if at is None:
+        best = res.best_box
+        at = (best if best is not None else res.ranges).mean(axis=1)
+    at = np.asarray(at, dtype=float)
     for key, color, label in styles:
         boxes = getattr(res, key)
+        for m in others:
+            boxes = boxes[(boxes[:, m, 0] <= at[m]) & (at[m] <= boxes[:, m, 1])]
         if len(boxes) == 0:
             continue
         rects = [Rectangle((b[i, 0], b[j, 0]), b[i, 1] - b[i, 0], b[j, 1] - b[j, 0]) for b in boxes]
@@ -304,11 +312,13 @@ def plot_design(res: DesignResult, path=None, axes=(0, 1), title=None):
             rects, facecolor=color, edgecolor="k" if len(rects) < 3000 else color, linewidth=0.2
         )
         ax.add_collection(pc)
-        share = 100 * res.share(key)
+        n_all, share = len(getattr(res, key)), 100 * res.share(key)
         handles.append(
-            Patch(facecolor=color, edgecolor="k", label=f"{label}: {len(boxes)} ({share:.1f} %)")
+            Patch(facecolor=color, edgecolor="k", label=f"{label}: {n_all} ({share:.1f} %)")
         )
-    if res.best is not None:
+    if res.best is not None and all(
+        res.good[res.best][m, 0] <= at[m] <= res.good[res.best][m, 1] for m in others
+    ):
         b = res.good[res.best]
         ax.add_patch(
             Rectangle(
@@ -331,8 +341,8 @@ def plot_design(res: DesignResult, path=None, axes=(0, 1), title=None):
     if title is None:
         title = f"{res.robot}: f_min ≥ {res.min_force:g} N on the workspace {ws} cm"
         if k > 2:
-            others = ", ".join(n for m, n in enumerate(res.names) if m not in (i, j))
-            title += f"\nprojection onto ({res.names[i]}, {res.names[j]}) over {others}"
+            where = ", ".join(f"{res.names[m]} = {at[m]:.4g}" for m in others)
+            title += f"\nsection at {where}"
         if res.status != "complete":
             title += f" [{res.status}]"
     ax.set_title(title, fontsize=9)
