@@ -8,7 +8,8 @@ Prints medians (and min/max) over ``--repeat`` runs:
   (200 x 200 for the planar robots, 100 x 100 at z = 107 cm for MARIONET), vectorised;
 * a single pose: :func:`isotropic_force` (with the polytope's facets and, for dof 6, the
   hull of the force section);
-* certified workspaces: time, boxes processed and proven share at two ``eps`` values.
+* certified workspaces: time, boxes processed and proven share at two ``eps`` values;
+* certified design (krut-3, two parameters): time, pairs, shares at three ``eps`` values.
 """
 
 from __future__ import annotations
@@ -110,6 +111,28 @@ def bench_workspace(repeat: int, quick: bool):
             )
 
 
+def bench_design(repeat: int, quick: bool):
+    """Certified design of Krut's 3-motor robot (examples/design/krut3-spec.json)."""
+    from certsolve.force.design import design
+
+    spec = ROBOTS.parent / "design" / "krut3-spec.json"
+    print("\ncertified design, krut-3: base half-width x tau_max, F = 150 N on [-20, 20]^2")
+    print(
+        f"{'eps':>6} {'ws eps':>7} {'time s, median (min-max)':>27} {'pairs':>8} "
+        f"{'boxes':>6} {'good %':>7} {'bad %':>6} {'undec. %':>8}"
+    )
+    settings = [(1 / 16, 2.5), (1 / 32, 1.25)] + ([] if quick else [(1 / 64, 0.625)])
+    for eps, weps in settings:
+        res, ts = timed(
+            lambda e=eps, w=weps: design(spec=spec, eps=e, workspace_eps=w), 1 if quick else 3
+        )
+        print(
+            f"{eps:6.4f} {weps:7g} {fmt_times(ts):>27} {res.pairs:8d} {res.parameter_boxes:6d} "
+            f"{100 * res.share('good'):7.1f} {100 * res.share('bad'):6.1f} "
+            f"{100 * res.share('undecided'):8.1f}"
+        )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5, help="runs per measurement (median)")
@@ -122,6 +145,7 @@ def main() -> None:
     bench_maps(args.repeat, args.quick)
     bench_single(args.repeat)
     bench_workspace(args.repeat, args.quick)
+    bench_design(args.repeat, args.quick)
 
 
 if __name__ == "__main__":

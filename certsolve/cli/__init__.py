@@ -7,6 +7,7 @@ parser(s) and sets ``func`` (called with the parsed arguments, returns an exit c
 * :mod:`.fk`      -- ``certsolve fk ROBOT --u ...`` (forward kinematics, all solutions; tracking)
 * :mod:`.ik`      -- ``certsolve ik ROBOT --pose ...``
 * :mod:`.force`   -- ``certsolve isotropic`` and ``certsolve workspace``
+* :mod:`.design`  -- ``certsolve design SPEC.json`` (certified design of the force index)
 * :mod:`.service` -- ``certsolve serve`` and ``batch`` (the job service on this machine)
 * :mod:`.remote`  -- ``certsolve submit``, ``status``, ``result``, ``cancel`` (a running service)
 * :mod:`.schema`  -- ``certsolve schema robot`` (JSON Schema of robot files)
@@ -61,6 +62,11 @@ COMMANDS: tuple[Command, ...] = (
         name="workspace",
         module="force",
         help="certified workspace where the maximum isotropic force is at least F",
+    ),
+    Command(
+        name="design",
+        module="design",
+        help="certified design: parameter boxes proven to give isotropic force >= F",
     ),
     Command(name="serve", module="service", help="run the HTTP job service"),
     Command(name="batch", module="service", help="run a JSON-lines file of jobs offline"),

@@ -24,6 +24,7 @@ __all__ = [
     "validated",
     "parse_floats",
     "print_json",
+    "print_result",
     "progress_reporter",
 ]
 
@@ -140,6 +141,17 @@ def parse_floats(text: str, what: str, count: int | None = None) -> list[float]:
 def print_json(obj: Any) -> None:
     json.dump(obj, sys.stdout, indent=2, allow_nan=False, default=_default)
     sys.stdout.write("\n")
+
+
+def print_result(as_json: bool, result: Any, text: Callable[[], str], **extra: Any) -> None:
+    """``--json``: ``result.to_dict()`` with the ``extra`` items that are not None (e.g. the
+    plot written); otherwise the readable report ``text()``."""
+    if as_json:
+        out = result.to_dict()
+        out.update({k: v for k, v in extra.items() if v is not None})
+        print_json(out)
+    else:
+        print(text())
 
 
 def _default(o):

@@ -1,7 +1,8 @@
 """``certsolve isotropic`` and ``certsolve workspace``: force indexes (Krut et al. 2004).
 
-* ``certsolve isotropic ROBOT --at x,y[,z,...]``: the maximum isotropic force at one pose and
-  the force polytope's facets;
+* ``certsolve isotropic ROBOT --at x,y[,z,...] [--plot pose.png] [--ellipse]``: the maximum
+  isotropic force at one pose and the force polytope's facets, optionally drawn as in the
+  paper's Fig. 4 (:mod:`certsolve.force.picture`);
 * ``certsolve isotropic ROBOT --grid xmin,xmax,ymin,ymax[,nx,ny] [--plot map.png]``: the index
   over a grid of positions (fixed orientation), optionally drawn as a heat map;
 * ``certsolve workspace ROBOT --min-force F --box ... --eps E [--plot paving.png]``: the
@@ -16,7 +17,7 @@ import re
 import numpy as np
 
 from ..robot import Pose, Robot
-from .common import CliError, parse_floats, print_json, progress_reporter, validated
+from .common import CliError, parse_floats, print_json, print_result, progress_reporter, validated
 
 
 def register(sub) -> None:
@@ -54,7 +55,13 @@ def register(sub) -> None:
     p.add_argument(
         "--ellipse", action="store_true", help="with --at: also the largest centred ellipse"
     )
-    p.add_argument("--plot", metavar="PNG", default=None, help="heat map of the grid (PNG)")
+    p.add_argument(
+        "--plot",
+        metavar="PNG",
+        default=None,
+        help="with --grid: heat map; with --at: the force polytope, isotropic circle (three "
+        "sections through the centre for dof 6), centre and --ellipse (PNG)",
+    )
     p.add_argument("--vmax", type=float, default=None, help="top of the colour scale (N)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run_isotropic)
@@ -163,7 +170,7 @@ def run_isotropic(args: argparse.Namespace) -> int:
     robot = Robot.load(args.robot)
     external = _external(robot, args.external)
     if args.at is not None:
-        for opt in ("z", "orientation", "plot"):
+        for opt in ("z", "orientation", "vmax"):
             if getattr(args, opt) is not None:
                 raise CliError(f"--{opt} goes with --grid (with --at, put angles in the pose)")
         from ..jobs.kinds.isotropic_map import PoseParams
@@ -181,10 +188,12 @@ def run_isotropic(args: argparse.Namespace) -> int:
             )
         except ValueError as exc:
             raise CliError(f"--algorithm {args.algorithm}: {exc}") from None
-        if args.json:
-            print_json(res.to_dict())
-        else:
-            print(format_isotropic(res))
+        if args.plot:
+            from ..force.picture import force_picture
+            from ..force.plots import plot_force_picture
+
+            plot_force_picture(force_picture(res), args.plot)
+        print_result(args.json, res, lambda: format_isotropic(res, args.plot), plot=args.plot)
         return 0
 
     vals = parse_floats(args.grid, "--grid")
@@ -210,17 +219,11 @@ def run_isotropic(args: argparse.Namespace) -> int:
         from ..force.plots import plot_map
 
         plot_map(res, args.plot, vmax=args.vmax)
-    if args.json:
-        out = res.to_dict()
-        if args.plot:
-            out["plot"] = args.plot
-        print_json(out)
-    else:
-        print(format_map(res, args.plot))
+    print_result(args.json, res, lambda: format_map(res, args.plot), plot=args.plot)
     return 0
 
 
-def format_isotropic(res) -> str:
+def format_isotropic(res, plot: str | None = None) -> str:
     where = ", ".join(f"{v:g}" for v in res.pose)
     lines = [
         f"{res.robot} at ({where}): maximum isotropic force {_fmt(res.isotropic_force)} N "
@@ -257,6 +260,8 @@ def format_isotropic(res) -> str:
             vv = "-" if np.isnan(v[k]).any() else ", ".join(f"{t: .6g}" for t in v[k])
             lines.append(f"    n = ({n})  d = {poly.offsets[k]: .6g}  v = ({vv})")
     lines.append(f"  {res.algorithm}, {1e3 * res.time:.2f} ms")
+    if plot:
+        lines.append(f"  wrote {plot}")
     return "\n".join(lines)
 
 

@@ -1,4 +1,8 @@
-"""``certsolve ik ROBOT --pose ...``: inverse kinematics (Merlet 2007, section II.A)."""
+"""``certsolve ik ROBOT --pose ...``: inverse kinematics (Merlet 2007, section II.A).
+
+``--sweep J=START:STOP:N`` follows the controls by continuation while ``u_J`` takes ``N``
+values from ``START`` to ``STOP`` (Fig. 3 of the paper; :mod:`certsolve.kinematics.ik_sweep`).
+"""
 
 from __future__ import annotations
 
@@ -7,8 +11,9 @@ import argparse
 import numpy as np
 
 from ..kinematics.ik import METHODS, IKResult, inverse_kinematics
+from ..kinematics.ik_sweep import MAX_POINTS, IKSweepResult, ik_sweep
 from ..robot import Pose, Robot, load_robot_spec
-from .common import CliError, parse_floats, print_json, validated
+from .common import CliError, parse_floats, print_json, print_result, validated
 
 
 def register(sub) -> None:
@@ -27,9 +32,14 @@ def register(sub) -> None:
         help="x,y,z,yaw,pitch,roll (cm, degrees; Z-Y-X Euler angles); planar robots x,y,theta; "
         "point robots x,y.  Use --pose=-5,... for a leading minus sign",
     )
-    p.add_argument("--method", choices=METHODS, default="tension", help="default: tension")
     p.add_argument(
-        "--u-last", default=None, help="alg1: centre of the search window; alg2: Newton start"
+        "--method", choices=METHODS, default=None, help="default: tension (not with --sweep)"
+    )
+    p.add_argument(
+        "--u-last",
+        default=None,
+        help="alg1: centre of the search window; alg2: Newton start; --sweep: Newton start "
+        "of the first point",
     )
     p.add_argument(
         "--window",
@@ -44,13 +54,28 @@ def register(sub) -> None:
     p.add_argument(
         "--newton", action="store_true", help="alg2: classical Newton in u instead of the τ solve"
     )
-    p.add_argument("--timeout", type=float, default=10.0, help="alg1: time limit (s)")
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=None,
+        help="time limit (s): alg1 (default 10), --sweep (default: none)",
+    )
     p.add_argument("--max-boxes", type=int, default=20000, help="alg1: box limit")
     p.add_argument(
         "--distribution",
         choices=("auto", "closed-form", "lp"),
         default="auto",
         help="tension: how to choose the tensions (default auto)",
+    )
+    p.add_argument(
+        "--sweep",
+        metavar="J=START:STOP:N",
+        default=None,
+        help="fix u_J at N values from START to STOP (cm), follow the other controls by "
+        "continuation and certify each point (e.g. 1=0.1:10:100)",
+    )
+    p.add_argument(
+        "--plot", metavar="PNG", default=None, help="with --sweep: every u_j against u_J (PNG)"
     )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
@@ -69,14 +94,12 @@ def _options(args: argparse.Namespace, robot: Robot) -> dict:
                 raise CliError(f"{flag} applies to --method alg1 or alg2")
         return {"distribution": args.distribution, "check_lp": True}
     if args.method == "alg1":
-        if args.timeout is not None and not args.timeout > 0:
-            raise CliError("--timeout must be positive")
         if args.max_boxes < 1:
             raise CliError("--max-boxes must be at least 1")
         return {
             "u_last": u_last,
             "window": args.window,
-            "timeout": args.timeout,
+            "timeout": 10.0 if args.timeout is None else args.timeout,
             "max_boxes": args.max_boxes,
         }
     if not 1 <= args.fixed_wire <= m:
@@ -90,14 +113,64 @@ def _options(args: argparse.Namespace, robot: Robot) -> dict:
     }
 
 
+def parse_sweep(text: str, m: int) -> tuple[int, float, float, int]:
+    """``"J=START:STOP:N"`` -> ``(J, START, STOP, N)`` with errors naming ``--sweep``."""
+    form = f"--sweep: expected J=START:STOP:N (e.g. 1=0.1:10:100), got {text!r}"
+    head, sep, rest = text.replace(" ", "").partition("=")
+    parts = rest.split(":")
+    if not sep or len(parts) != 3:
+        raise CliError(form)
+    try:
+        joint = int(head)
+    except ValueError:
+        raise CliError(f"--sweep: the wire J must be an integer, got {head!r}") from None
+    if not 1 <= joint <= m:
+        raise CliError(f"--sweep: wire {joint}: the robot has wires 1..{m}")
+    try:
+        start, stop = float(parts[0]), float(parts[1])
+    except ValueError:
+        raise CliError(form) from None
+    if not (np.isfinite(start) and np.isfinite(stop)):
+        raise CliError("--sweep: START and STOP must be finite numbers (cm)")
+    try:
+        count = int(parts[2])
+    except ValueError:
+        raise CliError(f"--sweep: N must be an integer, got {parts[2]!r}") from None
+    if not 2 <= count <= MAX_POINTS:
+        raise CliError(f"--sweep: N must be between 2 and {MAX_POINTS}")
+    return joint, start, stop, count
+
+
+def _check_sweep_options(args: argparse.Namespace) -> None:
+    if args.sweep is None:
+        if args.plot is not None:
+            raise CliError("--plot goes with --sweep")
+        return
+    if args.method is not None:
+        raise CliError("--sweep runs Algorithm 2 with continuation at every point: drop --method")
+    for flag, val in (
+        ("--window", args.window),
+        ("--tau-fixed", args.tau_fixed),
+        ("--newton", args.newton or None),
+    ):
+        if val is not None:
+            raise CliError(f"{flag} does not apply to --sweep")
+    if args.timeout is not None and not args.timeout > 0:
+        raise CliError("--timeout must be positive")
+
+
 def run(args: argparse.Namespace) -> int:
     from ..jobs.kinds.ik import IkParams
 
+    _check_sweep_options(args)
     spec = load_robot_spec(args.robot)
-    values = parse_floats(args.pose, "--pose")
-    params = validated(IkParams, args, {"pose": values}, robot=spec)  # the ik job's checks
+    values = {"pose": parse_floats(args.pose, "--pose"), "method": args.method or "tension"}
+    params = validated(IkParams, args, values, robot=spec)  # the ik job's checks
     robot = Robot.from_spec(spec)
     pose = Pose.from_params(robot.dof, params.pose)
+    if args.sweep is not None:
+        return run_sweep(args, robot, pose)
+    args.method = params.method
     result = inverse_kinematics(robot, pose, args.method, **_options(args, robot))
     if args.json:
         print_json(result.to_dict())
@@ -171,4 +244,53 @@ def format_result(res: IKResult, robot: Robot) -> str:
             f"parametric wire(s) {details.get('parametric_wires')}"
         )
     lines.extend(f"note: {m}" for m in res.messages)
+    return "\n".join(lines)
+
+
+def run_sweep(args: argparse.Namespace, robot: Robot, pose) -> int:
+    joint, start, stop, count = parse_sweep(args.sweep, robot.m)
+    u_start = None if args.u_last is None else parse_floats(args.u_last, "--u-last", robot.m)
+    result = ik_sweep(
+        robot,
+        pose,
+        joint=joint,
+        start=start,
+        stop=stop,
+        count=count,
+        u_start=u_start,
+        timeout=args.timeout,
+    )
+    if args.plot:
+        from ..kinematics.plots import plot_sweep
+
+        plot_sweep(result, args.plot, tau_limits=(robot.tau_min, robot.tau_max))
+    print_result(args.json, result, lambda: format_sweep(result, args.plot), plot=args.plot)
+    return 0
+
+
+def format_sweep(res: IKSweepResult, plot: str | None = None) -> str:
+    """One row per point: u_J, the other controls, the tensions, the status and why."""
+    names = {6: ("x", "y", "z", "yaw", "pitch", "roll"), 3: ("x", "y", "theta"), 2: ("x", "y")}
+    pose = ", ".join(
+        f"{n}={v:.6g}" for n, v in zip(names[res.dof], res.pose.params(res.dof), strict=True)
+    )
+    c = res.counts
+    lines = [
+        f"{res.robot} (dof {res.dof}): IK sweep of u_{res.joint} from {res.start:g} to "
+        f"{res.stop:g} cm ({res.count} points) at {pose}",
+        f"status: {res.status}; {c['certified']} certified, {c['uncertified']} uncertified, "
+        f"{c['infeasible']} infeasible; {res.time:.3f} s",
+    ]
+    U, T = res.controls(), res.tensions()
+    m = U.shape[1]
+    head = " ".join(f"{'u_' + str(j + 1):>10}" for j in range(m))
+    head += " " + " ".join(f"{'tau_' + str(j + 1):>9}" for j in range(m))
+    lines.append(f"{head}  status")
+    for i, p in enumerate(res.points):
+        row = " ".join(_num(U[i, j], "10.5f") for j in range(m))
+        row += " " + " ".join(_num(T[i, j], "9.4f") for j in range(m))
+        note = f"  ({p.reason})" if p.reason else ""
+        lines.append(f"{row}  {p.status}{note}")
+    if plot:
+        lines.append(f"wrote {plot}")
     return "\n".join(lines)

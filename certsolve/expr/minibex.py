@@ -37,7 +37,7 @@ from .graph import Graph
 from .node import Expr
 from .system import Constraint, System
 
-__all__ = ["MinibexError", "parse_minibex", "load_minibex", "decimal_enclosure"]
+__all__ = ["MinibexError", "parse_minibex", "load_minibex", "load_system", "decimal_enclosure"]
 
 
 class MinibexError(ValueError):
@@ -393,3 +393,15 @@ def load_minibex(path) -> System:
 
     p = Path(path)
     return parse_minibex(p.read_text(), name=p.stem)
+
+
+def load_system(source, name: str = "") -> System:
+    """A system from Minibex text or a file path (text is recognised by its sections:
+    it contains ``Variables``).  Raises :class:`MinibexError`, or ``OSError`` for a file
+    that cannot be read."""
+    from pathlib import Path
+
+    text = str(source)
+    if isinstance(source, Path) or "\n" not in text and "Variables" not in text:
+        return load_minibex(source)
+    return parse_minibex(text, name=name)

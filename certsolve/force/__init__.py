@@ -10,7 +10,8 @@
 * :mod:`.enclosure`  -- interval enclosures of the index test over boxes (proofs)
 * :mod:`.meanvalue`  -- slope (mean-value) interval arithmetic used by the proofs
 * :mod:`.certified`  -- certified workspace ``{f_min ≥ f_req}``: paving by bisection
-* :mod:`.plots`      -- heat maps and pavings (matplotlib)
+* :mod:`.picture`    -- the force picture at one pose (Fig. 4): polygons, circle, ellipse
+* :mod:`.plots`      -- heat maps, pavings and force pictures (matplotlib)
 * :mod:`.wedge`      -- facet candidates: generalised cross products
 
 Layering: this package imports :mod:`certsolve.interval` and :mod:`certsolve.robot` only.
@@ -24,18 +25,21 @@ from .isotropic import IsotropicForceResult, isotropic_force, isotropic_values
 from .krut import krut_polytope
 from .loads import external_wrench
 from .maps import IsotropicMap, isotropic_map
+from .picture import ForcePicture, force_picture
 from .polytope import ForcePolytope, hyperplane_shifting
 from .section import force_section
 
 __all__ = [
     "CentredEllipsoid",
     "CertifiedWorkspace",
+    "ForcePicture",
     "ForcePolytope",
     "IsotropicForceResult",
     "IsotropicMap",
     "WorkspaceProgress",
     "certified_workspace",
     "external_wrench",
+    "force_picture",
     "force_section",
     "hyperplane_shifting",
     "isotropic_force",

@@ -26,6 +26,19 @@ rigorous ``sin``/``cos``; point-matrix products with the a-priori rounding-error
   proof that ``rank H = w`` at every pose of the box, required by the equivalence above;
 * ``wires_ok``: every ``ρ_l`` is bounded away from 0 (no anchor inside the box).
 
+**Interval robot parameters.**  With ``params`` (a :class:`~certsolve.robot.params.RobotBounds`)
+the anchors ``A``, attachments ``B`` and tension limits are interval arrays over a box of
+design parameters ``θ`` (one per box of the batch), and every enclosure holds for every
+robot of the box *and* every pose of the pose box simultaneously (the design search,
+:mod:`.design`).  Each formula below is an identity for every fixed robot.  Point
+platforms evaluate it with the robot's intervals in place of its floats (natural interval
+arithmetic: measured faster, at equal tightness per second, than a slope form).  Rigid
+platforms add the parameters as slope dimensions: the midpoint value encloses the
+quantity at the centre pose *and* centre parameters, and the slopes in ``θ`` are exact
+derivatives of the affine arrays (:func:`_column_slopes`; ``φ`` with slopes in its tension
+limits, :func:`~.meanvalue.phi_mv`), so coordinates moved together by one parameter stay
+correlated to first order.
+
 **Point platform (dof 2).**  ``c_j = (a_jy, -a_jx)`` and
 ``c_j·ĥ_i = -cross(A_j - p, A_i - p) = -(cross(A_j, A_i) + cross(A_i - A_j, p))``, linear in
 ``p``: its interval is exact up to rounding.
@@ -52,6 +65,7 @@ from ..interval import arith, elementary
 from ..interval.linalg import mr_from_bounds
 from ..interval.rounding import down, up
 from ..robot import Robot
+from ..robot.params import RobotBounds
 from .loads import force_rows
 from .meanvalue import MV, phi_mv, pmatmul, wedge_mv
 from .wedge import basis_groups, facet_subsets
@@ -157,6 +171,23 @@ def _matvec_point(R, V):
     return _sum(terms)
 
 
+def _matvec(R, V):
+    """``R v_i`` for interval ``R`` ``(d, d, B)`` and interval vectors ``V`` ``(m, d, n)`` with
+    ``n`` 1 or ``B``: ``(m, d, B)`` (a thin ``V`` shared by the batch uses the point path)."""
+    vlo, vhi = V
+    if vlo.shape[-1] == 1 and np.array_equal(vlo, vhi):
+        return _matvec_point(R, vlo[..., 0])
+    Rlo, Rhi = R
+    d = vlo.shape[1]
+    terms = [
+        arith.mul(
+            Rlo[None, :, c, :], Rhi[None, :, c, :], vlo[:, c][:, None, :], vhi[:, c][:, None, :]
+        )
+        for c in range(d)
+    ]
+    return _sum(terms)
+
+
 def _cross2(a, b):
     """``a_x b_y - a_y b_x`` on interval vectors with the component axis first."""
     (alo, ahi), (blo, bhi) = a, b
@@ -185,19 +216,28 @@ def _scale(lo, hi, c):
 
 
 def _phi(slo, shi, tmin, tmax):
-    """Enclosure of ``φ(s) = τmax max(s, 0) + τmin min(s, 0)`` (``τ`` broadcast)."""
-    plo, phi = _scale(np.maximum(slo, 0.0), np.maximum(shi, 0.0), tmax)
-    nlo, nhi = _scale(np.minimum(slo, 0.0), np.minimum(shi, 0.0), tmin)
+    """Enclosure of ``φ(s) = τmax max(s, 0) + τmin min(s, 0)``; ``τ`` are interval pairs
+    (broadcast with ``s``; thin pairs take the point path)."""
+    plo, phi = _tscale(np.maximum(slo, 0.0), np.maximum(shi, 0.0), tmax)
+    nlo, nhi = _tscale(np.minimum(slo, 0.0), np.minimum(shi, 0.0), tmin)
     return arith.add(plo, phi, nlo, nhi)
 
 
+def _tscale(lo, hi, t):
+    """``[t] · [lo, hi]`` for an interval pair ``t`` (``0 · inf = 0``)."""
+    tlo, thi = t
+    if tlo is thi or np.array_equal(tlo, thi):
+        return _scale(lo, hi, tlo)
+    return arith.mul(lo, hi, tlo, thi)
+
+
 # -- the robot's columns ------------------------------------------------------------------
-def _columns(robot: Robot, plo, phi, R):
+def _columns(robot: Robot, plo, phi, R, A, Bp):
     """Natural enclosures over the box: ``e = A - p``, ``b = R B``, ``a = e - b`` ``(m, d, B)``
-    and the unnormalised columns ``ĥ`` ``(w, m, B)`` (dof 3, 6)."""
-    A = robot.A[:, :, None]
-    e = arith.sub(A, A, plo[None], phi[None])
-    b = _matvec_point(R, robot.B)
+    and the unnormalised columns ``ĥ`` ``(w, m, B)`` (dof 3, 6); ``A``, ``Bp`` interval pairs
+    ``(m, d, n)``."""
+    e = arith.sub(*A, plo[None], phi[None])
+    b = _matvec(R, Bp)
     a = arith.sub(*e, *b)
     tr = [(np.moveaxis(x[0], 1, 0), np.moveaxis(x[1], 1, 0)) for x in (e, b, a)]
     et, bt, at = tr
@@ -210,11 +250,13 @@ def _columns(robot: Robot, plo, phi, R):
     return e, b, a, h
 
 
-def _column_slopes(robot: Robot, e, b, dR) -> list:
+def _column_slopes(robot: Robot, e, b, R, dR, prm: RobotBounds) -> list:
     """Interval enclosures ``(w, m, B)`` of ``∂ĥ/∂x_j`` over the box, per axis ``j``.
 
     Positions: ``∂a/∂p_j = -e_j``, ``∂(b × (A - p))/∂p_j = -b × e_j``; angles:
-    ``∂a/∂α = -∂b/∂α``, ``∂(b × (A - p))/∂α = ∂b/∂α × (A - p)``, ``∂b/∂α = (∂R/∂α) B``.
+    ``∂a/∂α = -∂b/∂α``, ``∂(b × (A - p))/∂α = ∂b/∂α × (A - p)``, ``∂b/∂α = (∂R/∂α) B``;
+    design parameters (``A``, ``B`` affine in ``θ``): ``∂a/∂θ = ∂A/∂θ - R ∂B/∂θ``,
+    ``∂(b × e)/∂θ = (R ∂B/∂θ) × e + b × ∂A/∂θ``.
     """
     d = robot.dim
     w = robot.wrench_dim
@@ -237,7 +279,7 @@ def _column_slopes(robot: Robot, e, b, dR) -> list:
             lo[3 + i2], hi[3 + i2] = blo[i1], bhi[i1]
         out.append((lo, hi))
     for dRj in dR:
-        db = _matvec_point(dRj, robot.B)  # (m, d, B)
+        db = _matvec(dRj, prm.B)  # (m, d, B)
         dbt = (np.moveaxis(db[0], 1, 0), np.moveaxis(db[1], 1, 0))
         if d == 2:
             mom = _cross2(dbt, et)
@@ -246,6 +288,21 @@ def _column_slopes(robot: Robot, e, b, dR) -> list:
             mom = _cross3(dbt, et)
         nlo, nhi = arith.neg(*dbt)
         out.append((np.concatenate([nlo, mom[0]]), np.concatenate([nhi, mom[1]])))
+    cross = _cross2 if d == 2 else _cross3
+    for dA, dB in zip(prm.dA, prm.dB):
+        if not (np.any(dA) or np.any(dB)):
+            out.append((np.zeros(shape), np.zeros(shape)))
+            continue
+        db = _matvec_point(R, dB)  # (m, d, B)
+        dbt = (np.moveaxis(db[0], 1, 0), np.moveaxis(db[1], 1, 0))
+        dat = np.moveaxis(dA, 1, 0)[..., None]  # (d, m, 1)
+        da = arith.sub(dat, dat, *dbt)
+        mom = arith.add(*cross(dbt, et), *cross((blo, bhi), (dat, dat)))
+        if d == 2:
+            mom = (mom[0][None], mom[1][None])
+        lo = np.concatenate([np.broadcast_to(da[0], (d,) + shape[1:]), mom[0]])
+        hi = np.concatenate([np.broadcast_to(da[1], (d,) + shape[1:]), mom[1]])
+        out.append((lo, hi))
     return out
 
 
@@ -272,40 +329,52 @@ def slack_enclosures(
     alo: np.ndarray | None = None,
     ahi: np.ndarray | None = None,
     rotation: np.ndarray | None = None,
+    params: RobotBounds | None = None,
+    norms: bool = False,
 ):
     """Enclosures of every ``g_k^±`` over ``B`` boxes (batch last).
 
     ``plo``, ``phi``: ``(d, B)`` position bounds (cm); ``alo``, ``ahi``: ``(na, B)`` angle
     bounds (degrees; dof 3: θ, dof 6: yaw, pitch, roll) or ``None`` for the fixed
-    ``rotation`` (a ``(d, d)`` float matrix, identity if omitted).  Returns
-    ``(glo, ghi, full_rank, wires_ok)`` with ``g`` of shape ``(2K, B)``.
+    ``rotation`` (a ``(d, d)`` float matrix, identity if omitted); ``params``: interval
+    anchors, attachments and tension limits per box (batch of ``B`` or of 1; default the
+    robot's floats).  Returns ``(glo, ghi, full_rank, wires_ok)`` with ``g`` of shape
+    ``(2K, B)``, and with ``norms`` a fifth array ``(2K, B)``: an upper bound of
+    ``||c_k,f||`` in the same scaling as ``g``, so that at a pose with full rank
+    ``f_min ≥ f_req + min_k glo_k / norm_k`` whenever every ``glo_k ≥ 0``.
     """
+    prm = RobotBounds.point(robot) if params is None else params
     with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
         if robot.dof == 2:
-            return _point_slacks(robot, f_req, external, *_parts_point(robot, plo, phi))
-        return _rigid(robot, plo, phi, f_req, external, alo, ahi, rotation)
+            out = _point_slacks(robot, f_req, external, prm, *_parts_point(robot, plo, phi, prm))
+        else:
+            out = _rigid(robot, plo, phi, f_req, external, alo, ahi, rotation, prm)
+    return out if norms else out[:4]
 
 
-def _parts_point(robot: Robot, plo, phi):
-    A = robot.A
+def _parts_point(robot: Robot, plo, phi, prm: RobotBounds):
+    Alo, Ahi = prm.A  # (m, 2, n), n = 1 or B
     m = robot.m
     subsets = facet_subsets(m, 2)
     j = subsets[:, 0]
-    Aj = A[j][:, None, :]  # (K, 1, 2)
-    Ai = A[None, :, :]  # (1, m, 2)
-    e = arith.sub(A[:, :, None], A[:, :, None], plo[None], phi[None])  # a = A - p: (m, 2, B)
+    Aj = (Alo[j][:, None], Ahi[j][:, None])  # (K, 1, 2, n)
+    Ai = (Alo[None], Ahi[None])  # (1, m, 2, n)
+    e = arith.sub(Alo, Ahi, plo[None], phi[None])  # a = A - p: (m, 2, B)
     elo, ehi = e
     rho = arith.sqrt(*_sum([arith.sqr(elo[:, r], ehi[:, r]) for r in range(2)]))
+
+    def comp(x, r):
+        return x[0][..., r, :], x[1][..., r, :]
+
     # c_j · ĥ_i = -cross(a_j, a_i) = -(cross(A_j, A_i) + cross(A_i - A_j, p))
     c1 = arith.sub(
-        *arith.mul(Aj[..., 0], Aj[..., 0], Ai[..., 1], Ai[..., 1]),
-        *arith.mul(Aj[..., 1], Aj[..., 1], Ai[..., 0], Ai[..., 0]),
-    )  # (K, m)
-    dx = arith.sub(Ai[..., 0], Ai[..., 0], Aj[..., 0], Aj[..., 0])
-    dy = arith.sub(Ai[..., 1], Ai[..., 1], Aj[..., 1], Aj[..., 1])
-    t1 = arith.mul(dx[0][..., None], dx[1][..., None], plo[1], phi[1])
-    t2 = arith.mul(dy[0][..., None], dy[1][..., None], plo[0], phi[0])
-    cr = arith.add(c1[0][..., None], c1[1][..., None], *arith.sub(*t1, *t2))
+        *arith.mul(*comp(Aj, 0), *comp(Ai, 1)), *arith.mul(*comp(Aj, 1), *comp(Ai, 0))
+    )  # (K, m, n)
+    dx = arith.sub(*comp(Ai, 0), *comp(Aj, 0))
+    dy = arith.sub(*comp(Ai, 1), *comp(Aj, 1))
+    t1 = arith.mul(*dx, plo[1], phi[1])
+    t2 = arith.mul(*dy, plo[0], phi[0])
+    cr = arith.add(*c1, *arith.sub(*t1, *t2))
     D = arith.neg(*cr)  # (K, m, B)
     c = (np.stack([elo[j, 1], -ehi[j, 0]]), np.stack([ehi[j, 1], -elo[j, 0]]))  # (2, K, B)
     cf = (rho[0][j], rho[1][j])  # ||c_j|| = ρ_j
@@ -323,6 +392,7 @@ def _weight_mv(robot: Robot, R, Rmid, dR, nd: int, B: int, external) -> MV:
     gx = _matvec_point(R, com)
     z = np.zeros((1, d, B))
     gs = [(z, z)] * d + [_matvec_point(dRj, com) for dRj in dR]
+    gs += [(z, z)] * (nd - len(gs))  # the design parameters do not move the weight
     g = MV(gm, gx, gs).apply(lambda t: t[0])  # (d, B)
 
     def comp(u, i):
@@ -390,7 +460,7 @@ class _BasisInverse:
         return down(ulo - rad), up(uhi + rad)
 
 
-def _rigid(robot: Robot, plo, phi, f_req, external, alo, ahi, rotation):
+def _rigid(robot: Robot, plo, phi, f_req, external, alo, ahi, rotation, prm: RobotBounds):
     r"""dof 3 and 6: the basis form of the facets with slope enclosures.
 
     With a basis ``B0`` of ``w`` columns (nonsingular over the box, the one with the largest
@@ -420,12 +490,17 @@ def _rigid(robot: Robot, plo, phi, f_req, external, alo, ahi, rotation):
     radii = [np.maximum(up(phi - pmid), up(pmid - plo))]
     if alo is not None:
         radii.append(np.maximum(up(ahi - amid), up(amid - alo)))
+    if prm.k:  # the design parameters are slope dimensions too
+        radii.append(np.broadcast_to(prm.radius, (prm.k, B)))
     radii = np.concatenate(radii)  # (nd, B)
     nd = radii.shape[0]
 
-    e, b, _, hx = _columns(robot, plo, phi, R)
-    _, _, _, hm = _columns(robot, pmid, pmid, Rmid)
-    h = MV(hm, hx, _column_slopes(robot, e, b, dR))  # (w, m, B)
+    e, b, _, hx = _columns(robot, plo, phi, R, prm.A, prm.B)
+    _, _, _, hm = _columns(robot, pmid, pmid, Rmid, prm.A_mid, prm.B_mid)
+    h = MV(hm, hx, _column_slopes(robot, e, b, R, dR, prm))  # (w, m, B)
+    if prm.k:  # coordinates moved by one parameter are dependent: the slope range is tighter
+        h = h.tighten(radii)
+        hx = h.x
     a = h.apply(lambda t: t[:d])
     sq = a.apply(lambda t: t[0]).sqr()
     for r in range(1, d):
@@ -460,12 +535,13 @@ def _rigid(robot: Robot, plo, phi, f_req, external, alo, ahi, rotation):
     K = len(facet_subsets(m, w))
     glo = np.full((2 * K, B), -np.inf)
     ghi = np.full((2 * K, B), np.inf)
+    nhi = np.full((2 * K, B), np.inf)
     full_rank = np.zeros(B, dtype=bool)
     for ib, b0 in enumerate(bases):
         sel = np.nonzero((choice == ib) & found)[0]
         if sel.size == 0:
             continue
-        g_lo, g_hi, ok = _rigid_basis(
+        g_lo, g_hi, n_hi, ok = _rigid_basis(
             robot,
             b0,
             h.apply(lambda t, s=sel: t[..., s]),
@@ -474,16 +550,19 @@ def _rigid(robot: Robot, plo, phi, f_req, external, alo, ahi, rotation):
             radii[:, sel],
             f_req,
             nf,
+            prm.take(sel),
         )
         glo[:, sel] = np.where(ok, g_lo, -np.inf)
         ghi[:, sel] = np.where(ok, g_hi, np.inf)
+        nhi[:, sel] = n_hi
         full_rank[sel] = ok
     glo = np.where(np.isnan(glo), -np.inf, glo)
     ghi = np.where(np.isnan(ghi), np.inf, ghi)
-    return glo, ghi, full_rank, wires_ok
+    nhi = np.where(np.isnan(nhi), np.inf, nhi)
+    return glo, ghi, full_rank, wires_ok, nhi
 
 
-def _rigid_basis(robot: Robot, b0, h: MV, rho: MV, wext: MV, radii, f_req, nf):
+def _rigid_basis(robot: Robot, b0, h: MV, rho: MV, wext: MV, radii, f_req, nf, prm):
     """The slacks of :func:`_rigid` for boxes sharing the basis ``b0``: ``(2K, B')``."""
     m, w = robot.m, robot.wrench_dim
     b0 = tuple(int(i) for i in b0)
@@ -526,8 +605,8 @@ def _rigid_basis(robot: Robot, b0, h: MV, rho: MV, wext: MV, radii, f_req, nf):
     y = y.apply(lambda t: np.transpose(t, (1, 2, 0)))  # (w, e, B)
     z = z.apply(lambda t: t[:, :, 0].T)  # (w, B)
     Gf = Gf.apply(lambda t: np.transpose(t, (1, 2, 0)))  # (w, nf, B)
-    tmin, tmax = robot.tau_min, robot.tau_max
-    gp_lo, gp_hi, gm_lo, gm_hi = [], [], [], []
+    nd = len(radii)
+    gp_lo, gp_hi, gm_lo, gm_hi, n_hi = [], [], [], [], []
     for F, T, Rr in basis_groups(m, w, b0):
         Kt, t = T.shape
         if t == 0:
@@ -551,8 +630,10 @@ def _rigid_basis(robot: Robot, b0, h: MV, rho: MV, wext: MV, radii, f_req, nf):
             qs.append(DR / rho.apply(lambda a, c=cR: a[c]))
         Np = Nm = None
         for q, c in zip(qs, cols):
-            pp = phi_mv(q, tmin[c][..., None], tmax[c][..., None])
-            pm = phi_mv(-q, tmin[c][..., None], tmax[c][..., None])
+            tmin = _tau_mv(prm.tau_min, prm.tau_min_mid, prm.dtau_min, c, nd)
+            tmax = _tau_mv(prm.tau_max, prm.tau_max_mid, prm.dtau_max, c, nd)
+            pp = phi_mv(q, tmin, tmax)
+            pm = phi_mv(-q, tmin, tmax)
             for i in range(c.shape[0]):
                 a1 = pp.apply(lambda a, i=i: a[i])
                 a2 = pm.apply(lambda a, i=i: a[i])
@@ -571,7 +652,9 @@ def _rigid_basis(robot: Robot, b0, h: MV, rho: MV, wext: MV, radii, f_req, nf):
         n2 = cf.apply(lambda a: a[0]).sqr()
         for r in range(1, nf):
             n2 = n2 + cf.apply(lambda a, r=r: a[r]).sqr()
-        fr = n2.sqrt().scale(float(f_req))
+        nrm = n2.sqrt()
+        n_hi.append(nrm.enclose(radii)[1])
+        fr = nrm.scale(float(f_req))
         gp = (Np + cw - fr).enclose(radii)
         gn = (Nm - cw - fr).enclose(radii)
         gp_lo.append(gp[0])
@@ -580,10 +663,23 @@ def _rigid_basis(robot: Robot, b0, h: MV, rho: MV, wext: MV, radii, f_req, nf):
         gm_hi.append(gn[1])
     glo = np.concatenate(gp_lo + gm_lo)
     ghi = np.concatenate(gp_hi + gm_hi)
-    return glo, ghi, ok
+    return glo, ghi, np.concatenate(n_hi + n_hi), ok
 
 
-def _point_slacks(robot, f_req, external, subsets, rho, D, c, cf):
+def _tau_mv(box, mid, deriv, c, nd: int):
+    """Tension limits of the wires ``c`` as a slope triple (an interval pair without design
+    parameters): slopes 0 in the pose axes, the exact derivatives in the parameters."""
+    box = (box[0][c], box[1][c])
+    if deriv.shape[0] == 0:
+        return box
+    slopes = [None] * (nd - deriv.shape[0])
+    for dt in deriv:
+        v = dt[c][..., None]
+        slopes.append((v, v) if np.any(v) else None)
+    return MV((mid[0][c], mid[1][c]), box, slopes)
+
+
+def _point_slacks(robot, f_req, external, prm: RobotBounds, subsets, rho, D, c, cf):
     """dof 2: the slacks from the exact linear cross products of :func:`_parts_point`."""
     m, w = robot.m, robot.wrench_dim
     K = subsets.shape[0]
@@ -598,8 +694,8 @@ def _point_slacks(robot, f_req, external, subsets, rho, D, c, cf):
     qlo, qhi = arith.div(Dlo, Dhi, rho[0][None], rho[1][None])  # c_k · h_l
     qlo = np.where(mem, 0.0, qlo)
     qhi = np.where(mem, 0.0, qhi)
-    tmx = robot.tau_max[None, :, None]
-    tmn = robot.tau_min[None, :, None]
+    tmn = prm.tau_min[0][None], prm.tau_min[1][None]  # (1, m, n)
+    tmx = prm.tau_max[0][None], prm.tau_max[1][None]
     pp = _phi(qlo, qhi, tmn, tmx)
     pm = _phi(-qhi, -qlo, tmn, tmx)
     Np = _sum([(pp[0][:, i], pp[1][:, i]) for i in range(m)])  # (K, B)
@@ -616,4 +712,5 @@ def _point_slacks(robot, f_req, external, subsets, rho, D, c, cf):
     # NaN can only come from inf - inf (a wire of length ~0): make it the whole line
     glo = np.where(np.isnan(glo), -np.inf, glo)
     ghi = np.where(np.isnan(ghi), np.inf, ghi)
-    return glo, ghi, full_rank, wires_ok
+    nhi = np.concatenate([cf[1], cf[1]])
+    return glo, ghi, full_rank, wires_ok, np.where(np.isnan(nhi), np.inf, nhi)

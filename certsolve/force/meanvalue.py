@@ -211,24 +211,75 @@ def wedge_mv(M: MV) -> MV:
 
 
 def phi_mv(u: MV, tmin, tmax) -> MV:
-    """``φ(u) = τmax max(u, 0) + τmin min(u, 0)`` with its slope (``τ`` broadcast)."""
+    """``φ(u) = τmax max(u, 0) + τmin min(u, 0)`` with its slope.
 
-    def scale(lo, hi, c):
-        with np.errstate(invalid="ignore"):
-            rlo, rhi = arith.scale(lo, hi, c)
-        z = np.broadcast_to(np.asarray(c) == 0, rlo.shape)
-        return np.where(z, 0.0, rlo), np.where(z, 0.0, rhi)
-
-    def phi(p):
-        a = scale(np.maximum(p[0], 0.0), np.maximum(p[1], 0.0), tmax)
-        b = scale(np.minimum(p[0], 0.0), np.minimum(p[1], 0.0), tmin)
-        return arith.add(*a, *b)
-
+    ``tmin``, ``tmax`` (broadcast with ``u``): floats; interval pairs ``(lo, hi)``; or, when
+    the limits depend on the slope variables (design parameters), :class:`MV` triples whose
+    slopes may be ``None`` (zero).  Then, from
+    ``φ(u, τ) - φ(u_m, τ_m) = [φ(u, τ) - φ(u_m, τ)] + [φ(u_m, τ) - φ(u_m, τ_m)]``, the slope
+    is ``S s_u + max(u_m, 0) s_τmax + min(u_m, 0) s_τmin`` with ``S`` the slope set of ``φ``
+    in ``u`` over the box (hull over the tension values).
+    """
+    if isinstance(tmin, MV) or isinstance(tmax, MV):
+        return _phi_mv_param(u, tmin, tmax)
+    nlo, nhi = tmin if isinstance(tmin, tuple) else (tmin, tmin)
+    xlo_, xhi_ = tmax if isinstance(tmax, tuple) else (tmax, tmax)
+    point = (nlo is nhi or np.array_equal(nlo, nhi)) and (
+        xlo_ is xhi_ or np.array_equal(xlo_, xhi_)
+    )
     xlo, xhi = u.x
-    tmin_b = np.broadcast_to(tmin, xlo.shape)
-    tmax_b = np.broadcast_to(tmax, xlo.shape)
-    slo = np.where(xlo >= 0.0, tmax_b, tmin_b)
-    shi = np.where(xhi <= 0.0, tmin_b, tmax_b)
-    slo, shi = np.minimum(slo, shi), np.maximum(slo, shi)  # u ≡ 0: any slope, keep it non-empty
+    slo, shi = _phi_slopes(xlo, xhi, (nlo, nhi), (xlo_, xhi_), point)
     s = [arith.mul(slo, shi, *sj) for sj in u.s]
-    return MV(phi(u.m), phi(u.x), s)
+    return MV(
+        _phi(u.m, (nlo, nhi), (xlo_, xhi_), point), _phi(u.x, (nlo, nhi), (xlo_, xhi_), point), s
+    )
+
+
+def _tscale(lo, hi, t, point: bool):
+    """``[t] · [lo, hi]``, ``0 · inf`` counted as 0."""
+    if not point:
+        return arith.mul(lo, hi, *t)
+    with np.errstate(invalid="ignore"):
+        rlo, rhi = arith.scale(lo, hi, t[0])
+    z = np.broadcast_to(np.asarray(t[0]) == 0, rlo.shape)
+    return np.where(z, 0.0, rlo), np.where(z, 0.0, rhi)
+
+
+def _phi(p, tmin, tmax, point: bool):
+    a = _tscale(np.maximum(p[0], 0.0), np.maximum(p[1], 0.0), tmax, point)
+    b = _tscale(np.minimum(p[0], 0.0), np.minimum(p[1], 0.0), tmin, point)
+    return arith.add(*a, *b)
+
+
+def _phi_slopes(xlo, xhi, tmin, tmax, point: bool):
+    """Slope set of ``φ`` in ``u`` over ``u ∈ [xlo, xhi]``: ``[τmax]`` on ``u ≥ 0``, ``[τmin]``
+    on ``u ≤ 0``, their hull across 0."""
+    if point:
+        tmin_b = np.broadcast_to(tmin[0], xlo.shape)
+        tmax_b = np.broadcast_to(tmax[0], xlo.shape)
+        slo = np.where(xlo >= 0.0, tmax_b, tmin_b)
+        shi = np.where(xhi <= 0.0, tmin_b, tmax_b)
+    else:
+        n_lo, n_hi = (np.broadcast_to(t, xlo.shape) for t in tmin)
+        x_lo, x_hi = (np.broadcast_to(t, xlo.shape) for t in tmax)
+        slo = np.where(xlo >= 0.0, x_lo, np.where(xhi <= 0.0, n_lo, np.minimum(n_lo, x_lo)))
+        shi = np.where(xlo >= 0.0, x_hi, np.where(xhi <= 0.0, n_hi, np.maximum(n_hi, x_hi)))
+    return np.minimum(slo, shi), np.maximum(slo, shi)  # u ≡ 0: any slope, keep it non-empty
+
+
+def _phi_mv_param(u: MV, tmin: MV, tmax: MV) -> MV:
+    """:func:`phi_mv` with tension limits that are slope triples (see its docstring)."""
+    slo, shi = _phi_slopes(*u.x, tmin.x, tmax.x, point=False)
+    pos = np.maximum(u.m[0], 0.0), np.maximum(u.m[1], 0.0)
+    neg = np.minimum(u.m[0], 0.0), np.minimum(u.m[1], 0.0)
+    s = []
+    for j, sj in enumerate(u.s):
+        acc = arith.mul(slo, shi, *sj)
+        if tmax.s[j] is not None:
+            acc = arith.add(*acc, *arith.mul(*pos, *tmax.s[j]))
+        if tmin.s[j] is not None:
+            acc = arith.add(*acc, *arith.mul(*neg, *tmin.s[j]))
+        s.append(acc)
+    m = _phi(u.m, tmin.m, tmax.m, point=False)
+    x = _phi(u.x, tmin.x, tmax.x, point=False)
+    return MV(m, x, s)

@@ -1,4 +1,6 @@
-"""Pictures: isotropic-force heat maps (Fig. 9/10 style) and certified pavings.
+"""Pictures: isotropic-force heat maps (Fig. 9/10 style), certified pavings, the force
+polytope at one pose with its isotropic circle and ellipse (Fig. 4 style), and pavings of
+design parameters.
 
 matplotlib is imported lazily with the non-interactive ``Agg`` backend.  Heat maps draw the
 region ``f_min < 0`` (and degenerate poses) in white as in the paper, the contour
@@ -12,19 +14,17 @@ from pathlib import Path
 
 import numpy as np
 
+from ..plotting import pyplot
 from .certified import CertifiedWorkspace
+from .design import DesignResult
 from .maps import IsotropicMap
+from .picture import ForcePicture
 
-__all__ = ["plot_map", "plot_maps", "plot_paving"]
+__all__ = ["plot_map", "plot_maps", "plot_paving", "plot_force_picture", "plot_design"]
 
 
 def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    return pyplot()
 
 
 def _draw_map(ax, res: IsotropicMap, vmax=None, title=None, cmap="jet", colorbar=True):
@@ -166,6 +166,190 @@ def plot_paving(ws: CertifiedWorkspace, path=None, title=None, anchors=None, z=N
         fontsize=8,
         frameon=False,
     )
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(Path(path))
+        plt.close(fig)
+    return fig
+
+
+def _fmt_vec(v) -> str:
+    return "(" + ", ".join(f"{x + 0.0:.4g}" for x in v) + ")"  # + 0.0: no "-0"
+
+
+def _panel_points(panel) -> np.ndarray:
+    pts = [panel.centre[None], panel.origin[None]]
+    if panel.polygon is not None:
+        pts.append(panel.polygon)
+    if panel.radius is not None:
+        pts.append(panel.centre[None] + panel.radius * np.array([[-1, -1], [1, 1]]))
+    if panel.ellipse is not None:
+        pts.append(panel.ellipse)
+    return np.concatenate(pts)
+
+
+def _draw_panel(ax, pic: ForcePicture, panel, half: float):
+    from matplotlib.patches import Circle, Polygon
+
+    handles = []
+    if panel.polygon is not None:
+        what = "force polytope" if pic.dof == 2 else "force section F(μ)"
+        facets = f", {pic.n_facets} facets" if pic.n_facets is not None else ""
+        patch = Polygon(
+            panel.polygon, closed=True, facecolor="#cfe3f3", edgecolor="#1f4e79", lw=1.2,
+            label=f"{what}{facets}",
+        )  # fmt: skip
+        ax.add_patch(patch)
+        handles.append(patch)
+    if panel.radius is not None:
+        what = "isotropic force (sphere)" if pic.dof == 6 else "isotropic force"
+        circle = Circle(
+            panel.centre, panel.radius, fill=False, edgecolor="#c0392b", lw=1.6,
+            label=f"{what} {panel.radius:.5g} N",
+        )  # fmt: skip
+        ax.add_patch(circle)
+        handles.append(circle)
+    if panel.ellipse is not None:
+        semi = pic.ellipse_semi_axes if pic.dof == 6 else panel.ellipse_semi_axes
+        what = "ellipsoid" if pic.dof == 6 else "ellipse"
+        (line,) = ax.plot(
+            panel.ellipse[:, 0], panel.ellipse[:, 1], "--", color="#27ae60", lw=1.3,
+            label=f"{what}, semi-axes " + ", ".join(f"{v:.4g}" for v in semi) + " N",
+        )  # fmt: skip
+        handles.append(line)
+    (c,) = ax.plot(
+        *panel.centre, "x", color="#c0392b", ms=8, mew=2,
+        label=f"centre −w_ext {_fmt_vec(pic.centre)} N",
+    )  # fmt: skip
+    (o,) = ax.plot(*panel.origin, "+", color="k", ms=9, label="zero force")
+    handles += [c, o]
+    if panel.polygon is None:
+        ax.text(
+            0.5, 0.8, "no force polytope to draw:\nempty or flat at this pose",
+            transform=ax.transAxes, ha="center", fontsize=9,
+        )  # fmt: skip
+    mid = 0.5 * (_panel_points(panel).min(axis=0) + _panel_points(panel).max(axis=0))
+    ax.set_xlim(mid[0] - half, mid[0] + half)
+    ax.set_ylim(mid[1] - half, mid[1] + half)
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.3)
+    ax.set_xlabel(f"{panel.axes[0]} (N)")
+    ax.set_ylabel(f"{panel.axes[1]} (N)")
+    if panel.plane:
+        ax.set_title(f"section {panel.plane.replace('-0 N', '0 N')}", fontsize=9)
+    return handles
+
+
+def plot_force_picture(pic: ForcePicture, path=None, title=None):
+    """The force polytope, isotropic circle, centre and ellipse at one pose (Krut Fig. 4).
+
+    Planar robots: one panel; dof 6: the three sections through the centre side by side, on
+    one scale.  Values are in the legend.  Saved as PNG if ``path`` is given.  Returns the
+    figure.
+    """
+    plt = _plt()
+    n = len(pic.panels)
+    fig, axes = plt.subplots(1, n, figsize=(4.6 * n, 5.4), dpi=120, squeeze=False)
+    spans = [np.ptp(_panel_points(p), axis=0).max() for p in pic.panels]
+    big = max(spans)
+    half = 0.54 * big if big > 1e-6 else 1.0
+    handles = []
+    for ax, panel in zip(axes[0], pic.panels):
+        handles = _draw_panel(ax, pic, panel, half)
+    if title is None:
+        pose = ", ".join(f"{v + 0.0:g}" for v in pic.pose)
+        f = "n/a" if pic.isotropic_force is None else f"{pic.isotropic_force:.5g} N"
+        title = f"{pic.robot} at ({pose}): maximum isotropic force {f} [{pic.status}]"
+    fig.suptitle(title, fontsize=10)
+    fig.legend(
+        handles=handles, loc="lower center", ncol=2 if n == 1 else 3, fontsize=8,
+        frameon=False,
+    )  # fmt: skip
+    fig.tight_layout(rect=(0, 0.17 if n == 1 else 0.1, 1, 1))
+    if path is not None:
+        fig.savefig(Path(path))
+        plt.close(fig)
+    return fig
+
+
+def plot_design(res: DesignResult, path=None, axes=(0, 1), at=None, title=None):
+    """The paving of the design parameters: good green, bad grey, undecided orange, pending
+    blue, the best box outlined with its centre starred.
+
+    Two parameters: the plane of the parameters.  More: the **section** through the values
+    ``at`` (a ``(k,)`` array; default the centre of the best box, or the middle of the
+    ranges) of the parameters other than ``axes``: the boxes whose ranges contain them, so
+    every point of the picture shows the class of the box holding it.  Saved as PNG if
+    ``path`` is given.  Returns the figure.
+    """
+    plt = _plt()
+    from matplotlib.collections import PatchCollection
+    from matplotlib.patches import Patch, Rectangle
+
+    i, j = axes
+    k = len(res.names)
+    fig, ax = plt.subplots(figsize=(6.4, 5.8), dpi=120)
+    styles = [
+        ("bad", "#bdbdbd", "proven bad"),
+        ("pending", "#8ecae6", "not processed"),
+        ("undecided", "#ff9f1c", "undecided (< eps)"),
+        ("good", "#2a9d8f", "proven good"),
+    ]
+    handles = []
+    others = [m for m in range(k) if m not in (i, j)]
+    if at is None:
+        best = res.best_box
+        at = (best if best is not None else res.ranges).mean(axis=1)
+    at = np.asarray(at, dtype=float)
+    for key, color, label in styles:
+        boxes = getattr(res, key)
+        for m in others:
+            boxes = boxes[(boxes[:, m, 0] <= at[m]) & (at[m] <= boxes[:, m, 1])]
+        if len(boxes) == 0:
+            continue
+        rects = [Rectangle((b[i, 0], b[j, 0]), b[i, 1] - b[i, 0], b[j, 1] - b[j, 0]) for b in boxes]
+        pc = PatchCollection(
+            rects, facecolor=color, edgecolor="k" if len(rects) < 3000 else color, linewidth=0.2
+        )
+        ax.add_collection(pc)
+        n_all, share = len(getattr(res, key)), 100 * res.share(key)
+        handles.append(
+            Patch(facecolor=color, edgecolor="k", label=f"{label}: {n_all} ({share:.1f} %)")
+        )
+    if res.best is not None and all(
+        res.good[res.best][m, 0] <= at[m] <= res.good[res.best][m, 1] for m in others
+    ):
+        b = res.good[res.best]
+        ax.add_patch(
+            Rectangle(
+                (b[i, 0], b[j, 0]), b[i, 1] - b[i, 0], b[j, 1] - b[j, 0], fill=False,
+                edgecolor="#c0392b", lw=2.0,
+            )
+        )  # fmt: skip
+        c = 0.5 * (b[:, 0] + b[:, 1])
+        (star,) = ax.plot(
+            c[i], c[j], "*", color="#c0392b", ms=12,
+            label=f"best: margin {res.margin[res.best]:.4g} N "
+            f"(f ≥ {res.min_force + res.margin[res.best]:.4g} N)",
+        )  # fmt: skip
+        handles.append(star)
+    ax.set_xlim(*res.ranges[i])
+    ax.set_ylim(*res.ranges[j])
+    ax.set_xlabel(f"{res.names[i]}  ({res.paths[i]})")
+    ax.set_ylabel(f"{res.names[j]}  ({res.paths[j]})")
+    ws = ", ".join(f"[{lo:g}, {hi:g}]" for lo, hi in res.workspace)
+    if title is None:
+        title = f"{res.robot}: f_min ≥ {res.min_force:g} N on the workspace {ws} cm"
+        if k > 2:
+            where = ", ".join(f"{res.names[m]} = {at[m]:.4g}" for m in others)
+            title += f"\nsection at {where}"
+        if res.status != "complete":
+            title += f" [{res.status}]"
+    ax.set_title(title, fontsize=9)
+    ax.legend(
+        handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, fontsize=8,
+        frameon=False,
+    )  # fmt: skip
     fig.tight_layout()
     if path is not None:
         fig.savefig(Path(path))

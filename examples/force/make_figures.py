@@ -1,4 +1,4 @@
-"""Regenerate the paper's Fig. 9 and Fig. 10 (Krut, Company, Pierrot 2004) and two extras.
+"""Regenerate the paper's Fig. 4, 9 and 10 (Krut, Company, Pierrot 2004) and extras.
 
 Run from the repository root:  python examples/force/make_figures.py
 """
@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from certsolve.force import certified_workspace, isotropic_map
-from certsolve.force.plots import plot_map, plot_maps, plot_paving
+from certsolve.force import certified_workspace, force_picture, isotropic_force, isotropic_map
+from certsolve.force.plots import plot_force_picture, plot_map, plot_maps, plot_paving
 from certsolve.robot import Robot
 
 HERE = Path(__file__).resolve().parent
@@ -29,10 +29,22 @@ def main() -> None:
         titles=[f"Fig. 10: {n} actuators" for n in (4, 5, 6)],
     )
 
+    # Fig. 4: the force polytope at one pose, its isotropic circle and centred ellipse; and
+    # MARIONET's force section (gravity-shifted centre) cut through the centre three ways
+    at = isotropic_force(robots[3], [30.0, 20.0], ellipse=True)
+    plot_force_picture(force_picture(at), HERE / "fig4-krut3.png")
+    mar = Robot.load(ROBOTS / "marionet.json")
+    at6 = isotropic_force(mar, [111.0, 58.0, 107.0], ellipse=True)
+    plot_force_picture(force_picture(at6), HERE / "fig4-marionet.png")
+    print(
+        f"fig. 4: krut-3 at (30, 20): {at.isotropic_force:.4f} N, ellipse semi-axes "
+        f"{np.round(at.ellipse.semi_axes, 3)}; marionet at (111, 58, 107): "
+        f"{at6.isotropic_force:.4f} N, centre {np.round(at6.centre, 4) + 0.0}"
+    )
+
     # extras: the certified workspace f_min >= 100 N of the 3-motor robot, and MARIONET
     ws = certified_workspace(robots[3], 100.0, [-100, 100, -100, 100], 1.0)
     plot_paving(ws, HERE / "workspace-krut3-100N.png", anchors=robots[3].A)
-    mar = Robot.load(ROBOTS / "marionet.json")
     m6 = isotropic_map(mar, np.linspace(0, 180, 181), np.linspace(0, 120, 121), z=107.0)
     plot_map(m6, HERE / "marionet-z107.png")
     for n, m in maps.items():

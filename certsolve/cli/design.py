@@ -1,0 +1,179 @@
+"""``certsolve design SPEC.json``: certified design of the force index (Krut et al. 2004, IV-B).
+
+The spec names the robot, two or more design parameters (paths into the robot file with
+ranges), the workspace box and the required isotropic force
+(:mod:`certsolve.force.design_spec`); the search (:mod:`certsolve.force.design`) returns
+parameter boxes proven good, proven bad and undecided, optionally drawn (``--plot``), and
+the robot at the centre of the best proven box (``--emit-robot``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+
+from .common import CliError, parse_floats, print_json, progress_reporter
+
+DEFAULT_EPS = 1 / 16  # = certsolve.force.design_spec.DEFAULT_EPS, without importing it here
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "design",
+        help="parameter boxes proven to give the isotropic force F over a workspace",
+        description="Certified design: pave the box of design parameters into boxes proven "
+        "good (isotropic force >= min_force at every pose of the workspace, for every "
+        "parameter value of the box), proven bad (every parameter value of the box has a "
+        "force < min_force on a common witness box of poses) and undecided (narrower than "
+        "eps).  SPEC.json: {robot, parameters: [{name, path, mode, range}], workspace, "
+        "min_force[, orientation, eps, workspace_eps]}; see docs/design.md.",
+    )
+    p.add_argument("spec", help="design specification (JSON)")
+    p.add_argument(
+        "--eps",
+        type=float,
+        default=None,
+        help=f"parameter boxes stop at this fraction of each range (spec value, else "
+        f"{DEFAULT_EPS:g})",
+    )
+    p.add_argument(
+        "--workspace-eps",
+        type=float,
+        default=None,
+        help="pose boxes stop at this width, cm (spec value, else 1/16 of the largest "
+        "workspace side)",
+    )
+    p.add_argument(
+        "--timeout", type=float, default=None, help="time limit in seconds (default: none)"
+    )
+    p.add_argument(
+        "--max-boxes",
+        type=int,
+        default=None,
+        help="limit on evaluated (parameter, pose) pairs (default: none)",
+    )
+    p.add_argument("--plot", metavar="PNG", default=None, help="picture of the paving (PNG)")
+    p.add_argument(
+        "--axes",
+        metavar="I,J",
+        default="1,2",
+        help="with --plot and more than two parameters: the two parameters drawn (1-based; "
+        "the picture is the section through the centre of the best box; default 1,2)",
+    )
+    p.add_argument(
+        "--emit-robot",
+        metavar="JSON",
+        default=None,
+        help="write the robot at the centre of the best proven box (largest margin)",
+    )
+    p.add_argument("--no-boxes", action="store_true", help="omit the box lists from --json")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+def _axes(text: str, k: int) -> tuple[int, int]:
+    vals = parse_floats(text, "--axes", 2)
+    if any(v != int(v) for v in vals):
+        raise CliError("--axes: expected two parameter numbers, e.g. 1,2")
+    i, j = (int(v) for v in vals)
+    if not (1 <= i <= k and 1 <= j <= k) or i == j:
+        raise CliError(f"--axes: two different parameter numbers in 1..{k}")
+    return i - 1, j - 1
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..force.design import design
+    from ..force.design_spec import load_design_spec
+
+    for flag, val in (("--eps", args.eps), ("--workspace-eps", args.workspace_eps)):
+        if val is not None and not (math.isfinite(val) and val > 0):
+            raise CliError(f"{flag} must be a positive number")
+    if args.eps is not None and args.eps > 1:
+        raise CliError("--eps is a fraction of each parameter range: at most 1")
+    if args.timeout is not None and not args.timeout > 0:
+        raise CliError("--timeout must be positive (seconds)")
+    if args.max_boxes is not None and args.max_boxes < 1:
+        raise CliError("--max-boxes must be at least 1")
+    spec = load_design_spec(args.spec)
+    axes = _axes(args.axes, len(spec.parameters))
+    progress, stop = progress_reporter(not args.json, line=_design_line)
+    try:
+        res = design(
+            spec=spec,
+            eps=args.eps,
+            workspace_eps=args.workspace_eps,
+            progress=progress,
+            timeout=args.timeout,
+            max_boxes=args.max_boxes,
+        )
+    finally:
+        stop()
+    if args.plot:
+        from ..force.plots import plot_design
+
+        plot_design(res, args.plot, axes=axes)
+    emitted = None
+    if args.emit_robot and res.best_robot is not None:
+        with open(args.emit_robot, "w") as fh:
+            json.dump(res.best_robot, fh, indent=2)
+            fh.write("\n")
+        emitted = args.emit_robot
+    if args.json:
+        out = res.to_dict(boxes=not args.no_boxes)
+        out.update({"plot": args.plot, "emitted_robot": emitted})
+        print_json(out)
+    else:
+        print(format_design(res, args.plot, args.emit_robot, emitted))
+    return 0
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.1f} %"
+
+
+def format_design(res, plot=None, emit=None, emitted=None) -> str:
+    ws = " x ".join(f"[{lo:g}, {hi:g}]" for lo, hi in res.workspace)
+    lines = [
+        f"{res.robot}: isotropic force >= {res.min_force:g} N on the workspace {ws} cm: "
+        f"{res.status}"
+    ]
+    for name, path, mode, r in zip(res.names, res.paths, res.modes, res.ranges):
+        lines.append(f"  parameter {name} ({path}, {mode}) in [{r[0]:g}, {r[1]:g}]")
+    c = {k: len(getattr(res, k)) for k in ("good", "bad", "undecided", "pending")}
+    lines.append(
+        f"  good {c['good']} boxes ({_pct(res.share('good'))}), bad {c['bad']} "
+        f"({_pct(res.share('bad'))}), undecided {c['undecided']} "
+        f"({_pct(res.share('undecided'))}), pending {c['pending']} ({_pct(res.share('pending'))})"
+    )
+    if res.best is not None:
+        b = res.good[res.best]
+        box = ", ".join(f"{n} in [{lo:.6g}, {hi:.6g}]" for n, (lo, hi) in zip(res.names, b))
+        centre = ", ".join(f"{n} = {0.5 * (lo + hi):.6g}" for n, (lo, hi) in zip(res.names, b))
+        m = res.margin[res.best]
+        lines.append(
+            f"  best box: {box}: f_min >= {res.min_force + m:.6g} N proven (margin {m:.4g} N)"
+        )
+        lines.append(f"  its centre: {centre}")
+    else:
+        lines.append("  no parameter box is proven good")
+    lines.append(
+        f"  {res.pairs} (parameter, pose) pairs, {res.parameter_boxes} parameter boxes, "
+        f"eps {res.eps:g} of each range, workspace eps {res.workspace_eps:g} cm, "
+        f"{res.time:.3f} s"
+    )
+    lines.extend(f"  note: {n}" for n in res.notes)
+    if plot:
+        lines.append(f"  wrote {plot}")
+    if emit:
+        lines.append(
+            f"  wrote {emitted}" if emitted else "  no proven box: --emit-robot wrote nothing"
+        )
+    return "\n".join(lines)
+
+
+def _design_line(p) -> str:
+    return (
+        f"design: {p.pairs} pairs, {p.queued} queued, {p.good} good, {p.bad} bad, "
+        f"{p.undecided} undecided, {100 * p.good_share:.1f} % proven good, {p.elapsed:.1f} s"
+    )
