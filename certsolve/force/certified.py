@@ -136,6 +136,38 @@ class CertifiedWorkspace:
                 out[f"{k}_boxes"] = getattr(self, k).tolist()
         return out
 
+    @classmethod
+    def from_dict(cls, data: dict) -> CertifiedWorkspace:
+        """The paving back from :meth:`to_dict` (with its boxes)."""
+        box = np.asarray(data["box"], dtype=float).reshape(-1, 2)
+        angles = data.get("angles") or {}
+        ang = np.asarray(list(angles.values()), dtype=float).reshape(-1, 2)
+        nd = len(box) + len(ang)
+
+        def boxes(key: str) -> np.ndarray:
+            if f"{key}_boxes" not in data:
+                raise ValueError("the paving was saved without its boxes")
+            return np.asarray(data[f"{key}_boxes"], dtype=float).reshape(-1, nd, 2)
+
+        return cls(
+            robot=data["robot"],
+            dof=int(data["dof"]),
+            min_force=float(data["min_force"]),
+            box=box,
+            angles=ang,
+            angle_names=list(angles),
+            eps=float(data["eps"]),
+            eps_angle=float(data["eps_angle"]),
+            inside=boxes("inside"),
+            outside=boxes("outside"),
+            boundary=boxes("boundary"),
+            pending=boxes("pending"),
+            status=data["status"],
+            boxes=int(data["boxes"]),
+            time=float(data["time"]),
+            notes=list(data.get("notes", [])),
+        )
+
 
 def parse_box(box, d: int) -> np.ndarray:
     """``[[xmin, xmax], ...]`` or ``[xmin, xmax, ymin, ymax, ...]`` -> ``(d, 2)`` array."""

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..robot import Robot
 from ..robot.geometry import rotation_2d, rotation_zyx
-from .isotropic import DEGENERATE, INSIDE, isotropic_values
+from .isotropic import DEGENERATE, INSIDE, OUTSIDE, isotropic_values
 
 __all__ = ["IsotropicMap", "isotropic_map", "resolve_rotation"]
 
@@ -107,6 +107,33 @@ class IsotropicMap:
                 [None if not np.isfinite(t) else float(t) for t in row] for row in self.values
             ]
         return out
+
+    @classmethod
+    def from_dict(cls, data: dict, anchors) -> IsotropicMap:
+        """The map back from :meth:`to_dict` (with its values) and the robot's anchors.
+
+        ``status`` is read off the values as :func:`~.isotropic.isotropic_values` sets it:
+        ``null`` degenerate, negative outside, otherwise inside.
+        """
+        if data.get("isotropic_force") is None:
+            raise ValueError("the map was saved without its values")
+        values = np.array(
+            [[np.nan if v is None else float(v) for v in row] for row in data["isotropic_force"]]
+        ).reshape(len(data["ys"]), len(data["xs"]))
+        status = np.where(np.isnan(values), DEGENERATE, np.where(values >= 0, INSIDE, OUTSIDE))
+        return cls(
+            robot=data["robot"],
+            dof=int(data["dof"]),
+            xs=np.asarray(data["xs"], dtype=float),
+            ys=np.asarray(data["ys"], dtype=float),
+            z=data.get("z"),
+            rotation=np.asarray(data["rotation"], dtype=float),
+            angles=data.get("angles"),
+            values=values,
+            status=status.astype(np.int8),
+            anchors=np.asarray(anchors, dtype=float),
+            time=float(data.get("summary", {}).get("time") or 0.0),
+        )
 
 
 def isotropic_map(

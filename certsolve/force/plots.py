@@ -10,11 +10,9 @@ and equal axes.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-from ..plotting import pyplot
+from ..plotting import pyplot, save
 from .certified import CertifiedWorkspace
 from .design import DesignResult
 from .maps import IsotropicMap
@@ -76,10 +74,7 @@ def plot_map(res: IsotropicMap, path=None, vmax=None, title=None, cmap="jet"):
     fig, ax = plt.subplots(figsize=(6.4, 5.6), dpi=120)
     _draw_map(ax, res, vmax=vmax, title=title, cmap=cmap)
     fig.tight_layout()
-    if path is not None:
-        fig.savefig(Path(path))
-        plt.close(fig)
-    return fig
+    return save(fig, path)
 
 
 def plot_maps(maps: list[IsotropicMap], path=None, titles=None, shared_scale=True, cmap="jet"):
@@ -100,10 +95,7 @@ def plot_maps(maps: list[IsotropicMap], path=None, titles=None, shared_scale=Tru
         )
     if shared_scale and im is not None:
         fig.colorbar(im, ax=list(axes), label="maximum isotropic force (N)", shrink=0.85)
-    if path is not None:
-        fig.savefig(Path(path), bbox_inches="tight")
-        plt.close(fig)
-    return fig
+    return save(fig, path, bbox_inches="tight")
 
 
 def plot_paving(ws: CertifiedWorkspace, path=None, title=None, anchors=None, z=None):
@@ -157,6 +149,8 @@ def plot_paving(ws: CertifiedWorkspace, path=None, title=None, anchors=None, z=N
             + "\n"
             f"inside {ws.inside_measure:.4g} {ws.unit} ({100 * ws.inside_share:.1f} % of the box)"
         )
+        if not ws.complete:
+            title += f" [{ws.status}: {len(ws.pending)} boxes not processed]"
     ax.set_title(title, fontsize=10)
     ax.legend(
         handles=handles,
@@ -167,10 +161,7 @@ def plot_paving(ws: CertifiedWorkspace, path=None, title=None, anchors=None, z=N
         frameon=False,
     )
     fig.tight_layout()
-    if path is not None:
-        fig.savefig(Path(path))
-        plt.close(fig)
-    return fig
+    return save(fig, path)
 
 
 def _fmt_vec(v) -> str:
@@ -266,10 +257,7 @@ def plot_force_picture(pic: ForcePicture, path=None, title=None):
         frameon=False,
     )  # fmt: skip
     fig.tight_layout(rect=(0, 0.17 if n == 1 else 0.1, 1, 1))
-    if path is not None:
-        fig.savefig(Path(path))
-        plt.close(fig)
-    return fig
+    return save(fig, path)
 
 
 def plot_design(res: DesignResult, path=None, axes=(0, 1), at=None, title=None):
@@ -351,7 +339,4 @@ def plot_design(res: DesignResult, path=None, axes=(0, 1), at=None, title=None):
         frameon=False,
     )  # fmt: skip
     fig.tight_layout()
-    if path is not None:
-        fig.savefig(Path(path))
-        plt.close(fig)
-    return fig
+    return save(fig, path)
