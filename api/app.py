@@ -3,8 +3,10 @@
 ``create_app(settings)`` builds the application around a :class:`certsolve.jobs.JobService`:
 jobs are queued in the service's SQLite store and run by its worker processes; the HTTP
 process only validates, stores and reads.  Routes live in one router per resource
-(:mod:`.routers.jobs`, :mod:`.routers.sync`, :mod:`.routers.meta`) and get the settings
-and services through FastAPI dependencies (:mod:`.deps`).  Run it with ``certsolve serve``
+(:mod:`.routers.jobs`, :mod:`.routers.sync`, :mod:`.routers.meta`, the pictures of finished
+jobs :mod:`.routers.pictures`, the bundled robots :mod:`.routers.examples`, and the web
+page at ``/`` :mod:`.routers.pages`) and get the settings and services through FastAPI
+dependencies (:mod:`.deps`).  Run it with ``certsolve serve``
 or ``uvicorn certsolve.api.app:create_app --factory`` (settings from ``CERTSOLVE_*``
 variables).  See ``docs/api.md``.
 """
@@ -17,13 +19,14 @@ from contextlib import asynccontextmanager
 from fastapi import FastAPI
 
 from certsolve.jobs.kinds import job_request_type
+from certsolve.jobs.pictures import Pictures
 from certsolve.jobs.quick import QuickCalls
 from certsolve.jobs.service import JobService
 from certsolve.jobs.settings import ServiceSettings
 
 from .errors import install_error_handlers
 from .middleware import BodyLimitMiddleware
-from .routers import jobs, meta, sync
+from .routers import examples, jobs, meta, pages, pictures, sync
 
 __all__ = ["API_VERSION", "create_app"]
 
@@ -61,9 +64,13 @@ def create_app(
     app.state.settings = settings
     app.state.service = service
     app.state.quick = QuickCalls(settings)
+    app.state.pictures = Pictures(service.store, settings.data_dir / "pictures")
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
     install_error_handlers(app)
     app.include_router(meta.router)
     app.include_router(jobs.router(job_request_type(settings.enable_test_kinds)))
     app.include_router(sync.router)
+    app.include_router(pictures.router)
+    app.include_router(examples.router)
+    app.include_router(pages.router)
     return app
