@@ -149,7 +149,7 @@ def screenshot(driver, name):
     if not SHOTS:
         return
     height = driver.execute_script("return document.documentElement.scrollHeight")
-    driver.set_window_size(1280, min(max(height, 700), 4000))
+    driver.set_window_size(1280, min(max(height + 120, 700), 4000))  # + the window frame
     driver.execute_script("window.scrollTo(0, 0)")
     time.sleep(0.3)
     Path(SHOTS).mkdir(parents=True, exist_ok=True)

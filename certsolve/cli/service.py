@@ -25,7 +25,8 @@ def _register_serve(sub) -> None:
     p = sub.add_parser(
         "serve",
         description="Serve the job API (FastAPI + uvicorn). Jobs run in worker processes and "
-        "are kept in DATA_DIR/jobs.sqlite3: a restart loses nothing. API docs at /docs.",
+        "are kept in DATA_DIR/jobs.sqlite3: a restart loses nothing. The web page is at /, "
+        "the API docs at /docs.",
     )
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (127.0.0.1)")
     p.add_argument("--port", type=int, default=8000, help="port (8000)")
@@ -109,7 +110,7 @@ def run_serve(args: argparse.Namespace) -> int:
         format="%(asctime)s %(levelname)s %(name)s: %(message)s",
     )
     print(
-        f"certsolve: serving http://{args.host}:{args.port} (docs at /docs) with "
+        f"certsolve: serving http://{args.host}:{args.port} (web page at /, docs at /docs) with "
         f"{settings.workers} worker(s), jobs in {settings.data_dir.resolve()}",
         file=sys.stderr,
         flush=True,

@@ -9,6 +9,8 @@
 * :mod:`.pool`     -- :class:`WorkerPool`, the supervisor (dead workers, time limits)
 * :mod:`.service`  -- :class:`JobService`, what the HTTP API and the batch runner use
 * :mod:`.batch`    -- :func:`run_batch`, offline JSON-lines batches (resumable)
+* :mod:`.pictures` -- :class:`~.pictures.Pictures`, PNG pictures of finished jobs, drawn
+  once and kept in the data directory
 
 This package may import the library (solver, robot, kinematics, force) but never ``api``.
 
