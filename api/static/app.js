@@ -476,10 +476,19 @@ function progressText(job) {
   return parts.join(" · ");
 }
 
+// the job's status, and beside a finished one "incomplete" when its search left boxes
+// pending or undecided, or was stopped (from its last progress: the list has no results)
 function statusBadge(job) {
   let word = job.status;
   if (job.cancel_requested && !FINAL.has(job.status)) word = "cancelling";
-  return el("span", { class: "badge status-" + job.status, text: word });
+  const p = job.progress || {};
+  const worry = FINAL.has(job.status) && (p.pending > 0 || p.undecided > 0 || p.stopped_by);
+  return el(
+    "span",
+    {},
+    el("span", { class: "badge status-" + job.status, text: word }),
+    worry ? el("span", { class: "badge warn", text: "incomplete" }) : ""
+  );
 }
 
 async function cancelJob(id, button) {
@@ -508,11 +517,9 @@ function jobRow(job) {
 
 function updateRow(tr, job) {
   const active = !FINAL.has(job.status);
-  const p = job.progress || {};
-  const worry = FINAL.has(job.status) && (p.pending > 0 || p.undecided > 0 || p.stopped_by);
   const [, , status, progress, when, action] = tr.children;
   tr.dataset.status = job.status;
-  status.replaceChildren(statusBadge(job), worry ? el("span", { class: "badge warn", text: "incomplete" }) : "");
+  status.replaceChildren(statusBadge(job));
   progress.replaceChildren(job.status === "running" ? el("span", { class: "spinner" }) : "", progressText(job));
   when.title = job.created_at;
   when.textContent = age(job.created_at);
