@@ -183,3 +183,17 @@ def test_pictures_without_matplotlib_name_the_extra(app, client, monkeypatch):
     extra = "a picture needs the 'plot' extra: pip install 'certsolve[plot]'"
     assert r.json()["error"] == extra
     assert client.get(f"/v1/jobs/{job_id}/map.png").status_code == 404  # checked first
+
+
+def test_a_result_without_what_the_picture_needs_is_404(app, client):
+    """A map stored without its values (as ``to_dict(values=False)`` writes it)."""
+    from certsolve.jobs.status import JobStatus
+
+    grid = {"grid": [-9, 9, -9, 9], "nx": 3, "ny": 3}
+    map_id = submit(client, {"kind": "isotropic-map", "robot": KRUT3, "params": grid})
+    store = app.state.service.store
+    job, lease = store.claim(os.getpid())
+    result = {"robot": "krut-3", "dof": 2, "xs": [-9, 0, 9], "ys": [-9, 0, 9], "summary": {}}
+    assert store.finish(job.id, lease, JobStatus.DONE, result=json.dumps(result))
+    r = client.get(f"/v1/jobs/{map_id}/map.png")
+    assert r.status_code == 404 and "cannot be drawn" in r.json()["error"]

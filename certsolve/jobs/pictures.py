@@ -37,7 +37,7 @@ from typing import Any
 
 from ..extras import require
 from .service import NoResult, NoSuchJob
-from .store import JobRow, JobStore
+from .store import JobStore
 
 __all__ = ["PICTURES", "STYLE", "NoPicture", "Pictures"]
 
@@ -89,7 +89,10 @@ class Pictures:
         require("plot", "a picture")
         with self._lock:
             if not path.exists():
-                _write(path, lambda out: _DRAW[name](full, request, result, index, out))
+                try:
+                    _write(path, lambda out: _DRAW[name](request, result, index, out))
+                except ValueError as exc:  # a result stored without what the picture needs
+                    raise NoPicture(f"job {job_id}: its result cannot be drawn ({exc})") from None
         return path
 
 
@@ -152,14 +155,14 @@ def _truncation_note(result: dict[str, Any]) -> str:
     return f"only part of a long list is stored: {lists}"
 
 
-def _draw_pose(row: JobRow, request, result, index, out: Path) -> None:
+def _draw_pose(request, result, index, out: Path) -> None:
     from ..kinematics.plots import plot_pose
 
     poses = result["solutions"]
     plot_pose(_robot(request), _fk_pose(poses[index]), out, number=(index + 1, len(poses)))
 
 
-def _draw_poses(row: JobRow, request, result, index, out: Path) -> None:
+def _draw_poses(request, result, index, out: Path) -> None:
     from ..kinematics.plots import plot_poses
 
     robot = _robot(request)
@@ -171,14 +174,14 @@ def _draw_poses(row: JobRow, request, result, index, out: Path) -> None:
     plot_poses(robot, poses, out, title=title)
 
 
-def _draw_map(row: JobRow, request, result, index, out: Path) -> None:
+def _draw_map(request, result, index, out: Path) -> None:
     from ..force.maps import IsotropicMap
     from ..force.plots import plot_map
 
     plot_map(IsotropicMap.from_dict(result, _robot(request).A), out)
 
 
-def _draw_paving(row: JobRow, request, result, index, out: Path) -> None:
+def _draw_paving(request, result, index, out: Path) -> None:
     from ..force.certified import CertifiedWorkspace
     from ..force.plots import plot_paving
 
