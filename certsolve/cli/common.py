@@ -33,18 +33,11 @@ def parse_floats(text: str, what: str, count: int | None = None) -> list[float]:
 
 
 def print_json(obj: Any) -> None:
-    json.dump(obj, sys.stdout, indent=2, allow_nan=False, default=_default)
+    """Strict JSON on stdout: numpy values become plain ones, an infinite bound ``null``."""
+    from ..jobs.jsonutil import plain
+
+    json.dump(plain(obj), sys.stdout, indent=2, allow_nan=False)
     sys.stdout.write("\n")
-
-
-def _default(o):
-    import numpy as np
-
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, np.generic):
-        return o.item()
-    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
 
 
 def progress_reporter(enabled: bool, label: str = "solving"):

@@ -30,6 +30,7 @@ import numpy as np
 
 from ..expr.compiled import CompiledSystem
 from ..expr.system import System
+from ..interval.core import splittable_width
 from .bisectors import SmearSumRelative, split
 from .buffer import BoxStack
 from .certify import Certifier, SolutionSet, box_difference
@@ -266,7 +267,7 @@ class Solver:
         lo2, hi2 = lo1[todo], hi1[todo]
         if lo2.shape[0] == 0:
             return
-        wid = hi2 - lo2
+        wid = splittable_width(lo2, hi2)  # 0 where no float is left inside
         if self.bisect_mask is not None:
             wid = wid[:, self.bisect_mask]
         small = np.all(wid <= self.eps, axis=1)
