@@ -16,11 +16,15 @@ never a traceback.
 
 from __future__ import annotations
 
-import argparse
-import sys
+import time
 
-from . import fk, force, ik, schema, service, solve
-from .common import CliError, user_errors
+_STARTED = time.monotonic()  # before the sub-commands import numpy & co.: time limits count it
+
+import argparse  # noqa: E402
+import sys  # noqa: E402
+
+from . import fk, force, ik, schema, service, solve  # noqa: E402
+from .common import CliError, user_errors  # noqa: E402
 
 __all__ = ["main", "build_parser", "CliError"]
 
@@ -42,6 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.started = _STARTED if argv is None else time.monotonic()
     try:
         return int(args.func(args) or 0)
     except OSError as exc:

@@ -11,7 +11,7 @@ from ..kinematics.fk_systems import FORMULATIONS
 from ..kinematics.tracking import Tracker
 from ..robot.geometry import parse_pose
 from ..robot.model import Robot
-from .common import CliError, parse_floats, print_json, progress_reporter
+from .common import CliError, Deadline, parse_floats, print_json, progress_reporter
 
 
 def register(sub) -> None:
@@ -35,7 +35,12 @@ def register(sub) -> None:
         "--tau-max", type=float, default=None, help="override every wire's maximum tension (N)"
     )
     p.add_argument("--eps", type=float, default=1e-8, help="width below which boxes stop")
-    p.add_argument("--timeout", type=float, default=None, help="time limit (s)")
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=None,
+        help="time limit (s) of the whole command, writing the answer included",
+    )
     p.add_argument("--max-boxes", type=int, default=None, help="limit on processed boxes")
     p.add_argument("--workers", type=int, default=1, help="worker processes")
     p.add_argument("--verify", action="store_true", help="re-prove solutions with mpmath")
@@ -81,23 +86,25 @@ def run(args: argparse.Namespace) -> int:
         else:
             print(format_track(robot, res))
         return 0
-    progress, stop = progress_reporter(not args.json)
+    deadline = Deadline(args.timeout, args.started)
+    show, stop = progress_reporter(not args.json)
     try:
         res = forward_kinematics(
             robot,
             u,
             formulation=args.formulation,
             eps=args.eps,
-            timeout=args.timeout,
+            timeout=deadline.solver_timeout(),
             max_boxes=args.max_boxes,
             seed_planar=args.seed_planar,
             seeded_only=args.seeded_only,
-            progress=progress,
+            progress=deadline.progress(show),
             workers=args.workers,
             verify=args.verify,
         )
     finally:
         stop()
+    deadline.mark(res.stats)
     if args.json:
         print_json(res.to_dict())
     else:

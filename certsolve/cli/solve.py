@@ -6,7 +6,8 @@ import argparse
 
 from ..expr.minibex import load_minibex
 from ..solver import Solver
-from .common import print_json, progress_reporter
+from ..solver.summary import MAX_LISTED
+from .common import CliError, Deadline, print_json, progress_reporter
 
 
 def register(sub) -> None:
@@ -14,12 +15,29 @@ def register(sub) -> None:
         "solve",
         help="solve a square system written in Minibex",
         description="Find every solution of a square system in its domain, each certified "
-        "unique (Krawczyk); report undecided and pending boxes.",
+        "unique (Krawczyk); report undecided and pending boxes (as hulls with box counts).",
     )
     p.add_argument("file", help="Minibex file (Variables / Constraints / end)")
     p.add_argument("--eps", type=float, default=1e-8, help="width below which boxes stop")
-    p.add_argument("--timeout", type=float, default=None, help="time limit in seconds")
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=None,
+        help="time limit (s) of the whole command, writing the answer included",
+    )
     p.add_argument("--max-boxes", type=int, default=None, help="limit on processed boxes")
+    p.add_argument(
+        "--max-undecided",
+        type=int,
+        default=MAX_LISTED,
+        help="undecided hulls listed (default %(default)s); past it the answer is incomplete",
+    )
+    p.add_argument(
+        "--max-pending",
+        type=int,
+        default=MAX_LISTED,
+        help="hulls listing the boxes left by a limit (default %(default)s)",
+    )
     p.add_argument("--workers", type=int, default=1, help="worker processes")
     p.add_argument("--verify", action="store_true", help="re-prove solutions with mpmath")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -28,22 +46,32 @@ def register(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if not args.eps > 0:
-        raise ValueError("--eps must be positive")
+        raise CliError("--eps must be positive")
     if args.workers < 1:
-        raise ValueError("--workers must be at least 1")
+        raise CliError("--workers must be at least 1")
+    if args.max_boxes is not None and args.max_boxes < 1:
+        raise CliError("--max-boxes must be at least 1")
+    if args.max_undecided < 0:
+        raise CliError("--max-undecided must be at least 0")
+    if args.max_pending < 1:
+        raise CliError("--max-pending must be at least 1")
+    deadline = Deadline(args.timeout, args.started)
     system = load_minibex(args.file)
-    solver = Solver(system, eps=args.eps)
-    progress, stop = progress_reporter(not args.json)
+    solver = Solver(
+        system, eps=args.eps, max_undecided=args.max_undecided, max_pending=args.max_pending
+    )
+    show, stop = progress_reporter(not args.json)
     try:
         result = solver.solve(
-            timeout=args.timeout,
+            timeout=deadline.solver_timeout(),
             max_boxes=args.max_boxes,
             workers=args.workers,
             verify=args.verify,
-            progress=progress,
+            progress=deadline.progress(show),
         )
     finally:
         stop()
+    deadline.mark(result.stats)
     if args.json:
         print_json(result.to_dict())
     else:
@@ -53,9 +81,16 @@ def run(args: argparse.Namespace) -> int:
 
 def format_result(name: str, result) -> str:
     st = result.stats
+    und = f"{len(result.undecided)} undecided"
+    if result.undecided_total != len(result.undecided) or result.undecided_dropped:
+        und += f" hull(s) of {result.undecided_total} box(es)"
+        if result.undecided_dropped:
+            und += f", {result.undecided_dropped} box(es) not listed"
+    pend = f"{result.pending_total} pending"
+    if result.pending_total > len(result.pending):
+        pend += f" box(es) in {len(result.pending)} hull(s)"
     lines = [
-        f"{name}: {result.status}, {len(result.solutions)} solution(s), "
-        f"{len(result.undecided)} undecided, {len(result.pending)} pending",
+        f"{name}: {result.status}, {len(result.solutions)} solution(s), {und}, {pend}",
         f"  {st.boxes} boxes, {st.time:.3f} s, {st.workers} worker(s)"
         + (f", stopped by {st.stopped_by}" if st.stopped_by else ""),
     ]
@@ -67,8 +102,9 @@ def format_result(name: str, result) -> str:
         for v, (lo, hi) in zip(names, s.box, strict=True):
             lines.append(f"  {v:<{width}} = {0.5 * lo + 0.5 * hi: .15g}   [{lo!r}, {hi!r}]")
     for k, u in enumerate(result.undecided, 1):
+        count = f", {u.boxes} boxes" if u.boxes > 1 else ""
         lines.append(
-            f"undecided {k} ({u.reason}): "
+            f"undecided {k} ({u.reason}{count}): "
             + ", ".join(
                 f"{v} in [{lo:.6g}, {hi:.6g}]" for v, (lo, hi) in zip(names, u.box, strict=True)
             )
