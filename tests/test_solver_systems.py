@@ -87,6 +87,9 @@ def check_against_reference(name: str, system, result) -> None:
 CASES = [
     ("circle-line", 1e-8, 60, False),
     ("brown-5", 1e-8, 300, False),
+    ("brown-5-vector", 1e-8, 300, False),  # vector, loop and dot product (Minibex syntax)
+    ("discrete-boundary-10", 1e-8, 120, False),  # loops
+    ("troesch-10", 1e-8, 120, False),  # loops, sinh
     ("broyden-banded-10", 1e-8, 120, False),
     ("eco-6", 1e-8, 300, False),
     ("eco-7", 1e-8, 900, False),
