@@ -391,3 +391,22 @@ def test_fuzz_mutations_of_valid_files(text, edits):
         k = int(where * len(text))
         text = text[:k] + insert + text[k + cut :]
     parses_or_fails_cleanly(text)
+
+
+def test_the_examples_of_the_documentation_parse():
+    import re
+
+    doc = (Path(__file__).resolve().parent.parent / "docs" / "minibex.md").read_text()
+    blocks = re.findall(r"```\n(.*?)```", doc, flags=re.S)
+    s = parse_minibex(blocks[0])
+    assert s.variables == ["x[1]", "x[2]", "x[3]", "y", "z"]
+    assert s.domain[3].tolist() == [-math.inf, math.inf] and s.domain[4].tolist() == [0, math.inf]
+    constants = next(b for b in blocks if b.startswith("Constants\n  a = 2.5;"))
+    s = parse_minibex(constants + "Variables\n  x;\nConstraints\n  x = a + T(2, 1, 3);\nend\n")
+    assert s.n == 1
+    functions = next(b for b in blocks if b.startswith("function dist"))
+    s = parse_minibex(
+        "Variables\n  x; y;\n" + functions + "Constraints\n  dist(x, y, 0, 0) = 1;\n"
+        "  euler(x, y)(1) = 0;\nend\n"
+    )
+    assert s.n == 2
