@@ -471,6 +471,12 @@ def krawczyk(eqs, gens, x0, radius):
     Y = mp.inverse(Jm)
     Fm = [_iv_eval(f, m) for f in F]
     JB = [[_iv_eval(Jt[i][j], B) for j in range(n)] for i in range(n)]
+    return krawczyk_inside(m, B, Y, Fm, JB)
+
+
+def krawczyk_inside(m, B, Y, Fm, JB) -> bool:
+    """``K(B) = m - Y F(m) + (I - Y J(B)) (B - m)`` inside ``int B`` (mpmath.iv)."""
+    n = len(m)
     for i in range(n):
         k = m[i] - sum((iv.mpf(Y[i, q]) * Fm[q] for q in range(n)), iv.mpf(0))
         for j in range(n):
@@ -729,16 +735,8 @@ def solve_monotone(n, phi, dphi, b, domain, log=print):
     m = [iv.mpf(v) for v in sol]
     Y = mp.inverse(mp.matrix(J(sol, mp)))
     Fm = F(m, iv)
-    JB = J(B, iv)
-    for i in range(n):
-        k = m[i] - sum((iv.mpf(Y[i, q]) * Fm[q] for q in range(n)), iv.mpf(0))
-        for j in range(n):
-            c = iv.mpf(1 if i == j else 0)
-            for q in range(n):
-                c -= iv.mpf(Y[i, q]) * JB[q][j]
-            k += c * (B[j] - m[j])
-        if not (B[i].a < k.a and k.b < B[i].b):
-            raise RuntimeError("Krawczyk test failed around the Newton point")
+    if not krawczyk_inside(m, B, Y, Fm, J(B, iv)):
+        raise RuntimeError("Krawczyk test failed around the Newton point")
     log("  Krawczyk K(B) in int(B) at radius 1e-45: the (unique) zero is certified")
     assert all(lo < v < hi for v, (lo, hi) in zip(sol, domain))
     return [sol], {"newton_digits": 3 * DIGITS, "krawczyk_radius": "1e-45"}
