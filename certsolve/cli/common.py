@@ -83,7 +83,7 @@ class Deadline:
     own ``timeout`` is a backstop.
     """
 
-    RESERVE = 0.5  # s: result objects, JSON, printing
+    RESERVE = 1.0  # s: result objects, JSON (up to ~1 MB), printing, exit
     PER_UNDECIDED = 8e-6  # s per undecided box
     PER_PENDING = 3e-7  # s per pending box
 
