@@ -146,7 +146,8 @@ def test_json_helpers():
 def test_results_are_truncated(service):
     # a search stopped after a few boxes leaves pending boxes: at most 3 are kept
     text = (
-        "Variables\n x, y in [-3, 3];\nConstraints\n x^3 - x = 0.01*y;\n y^3 - y = 0.01*x;\nend\n"
+        "Variables\n x in [-3, 3];\n y in [-3, 3];\n"
+        "Constraints\n x^3 - x = 0.01*y;\n y^3 - y = 0.01*x;\nend\n"
     )
     row = run_one(service, {"kind": "solve", "system": text, "params": {"max_boxes": 5}})
     res = json.loads(row.result)

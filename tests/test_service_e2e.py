@@ -30,9 +30,9 @@ FINAL = ("done", "failed", "cancelled")
 
 def hard_system(n: int = 8) -> str:
     """3^n real solutions in [-2, 2]^n: minutes of work for the solver."""
-    names = ", ".join(f"x{i}" for i in range(n))
+    decls = "\n".join(f"  x{i} in [-2, 2];" for i in range(n))
     eqs = "\n".join(f"  x{i}^3 - x{i} - 0.01*x{(i + 1) % n} = 0;" for i in range(n))
-    return f"Variables\n  {names} in [-2, 2];\nConstraints\n{eqs}\nend\n"
+    return f"Variables\n{decls}\nConstraints\n{eqs}\nend\n"
 
 
 def free_port() -> int:

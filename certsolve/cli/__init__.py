@@ -22,13 +22,17 @@ never a traceback.
 
 from __future__ import annotations
 
-import argparse
-import importlib
-import sys
-from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+import time
 
-from .common import CliError, option_names, user_errors
+_STARTED = time.monotonic()  # before the command imports numpy & co.: time limits count it
+
+import argparse  # noqa: E402
+import importlib  # noqa: E402
+import sys  # noqa: E402
+from collections.abc import Iterable, Sequence  # noqa: E402
+from dataclasses import dataclass  # noqa: E402
+
+from .common import CliError, option_names, user_errors  # noqa: E402
 
 __all__ = ["COMMANDS", "Command", "main", "build_parser", "CliError"]
 
@@ -152,6 +156,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser(_chosen(argv))
     args = parser.parse_args(argv)
     args.options = option_names(parser, args.command)
+    args.started = _STARTED if argv is None else time.monotonic()
     try:
         return int(args.func(args) or 0)
     except OSError as exc:

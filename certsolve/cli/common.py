@@ -1,5 +1,5 @@
 """Helpers shared by the sub-commands: user errors, option validation, number lists, JSON
-output, progress lines.
+output, progress lines, and time limits on a whole command.
 
 Options that the job service also takes are validated by the service's own pydantic models
 (:func:`validated`), so ``certsolve fk --tau-max -5`` is refused exactly as
@@ -19,6 +19,7 @@ from typing import Any, TypeVar
 
 __all__ = [
     "CliError",
+    "Deadline",
     "user_errors",
     "option_names",
     "validated",
@@ -139,7 +140,10 @@ def parse_floats(text: str, what: str, count: int | None = None) -> list[float]:
 
 
 def print_json(obj: Any) -> None:
-    json.dump(obj, sys.stdout, indent=2, allow_nan=False, default=_default)
+    """Strict JSON on stdout: numpy values become plain ones, an infinite bound ``null``."""
+    from ..jobs.jsonutil import plain
+
+    json.dump(plain(obj), sys.stdout, indent=2, allow_nan=False)
     sys.stdout.write("\n")
 
 
@@ -201,3 +205,58 @@ def progress_reporter(
             sys.stderr.flush()
 
     return update, stop
+
+
+class Deadline:
+    """``--timeout`` for a whole command: start-up, search, building and writing the answer.
+
+    The search is stopped (through its progress callback) as soon as the time used, plus an
+    estimate of what building the answer will cost, reaches the limit: a fixed reserve for
+    writing (answers are bounded, :mod:`certsolve.solver.summary`) and a cost per undecided and
+    per pending box for summarising them (``benchmarks/summary_bench.py``: merging 10^6
+    undecided boxes takes 2-8 s, summarising 10^6 pending ones 0.01-0.25 s).  The solver's
+    own ``timeout`` is a backstop.
+    """
+
+    RESERVE = 1.0  # s: result objects, JSON (up to ~1 MB), printing, exit
+    PER_UNDECIDED = 8e-6  # s per undecided box
+    PER_PENDING = 3e-7  # s per pending box
+
+    def __init__(self, timeout: float | None, started: float, option: str = "--timeout"):
+        if timeout is not None and not (timeout > 0 and timeout < float("inf")):
+            raise CliError(f"{option}: expected a positive number of seconds, got {timeout}")
+        self.timeout = timeout
+        self.started = started
+        self.hit = False
+
+    def left(self) -> float | None:
+        if self.timeout is None:
+            return None
+        return self.timeout - (time.monotonic() - self.started)
+
+    def solver_timeout(self) -> float | None:
+        """Backstop time limit for the solver (the progress check usually stops it first)."""
+        left = self.left()
+        return None if left is None else max(left - self.RESERVE, 0.01)
+
+    def progress(self, inner=None):
+        """A progress callback: ``inner``'s (if any), stopping the search in time."""
+        if self.timeout is None:
+            return inner
+
+        def check(p):
+            if inner is not None:
+                inner(p)
+            und, pend = getattr(p, "undecided", 0), getattr(p, "pending", 0)
+            cost = self.RESERVE + self.PER_UNDECIDED * und + self.PER_PENDING * pend
+            if self.left() <= cost:
+                self.hit = True
+                return False
+            return True
+
+        return check
+
+    def mark(self, stats) -> None:
+        """A search stopped by this deadline was stopped by time, not cancelled."""
+        if self.hit and stats.stopped_by == "cancelled":
+            stats.stopped_by = "timeout"

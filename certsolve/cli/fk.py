@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import CliError, parse_floats, print_json, progress_reporter, validated
+from .common import CliError, Deadline, parse_floats, print_json, progress_reporter, validated
 
 
 def register(sub) -> None:
@@ -29,7 +29,12 @@ def register(sub) -> None:
         "--tau-max", type=float, default=None, help="override every wire's maximum tension (N)"
     )
     p.add_argument("--eps", type=float, default=1e-8, help="width below which boxes stop")
-    p.add_argument("--timeout", type=float, default=None, help="time limit (s)")
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=None,
+        help="time limit (s) of the whole command, writing the answer included",
+    )
     p.add_argument("--max-boxes", type=int, default=None, help="limit on processed boxes")
     p.add_argument("--workers", type=int, default=1, help="worker processes")
     p.add_argument("--verify", action="store_true", help="re-prove solutions with mpmath")
@@ -87,23 +92,25 @@ def run(args: argparse.Namespace) -> int:
         else:
             print(format_track(robot, res))
         return 0
-    progress, stop = progress_reporter(not args.json)
+    deadline = Deadline(args.timeout, args.started)
+    show, stop = progress_reporter(not args.json)
     try:
         res = forward_kinematics(
             robot,
             params.u,
             formulation=params.formulation,
             eps=params.eps,
-            timeout=params.timeout,
+            timeout=deadline.solver_timeout(),
             max_boxes=params.max_boxes,
             seed_planar=params.seed_planar,
             seeded_only=params.seeded_only,
-            progress=progress,
+            progress=deadline.progress(show),
             workers=args.workers,
             verify=args.verify,
         )
     finally:
         stop()
+    deadline.mark(res.stats)
     if args.json:
         print_json(res.to_dict())
     else:

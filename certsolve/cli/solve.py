@@ -4,19 +4,37 @@ from __future__ import annotations
 
 import argparse
 
-from .common import CliError, print_json, progress_reporter, validated
+from ..solver.summary import MAX_LISTED
+from .common import CliError, Deadline, print_json, progress_reporter, validated
 
 
 def register(sub) -> None:
     p = sub.add_parser(
         "solve",
         description="Find every solution of a square system in its domain, each certified "
-        "unique (Krawczyk); report undecided and pending boxes.",
+        "unique (Krawczyk); report undecided and pending boxes (as hulls with box counts).",
     )
     p.add_argument("file", help="Minibex file (Variables / Constraints / end)")
     p.add_argument("--eps", type=float, default=1e-8, help="width below which boxes stop")
-    p.add_argument("--timeout", type=float, default=None, help="time limit in seconds")
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=None,
+        help="time limit (s) of the whole command, writing the answer included",
+    )
     p.add_argument("--max-boxes", type=int, default=None, help="limit on processed boxes")
+    p.add_argument(
+        "--max-undecided",
+        type=int,
+        default=MAX_LISTED,
+        help="undecided hulls listed (default %(default)s); past it the answer is incomplete",
+    )
+    p.add_argument(
+        "--max-pending",
+        type=int,
+        default=MAX_LISTED,
+        help="hulls listing the boxes left by a limit (default %(default)s)",
+    )
     p.add_argument("--workers", type=int, default=1, help="worker processes")
     p.add_argument("--verify", action="store_true", help="re-prove solutions with mpmath")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -31,19 +49,26 @@ def run(args: argparse.Namespace) -> int:
     params = validated(SolveParams, args)  # the solve job's own checks (eps, timeout, ...)
     if args.workers < 1:
         raise CliError("--workers must be at least 1")
+    deadline = Deadline(params.timeout, args.started)
     system = load_minibex(args.file)
-    solver = Solver(system, eps=params.eps)
-    progress, stop = progress_reporter(not args.json)
+    solver = Solver(
+        system,
+        eps=params.eps,
+        max_undecided=params.max_undecided,
+        max_pending=params.max_pending,
+    )
+    show, stop = progress_reporter(not args.json)
     try:
         result = solver.solve(
-            timeout=params.timeout,
+            timeout=deadline.solver_timeout(),
             max_boxes=params.max_boxes,
             workers=args.workers,
             verify=params.verify,
-            progress=progress,
+            progress=deadline.progress(show),
         )
     finally:
         stop()
+    deadline.mark(result.stats)
     if args.json:
         print_json(result.to_dict())
     else:
@@ -53,9 +78,16 @@ def run(args: argparse.Namespace) -> int:
 
 def format_result(name: str, result) -> str:
     st = result.stats
+    und = f"{len(result.undecided)} undecided"
+    if result.undecided_total != len(result.undecided) or result.undecided_dropped:
+        und += f" hull(s) of {result.undecided_total} box(es)"
+        if result.undecided_dropped:
+            und += f", {result.undecided_dropped} box(es) not listed"
+    pend = f"{result.pending_total} pending"
+    if result.pending_total > len(result.pending):
+        pend += f" box(es) in {len(result.pending)} hull(s)"
     lines = [
-        f"{name}: {result.status}, {len(result.solutions)} solution(s), "
-        f"{len(result.undecided)} undecided, {len(result.pending)} pending",
+        f"{name}: {result.status}, {len(result.solutions)} solution(s), {und}, {pend}",
         f"  {st.boxes} boxes, {st.time:.3f} s, {st.workers} worker(s)"
         + (f", stopped by {st.stopped_by}" if st.stopped_by else ""),
     ]
@@ -67,8 +99,9 @@ def format_result(name: str, result) -> str:
         for v, (lo, hi) in zip(names, s.box, strict=True):
             lines.append(f"  {v:<{width}} = {0.5 * lo + 0.5 * hi: .15g}   [{lo!r}, {hi!r}]")
     for k, u in enumerate(result.undecided, 1):
+        count = f", {u.boxes} boxes" if u.boxes > 1 else ""
         lines.append(
-            f"undecided {k} ({u.reason}): "
+            f"undecided {k} ({u.reason}{count}): "
             + ", ".join(
                 f"{v} in [{lo:.6g}, {hi:.6g}]" for v, (lo, hi) in zip(names, u.box, strict=True)
             )

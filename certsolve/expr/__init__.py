@@ -5,7 +5,8 @@
 * :mod:`.program`  -- level-grouped batched evaluation (intervals, floats) and HC4-revise
 * :mod:`.system`   -- :class:`System`: square equations + extra constraints over a box
 * :mod:`.compiled` -- :class:`CompiledSystem`: ``f``, ``J`` and HC4 over batches of boxes
-* :mod:`.minibex`  -- parser for the Minibex subset of IBEX benchmark files
+* :mod:`.ops`      -- what each DAG operation computes (forward, backward, float, smoothness)
+* :mod:`.minibex`  -- the Minibex parser (IBEX's modelling language, ``docs/minibex.md``)
 """
 
 from .compiled import CompiledSystem
@@ -13,8 +14,16 @@ from .graph import Graph
 from .node import (
     Expr,
     abs_,
+    acos,
+    acosh,
+    asin,
+    asinh,
+    atan,
+    atan2,
+    atanh,
     const,
     cos,
+    cosh,
     esum,
     exp,
     log,
@@ -22,9 +31,14 @@ from .node import (
     min_,
     param,
     pow,
+    rpow,
+    sign,
     sin,
+    sinh,
     sqr,
     sqrt,
+    tan,
+    tanh,
     var,
 )
 from .program import Program
@@ -38,8 +52,16 @@ __all__ = [
     "Program",
     "System",
     "abs_",
+    "acos",
+    "acosh",
+    "asin",
+    "asinh",
+    "atan",
+    "atan2",
+    "atanh",
     "const",
     "cos",
+    "cosh",
     "esum",
     "exp",
     "log",
@@ -47,8 +69,13 @@ __all__ = [
     "min_",
     "param",
     "pow",
+    "rpow",
+    "sign",
     "sin",
+    "sinh",
     "sqr",
     "sqrt",
+    "tan",
+    "tanh",
     "var",
 ]

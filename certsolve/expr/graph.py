@@ -13,8 +13,9 @@ their derivatives.  A few rewrites keep the DAG small and the interval evaluatio
 Derivatives are symbolic (:meth:`Graph.derivative`) and land in the same DAG, so the
 Jacobian and the functions share their common sub-expressions.  For the non-smooth
 ``abs``, ``min`` and ``max`` the "derivative" is an enclosure of the generalised gradient
-(``sign`` and the hull of the branch derivatives), which is what the mean-value form used by
-interval Newton and Krawczyk needs for Lipschitz functions.
+(``sign`` and the hull of the branch derivatives); ``sign`` has derivative 0 off its jump.
+Boxes containing such a non-smooth point are not certified anyway
+(:data:`.ops.SMOOTH`).
 """
 
 from __future__ import annotations
@@ -23,34 +24,40 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..interval import arith, elementary
 from .node import OPS, Expr
+from .ops import FORWARD
 
 __all__ = ["Graph"]
 
 _COMMUTATIVE = {"add", "mul", "min", "max", "hull"}
 
-# interval implementations used for constant folding: op -> f(lo, hi[, lo, hi], param)
-_FOLD = {
-    "add": lambda a, b, p: arith.add(*a, *b),
-    "sub": lambda a, b, p: arith.sub(*a, *b),
-    "mul": lambda a, b, p: arith.mul(*a, *b),
-    "div": lambda a, b, p: arith.div(*a, *b),
-    "min": lambda a, b, p: arith.imin(*a, *b),
-    "max": lambda a, b, p: arith.imax(*a, *b),
-    "hull": lambda a, b, p: (np.minimum(a[0], b[0]), np.maximum(a[1], b[1])),
-    "neg": lambda a, b, p: arith.neg(*a),
-    "sqr": lambda a, b, p: arith.sqr(*a),
-    "sqrt": lambda a, b, p: arith.sqrt(*a),
-    "pow": lambda a, b, p: arith.pow_int(*a, p),
-    "exp": lambda a, b, p: elementary.exp(*a),
-    "log": lambda a, b, p: elementary.log(*a),
-    "sin": lambda a, b, p: elementary.sin(*a),
-    "cos": lambda a, b, p: elementary.cos(*a),
-    "abs": lambda a, b, p: arith.iabs(*a),
-    "sign": lambda a, b, p: (np.sign(a[0]), np.sign(a[1])),
-    "cadd": lambda a, b, p: arith.shift(*a, p),
-    "cmul": lambda a, b, p: arith.scale(*a, p),
+
+def _one_plus_sqr(g: Graph, u: int) -> int:
+    return g.node("cadd", (g.node("sqr", (u,)),), 1.0)
+
+
+def _one_minus_sqr(g: Graph, u: int) -> int:
+    return g.node("cadd", (g.node("neg", (g.node("sqr", (u,)),)),), 1.0)
+
+
+def _recip(g: Graph, u: int) -> int:
+    return g.node("div", (g.const(1.0), u))
+
+
+# d f(a) / d a as a node, for unary f: (graph, node of f(a), node of a) -> node
+_CHAIN = {
+    "tan": lambda g, x, a: _one_plus_sqr(g, x),
+    "sinh": lambda g, x, a: g.node("cosh", (a,)),
+    "cosh": lambda g, x, a: g.node("sinh", (a,)),
+    "tanh": lambda g, x, a: _one_minus_sqr(g, x),
+    "atan": lambda g, x, a: _recip(g, _one_plus_sqr(g, a)),
+    "asin": lambda g, x, a: _recip(g, g.node("sqrt", (_one_minus_sqr(g, a),))),
+    "acos": lambda g, x, a: g.node("neg", (_recip(g, g.node("sqrt", (_one_minus_sqr(g, a),))),)),
+    "asinh": lambda g, x, a: _recip(g, g.node("sqrt", (_one_plus_sqr(g, a),))),
+    "acosh": lambda g, x, a: _recip(
+        g, g.node("sqrt", (g.node("cadd", (g.node("sqr", (a,)),), -1.0),))
+    ),
+    "atanh": lambda g, x, a: _recip(g, _one_minus_sqr(g, a)),
 }
 
 
@@ -187,8 +194,11 @@ class Graph:
         return self._make(op, args, param)
 
     def _fold(self, op: str, args: tuple[int, ...], param) -> int:
-        vals = [tuple(np.float64(v) for v in self.param[a]) for a in args]
-        lo, hi = _FOLD[op](vals[0], vals[1] if len(vals) > 1 else None, param)
+        vals = [np.float64(v) for a in args for v in self.param[a]]
+        if len(vals) == 2:
+            vals += [None, None]
+        with np.errstate(all="ignore"):
+            lo, hi = FORWARD[op](*vals, param)
         lo, hi = float(lo), float(hi)
         if not lo <= hi:
             raise ValueError(f"constant expression {op} is undefined (empty)")
@@ -304,6 +314,26 @@ class Graph:
             return mul(N("cos", (a,)), da)
         if op == "cos":
             return N("neg", (mul(N("sin", (a,)), da),))
+        if op in _CHAIN:
+            return mul(_CHAIN[op](self, x, a), da)
+        if op == "atan2":  # atan2(y, x): (x dy - y dx) / (x^2 + y^2)
+            y, xx = args
+            r2 = N("add", (N("sqr", (y,)), N("sqr", (xx,))))
+            terms = []
+            if da is not None:
+                terms.append(mul(xx, da))
+            if db is not None:
+                terms.append(N("neg", (mul(y, db),)))
+            num = terms[0] if len(terms) == 1 else N("add", tuple(terms))
+            return N("div", (num, r2))
+        if op == "rpow":  # x^y: y x^(y-1) dx + x^y log(x) dy
+            b = args[1]
+            terms = []
+            if da is not None:
+                terms.append(mul(mul(b, N("rpow", (a, N("cadd", (b,), -1.0)))), da))
+            if db is not None:
+                terms.append(mul(mul(x, N("log", (a,))), db))
+            return terms[0] if len(terms) == 1 else N("add", tuple(terms))
         if op == "abs":
             return mul(N("sign", (a,)), da)
         if op == "sign":

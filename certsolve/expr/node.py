@@ -24,11 +24,25 @@ __all__ = [
     "sin",
     "cos",
     "pow",
+    "tan",
+    "sinh",
+    "cosh",
+    "tanh",
+    "asin",
+    "acos",
+    "atan",
+    "asinh",
+    "acosh",
+    "atanh",
+    "atan2",
+    "rpow",
+    "sign",
     "abs_",
     "min_",
     "max_",
     "esum",
     "OPS",
+    "UNARY_FUNCTIONS",
 ]
 
 #: operation name -> arity (params: 'var' name, 'const' (lo, hi), 'pow' exponent)
@@ -43,6 +57,8 @@ OPS: dict[str, int] = {
     "min": 2,
     "max": 2,
     "hull": 2,
+    "atan2": 2,  # atan2(y, x)
+    "rpow": 2,  # x^y = exp(y log x), x > 0
     "neg": 1,
     "sqr": 1,
     "sqrt": 1,
@@ -51,6 +67,16 @@ OPS: dict[str, int] = {
     "log": 1,
     "sin": 1,
     "cos": 1,
+    "tan": 1,
+    "sinh": 1,
+    "cosh": 1,
+    "tanh": 1,
+    "asin": 1,
+    "acos": 1,
+    "atan": 1,
+    "asinh": 1,
+    "acosh": 1,
+    "atanh": 1,
     "abs": 1,
     "sign": 1,
     "cadd": 1,
@@ -188,6 +214,41 @@ def cos(x) -> Expr:
     return Expr("cos", (Expr.wrap(x),))
 
 
+def _unary_builder(op: str):
+    def build(x) -> Expr:
+        return Expr(op, (Expr.wrap(x),))
+
+    build.__name__ = op
+    build.__doc__ = f"``{op}(x)``"
+    return build
+
+
+tan = _unary_builder("tan")
+sinh = _unary_builder("sinh")
+cosh = _unary_builder("cosh")
+tanh = _unary_builder("tanh")
+asin = _unary_builder("asin")
+acos = _unary_builder("acos")
+atan = _unary_builder("atan")
+asinh = _unary_builder("asinh")
+acosh = _unary_builder("acosh")
+atanh = _unary_builder("atanh")
+sign = _unary_builder("sign")
+
+
+def atan2(y, x) -> Expr:
+    """The angle of the point ``(x, y)``, in ``(-pi, pi]`` (undefined at the origin)."""
+    return Expr("atan2", (Expr.wrap(y), Expr.wrap(x)))
+
+
+def rpow(x, y) -> Expr:
+    """Real power ``x^y = exp(y log x)``: defined for ``x > 0`` (and ``0^y = 0`` for ``y > 0``).
+
+    For an integer exponent and any real ``x`` use :func:`pow`.
+    """
+    return Expr("rpow", (Expr.wrap(x), Expr.wrap(y)))
+
+
 def abs_(x) -> Expr:
     return Expr("abs", (Expr.wrap(x),))
 
@@ -207,6 +268,30 @@ def pow(x, n) -> Expr:  # noqa: A001 - mirrors the Minibex name
             return sqr(x)
         return Expr("pow", (Expr.wrap(x),), n)
     raise ValueError(f"only integer exponents are supported (got {n!r}); use exp(n*log(x))")
+
+
+#: one-argument functions by name (the Minibex names; ``ln`` is ``log``)
+UNARY_FUNCTIONS = {
+    "sqr": sqr,
+    "sqrt": sqrt,
+    "exp": exp,
+    "log": log,
+    "ln": log,
+    "sin": sin,
+    "cos": cos,
+    "tan": tan,
+    "sinh": sinh,
+    "cosh": cosh,
+    "tanh": tanh,
+    "asin": asin,
+    "acos": acos,
+    "atan": atan,
+    "asinh": asinh,
+    "acosh": acosh,
+    "atanh": atanh,
+    "sign": sign,
+    "abs": abs_,
+}
 
 
 def esum(terms) -> Expr:

@@ -25,44 +25,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..interval import arith, elementary
 from ..interval import inplace as IP
-from ..interval import projections as P
 from .graph import Graph
+from .ops import BACKWARD as _BWD
+from .ops import FLOAT as _FLT
+from .ops import FORWARD as _FWD
+from .ops import SMOOTH
 
 __all__ = ["Program"]
 
-
-def _sign(lo, hi):
-    return np.sign(lo), np.sign(hi)
-
-
-def _hull(alo, ahi, blo, bhi):
-    return np.minimum(alo, blo), np.maximum(ahi, bhi)
-
-
-# forward interval ops: (xlo, xhi, ylo, yhi, param) -> (lo, hi)
-_FWD = {
-    "add": lambda a, b, c, d, p: arith.add(a, b, c, d),
-    "sub": lambda a, b, c, d, p: arith.sub(a, b, c, d),
-    "mul": lambda a, b, c, d, p: arith.mul(a, b, c, d),
-    "div": lambda a, b, c, d, p: arith.div(a, b, c, d),
-    "min": lambda a, b, c, d, p: arith.imin(a, b, c, d),
-    "max": lambda a, b, c, d, p: arith.imax(a, b, c, d),
-    "hull": lambda a, b, c, d, p: _hull(a, b, c, d),
-    "neg": lambda a, b, c, d, p: (-b, -a),
-    "sqr": lambda a, b, c, d, p: arith.sqr(a, b),
-    "sqrt": lambda a, b, c, d, p: arith.sqrt(a, b),
-    "pow": lambda a, b, c, d, p: arith.pow_int(a, b, p),
-    "exp": lambda a, b, c, d, p: elementary.exp(a, b),
-    "log": lambda a, b, c, d, p: elementary.log(a, b),
-    "sin": lambda a, b, c, d, p: elementary.sin(a, b),
-    "cos": lambda a, b, c, d, p: elementary.cos(a, b),
-    "abs": lambda a, b, c, d, p: arith.iabs(a, b),
-    "sign": lambda a, b, c, d, p: _sign(a, b),
-    "cadd": lambda a, b, c, d, p: arith.shift(a, b, p),
-    "cmul": lambda a, b, c, d, p: arith.scale(a, b, p),
-}
 
 # forward ops writing into the node rows (fewer temporaries, see interval.inplace):
 # (xlo, xhi, ylo, yhi, param, out_lo, out_hi)
@@ -71,49 +42,6 @@ _FWD_INTO = {
     "sub": lambda a, b, c, d, p, o, q: IP.sub_into(a, b, c, d, o, q),
     "mul": lambda a, b, c, d, p, o, q: IP.mul_into(a, b, c, d, o, q),
     "cadd": lambda a, b, c, d, p, o, q: IP.shift_into(a, b, p, o, q),
-}
-
-# backward projections: (zlo, zhi, xlo, xhi, ylo, yhi, param) -> narrowed (x[, y]) bounds
-_BWD = {
-    "add": lambda z0, z1, a, b, c, d, p: IP.bwd_add(z0, z1, a, b, c, d),
-    "sub": lambda z0, z1, a, b, c, d, p: IP.bwd_sub(z0, z1, a, b, c, d),
-    "mul": lambda z0, z1, a, b, c, d, p: IP.bwd_mul(z0, z1, a, b, c, d),
-    "div": lambda z0, z1, a, b, c, d, p: P.bwd_div(z0, z1, a, b, c, d),
-    "min": lambda z0, z1, a, b, c, d, p: P.bwd_min(z0, z1, a, b, c, d),
-    "max": lambda z0, z1, a, b, c, d, p: P.bwd_max(z0, z1, a, b, c, d),
-    "neg": lambda z0, z1, a, b, c, d, p: P.bwd_neg(z0, z1, a, b),
-    "sqr": lambda z0, z1, a, b, c, d, p: P.bwd_sqr(z0, z1, a, b),
-    "sqrt": lambda z0, z1, a, b, c, d, p: P.bwd_sqrt(z0, z1, a, b),
-    "pow": lambda z0, z1, a, b, c, d, p: P.bwd_pow(z0, z1, a, b, p),
-    "exp": lambda z0, z1, a, b, c, d, p: P.bwd_exp(z0, z1, a, b),
-    "log": lambda z0, z1, a, b, c, d, p: P.bwd_log(z0, z1, a, b),
-    "abs": lambda z0, z1, a, b, c, d, p: P.bwd_abs(z0, z1, a, b),
-    "cadd": lambda z0, z1, a, b, c, d, p: P.bwd_shift(z0, z1, a, b, p),
-    "cmul": lambda z0, z1, a, b, c, d, p: P.bwd_scale(z0, z1, a, b, p),
-    # sin, cos, sign, hull: no contraction of the argument (sound)
-}
-
-# float ops for point evaluation (Newton iterations)
-_FLT = {
-    "add": lambda x, y, p: x + y,
-    "sub": lambda x, y, p: x - y,
-    "mul": lambda x, y, p: x * y,
-    "div": lambda x, y, p: x / y,
-    "min": lambda x, y, p: np.minimum(x, y),
-    "max": lambda x, y, p: np.maximum(x, y),
-    "hull": lambda x, y, p: 0.5 * (x + y),
-    "neg": lambda x, y, p: -x,
-    "sqr": lambda x, y, p: x * x,
-    "sqrt": lambda x, y, p: np.sqrt(x),
-    "pow": lambda x, y, p: x**p,
-    "exp": lambda x, y, p: np.exp(x),
-    "log": lambda x, y, p: np.log(x),
-    "sin": lambda x, y, p: np.sin(x),
-    "cos": lambda x, y, p: np.cos(x),
-    "abs": lambda x, y, p: np.abs(x),
-    "sign": lambda x, y, p: np.sign(x),
-    "cadd": lambda x, y, p: x + p,
-    "cmul": lambda x, y, p: x * p,
 }
 
 
@@ -208,10 +136,8 @@ class Program:
             groups.append(Group(op, i, j, a, b, param, unique, la, lb))
             i = j
         self.groups = groups
-        # groups whose operation is only partially defined (domain restriction)
-        self._restricted = [
-            g for g in groups if g.op in ("sqrt", "log", "div") or (g.op == "pow" and g.param < 0)
-        ]
+        # groups whose operation is not smooth everywhere (domain restriction, poles, kinks)
+        self._restricted = [g for g in groups if g.op in SMOOTH]
         self.n_levels = 1 + max([level[x] for x in needed], default=0)
 
     # -- evaluation ------------------------------------------------------------------------
@@ -254,21 +180,20 @@ class Program:
         return LO, HI
 
     def defined_mask(self, LO: np.ndarray, HI: np.ndarray) -> np.ndarray:
-        """Boxes on which every node is defined everywhere (no domain restriction applied).
+        """Boxes on which every node is defined, continuous and differentiable everywhere.
 
-        ``sqrt`` needs its argument ``>= 0``, ``log`` ``> 0``, division and negative powers a
-        divisor without 0.  Certification requires this: the Krawczyk and Newton theorems
-        need ``f`` continuous on the whole box.
+        The tests are :data:`.ops.SMOOTH` (``sqrt`` of a non-negative argument, ``log`` of a
+        positive one, no divisor or negative power over 0, no pole of ``tan``, no kink of
+        ``abs``/``min``/``max``, ...).  Certification requires this: the Krawczyk and Newton
+        theorems need ``f`` continuously differentiable on the whole box.
         """
         ok = np.ones(LO.shape[1], dtype=bool)
         for g in self._restricted:
-            if g.op == "sqrt":
-                ok &= np.all(LO[g.a] >= 0.0, axis=0)
-            elif g.op == "log":
-                ok &= np.all(LO[g.a] > 0.0, axis=0)
-            else:
-                d = g.b if g.op == "div" else g.a
-                ok &= np.all((LO[d] > 0.0) | (HI[d] < 0.0), axis=0)
+            b_lo = None if g.b is None else LO[g.b]
+            b_hi = None if g.b is None else HI[g.b]
+            z = slice(g.start, g.stop)
+            test = SMOOTH[g.op](LO[g.a], HI[g.a], b_lo, b_hi, LO[z], HI[z], g.param)
+            ok &= np.all(test, axis=0)
         return ok
 
     def eval_float(self, x: np.ndarray, pv=None) -> np.ndarray:

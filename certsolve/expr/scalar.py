@@ -15,8 +15,11 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+import numpy as np
+
 from ..interval.rounding import EPS, LIBM_ULPS
 from .graph import Graph
+from .ops import FLOAT, FORWARD
 
 __all__ = ["ScalarProgram"]
 
@@ -170,7 +173,26 @@ def _scale(a, b, c):
     return _down(min(p, q)), _up(max(p, q))
 
 
+def _fwd(op, a, b, c=None, d=None):
+    """Any operation without inline code: its batched enclosure (:data:`.ops.FORWARD`) on
+    numpy scalars -- the same bounds as the batched evaluator, at numpy's per-call cost."""
+    f = np.float64
+    with np.errstate(all="ignore"):
+        lo, hi = FORWARD[op](
+            f(a), f(b), None if c is None else f(c), None if d is None else f(d), None
+        )
+    return float(lo), float(hi)
+
+
+def _flt(op, x, y=None):
+    """Float value of an operation without inline code (NaN outside its domain)."""
+    with np.errstate(all="ignore"):
+        return float(FLOAT[op](np.float64(x), None if y is None else np.float64(y), None))
+
+
 _HELPERS = {
+    "_fwd": _fwd,
+    "_flt": _flt,
     "_down": _down,
     "_up": _up,
     "_mul": _mul,
@@ -226,6 +248,15 @@ _FLOAT = {
     "abs": "abs({a})",
     "sign": "float(({a} > 0) - ({a} < 0))",
 }
+
+
+def _call(op: str, fmt: dict) -> str:
+    """Source of the interval call of ``op`` (inline helper, or the generic fallback)."""
+    if op in _CALL:
+        return _CALL[op].format(**fmt)
+    if "b0" in fmt:
+        return f"_fwd({op!r}, {fmt['a0']}, {fmt['a1']}, {fmt['b0']}, {fmt['b1']})"
+    return f"_fwd({op!r}, {fmt['a0']}, {fmt['a1']})"
 
 
 class _Bail(Exception):
@@ -303,8 +334,13 @@ class ScalarProgram:
             elif op == "pow":
                 rhs, frhs = f"_ipow(l{a}, h{a}, {int(p)})", f"f{a} ** {int(p)}"
             else:
-                rhs = _CALL[op].format(**fmt)
-                frhs = _FLOAT[op].format(a=f"f{a}", b=f"f{args[1]}" if len(args) == 2 else "")
+                rhs = _call(op, fmt)
+                fb = f"f{args[1]}" if len(args) == 2 else "None"
+                frhs = (
+                    _FLOAT[op].format(a=f"f{a}", b=fb)
+                    if op in _FLOAT
+                    else f"_flt({op!r}, f{a}, {fb})"
+                )
             ilines.append(f"    {lo}, {hi} = {rhs}")
             flines.append(f"    {fv} = {frhs}")
         outs = [int(o) for o in outputs]
@@ -371,7 +407,7 @@ class ScalarProgram:
                 elif op == "pow":
                     lines.append(f"    {lo}, {hi} = _ipow(l{a}, h{a}, {int(p)})")
                 else:
-                    lines.append(f"    {lo}, {hi} = " + _CALL[op].format(**fmt))
+                    lines.append(f"    {lo}, {hi} = " + _call(op, fmt))
             if v in guarded:
                 lines.append(guard.format(lo=lo, hi=hi))
         outs = [int(o) for o in outputs]

@@ -1,7 +1,8 @@
 """A square system of equations over a box: the problem handed to the solver.
 
 ``System(variables, domain, equations, constraints)`` means: find every ``x`` in the box
-``domain`` with ``f_i(x) = 0`` for all equations.  ``constraints`` are *extra* relations
+``domain`` with ``f_i(x) = 0`` for all equations (``-inf`` / ``inf`` bounds are allowed: a
+Minibex variable declared without a domain).  ``constraints`` are *extra* relations
 ``lo <= g(x) <= hi`` that every sought solution satisfies (inequalities, or redundant
 equations); the solver uses them to contract and discard boxes but never to certify, so a
 problem stays square.  A point violating a constraint is not a solution of the problem.
@@ -49,7 +50,7 @@ class System:
     """
 
     variables: list[str]
-    domain: np.ndarray  # shape (n, 2): [lo, hi] per variable
+    domain: np.ndarray  # shape (n, 2): [lo, hi] per variable (infinite bounds allowed)
     equations: list[Expr]
     constraints: list[Constraint] = field(default_factory=list)
     name: str = ""
@@ -65,10 +66,8 @@ class System:
         if dom.shape != (n, 2):
             raise ValueError(f"domain must have shape ({n}, 2), got {dom.shape}")
         for name, (lo, hi) in zip(self.variables, dom, strict=True):
-            if not (np.isfinite(lo) and np.isfinite(hi)):
-                raise ValueError(f"domain of {name} must be finite, got [{lo}, {hi}]")
-            if not lo <= hi:
-                raise ValueError(f"domain of {name} is empty: [{lo}, {hi}]")
+            if not (lo <= hi and lo < np.inf and hi > -np.inf):
+                raise ValueError(f"domain of {name} must be a non-empty interval, got [{lo}, {hi}]")
         self.domain = dom
         if len(self.equations) != n:
             raise ValueError(

@@ -9,6 +9,13 @@ interval array of shape ``(batch, n)``.  Conventions (as in IBEX):
   never ``-inf`` for a non-empty interval;
 * no bound is ever NaN in a value produced by this package.
 
+Points chosen inside intervals (:func:`midpoint`, :func:`split_point`, :func:`cut_points`) are
+always finite floats, also for unbounded intervals: ``(-inf, inf)`` is cut at 0 and
+``[a, inf)`` at ``a + 2.5 max(|a|, 1)`` (mirrored for ``(-inf, b]``), so that repeated
+bisection of a half-line moves outward geometrically (about x3.5 per split; the largest float
+is reached after ~600 splits) instead of jumping to ``±1.8e308`` as a float midpoint would.
+``[max_float, inf)`` (and its mirror) has no float inside: :func:`splittable_width` is 0 there.
+
 All functions are elementwise and vectorised; none of them loops over elements in Python.
 """
 
@@ -24,6 +31,9 @@ __all__ = [
     "is_empty",
     "width",
     "midpoint",
+    "split_point",
+    "cut_points",
+    "splittable_width",
     "radius",
     "magnitude",
     "mignitude",
@@ -59,17 +69,81 @@ def width(lo, hi):
     return up(hi - lo)
 
 
-def midpoint(lo, hi):
-    """A float inside ``[lo, hi]`` close to its centre (finite intervals; clamps otherwise).
+_MAX = float(np.finfo(np.float64).max)
+_GROWTH = 2.5  # [a, inf) is cut at a + _GROWTH * max(|a|, 1)
 
-    ``0.5*lo + 0.5*hi`` cannot overflow; the result is clipped back into the interval so
-    that rounding never puts the midpoint outside it.
-    """
+
+def _unbounded_point(lo, hi):
+    """A finite point of each interval with an infinite bound (see the module docstring)."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        up_pt = lo + _GROWTH * np.maximum(np.abs(lo), 1.0)  # [lo, inf)
+        down_pt = hi - _GROWTH * np.maximum(np.abs(hi), 1.0)  # (-inf, hi]
+    m = np.where(np.isinf(hi), up_pt, down_pt)
+    m = np.where(np.isinf(lo) & np.isinf(hi), 0.0, m)
+    return np.clip(m, -_MAX, _MAX)
+
+
+def split_point(lo, hi, ratio: float = 0.5):
+    """A finite float in ``[lo, hi]``: ``lo + ratio (hi - lo)`` for bounded intervals (without
+    overflow when ``hi - lo`` does), the unbounded rule of the module docstring otherwise."""
+    lo = np.asarray(lo, dtype=np.float64)
+    hi = np.asarray(hi, dtype=np.float64)
+    with np.errstate(invalid="ignore", over="ignore"):
+        w = hi - lo
+        m = lo + ratio * w
+        if not np.all(np.isfinite(w)):
+            m = np.where(np.isfinite(w), m, (1.0 - ratio) * lo + ratio * hi)
+    return _finish(m, lo, hi)
+
+
+def _finish(m, lo, hi):
+    """Unbounded intervals get their finite point; every point is clamped into its interval."""
+    unbounded = np.isinf(lo) | np.isinf(hi)
+    if np.any(unbounded):
+        m = np.where(unbounded, _unbounded_point(lo, hi), m)
+    return np.minimum(np.maximum(m, lo), hi)
+
+
+def midpoint(lo, hi):
+    """A finite float inside ``[lo, hi]`` close to its centre (``0.5 lo + 0.5 hi``, which
+    cannot overflow; the unbounded rule of the module docstring for infinite bounds)."""
+    lo = np.asarray(lo, dtype=np.float64)
+    hi = np.asarray(hi, dtype=np.float64)
     with np.errstate(invalid="ignore", over="ignore"):
         m = 0.5 * lo + 0.5 * hi
-    m = np.where(np.isnan(m), 0.0, m)  # [-inf, inf]
-    m = np.where(np.isinf(m), np.clip(m, -np.finfo(float).max, np.finfo(float).max), m)
-    return np.minimum(np.maximum(m, lo), hi)
+    return _finish(m, lo, hi)
+
+
+def cut_points(lo, hi, slices: int):
+    """``slices + 1`` non-decreasing cut points of each interval, from ``lo`` to ``hi``.
+
+    Bounded intervals are cut evenly; an unbounded one at its :func:`split_point` only (the
+    other cuts repeat it: degenerate slices are harmless, the slices still cover the interval).
+    Returns an array of shape ``lo.shape + (slices + 1,)``.
+    """
+    lo = np.asarray(lo, dtype=np.float64)[..., None]
+    hi = np.asarray(hi, dtype=np.float64)[..., None]
+    t = np.arange(slices + 1) / slices
+    with np.errstate(invalid="ignore", over="ignore"):
+        w = hi - lo
+        cuts = lo + w * t
+        if not np.all(np.isfinite(w)):
+            cuts = np.where(np.isfinite(w), cuts, lo * (1.0 - t) + hi * t)
+    unbounded = np.isinf(lo) | np.isinf(hi)
+    if np.any(unbounded):
+        cuts = np.where(unbounded, split_point(lo, hi), cuts)
+    cuts = np.minimum(np.maximum(cuts, lo), hi)
+    cuts[..., 0] = lo[..., 0]
+    cuts[..., -1] = hi[..., 0]
+    return cuts
+
+
+def splittable_width(lo, hi):
+    """``hi - lo``, or 0 where no float lies strictly inside (the interval cannot be split)."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        w = hi - lo
+    m = split_point(lo, hi)
+    return np.where((m > lo) & (m < hi), w, 0.0)
 
 
 def radius(lo, hi, mid=None):

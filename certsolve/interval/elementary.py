@@ -1,15 +1,33 @@
-"""Elementary functions on intervals: ``exp``, ``log``, ``sin``, ``cos``.
+"""Elementary functions on intervals: exponential, logarithm, trigonometric, hyperbolic, their
+inverses, ``atan2`` and real powers.
 
 libm results are not correctly rounded, so bounds are widened by
 :data:`~certsolve.interval.rounding.LIBM_ULPS` ulps (:func:`widen_down` / :func:`widen_up`)
-instead of one.  ``log`` restricts its argument to ``(0, inf)`` (IBEX's domain convention:
-``log([-1, 1]) = [-inf, 0]``, ``log([-2, -1])`` is empty).
+instead of one.  Partial functions follow IBEX's *domain restriction* convention: the image of
+an interval is the image of its intersection with the function's domain (``log([-1, 1]) =
+[-inf, 0]``, ``asin([0, 2]) = [0, pi/2]``), and an interval with no point in the domain
+(``log([-2, -1])``) gives the empty interval.
 
-``sin`` and ``cos`` are monotone between critical points.  A bound is the extreme value
-(``±1``) whenever a critical point ``kπ/2`` may lie in the interval; the test is made on the
-interval enlarged by a relative ``1e-9`` so that the inexact value of π in floating point can
-never hide a critical point (a false positive only loses tightness).  Intervals wider than
-``2π``, or with huge bounds, map to ``[-1, 1]``.
+* Monotone functions (``exp log sinh tanh atan asin acos asinh acosh atanh``) map the end
+  points; a bound that overflows stays a valid (finite) bound.
+* ``sin``, ``cos`` and ``cosh`` are monotone between critical points.  A bound is the extreme
+  value (``±1``, or ``cosh(0) = 1``) whenever a critical point may lie in the interval; for
+  ``sin``/``cos`` the test ``kπ/2 ∈ [a, b]`` is made on the interval enlarged by a relative
+  ``1e-9`` so that the inexact value of π in floating point can never hide a critical point (a
+  false positive only loses tightness).  Intervals wider than ``2π``, or with huge bounds, map to
+  ``[-1, 1]``.
+* ``tan`` is increasing between its poles ``π/2 + kπ``; an interval that may contain a pole (same
+  enlarged test) maps to ``(-inf, inf)``, the hull of the two half-lines.
+* ``atan2(y, x)`` (the angle of the point ``(x, y)``, in ``(-π, π]``, undefined at the origin) is
+  continuous off the half-line ``{y = 0, x < 0}``; on a box that does not cross it, the angle is
+  extreme at a corner, since a box is convex and the directions of a convex set seen from a point
+  outside it form an arc ending at the directions of vertices.  A box crossing the half-line maps
+  to ``[-π, π]``.
+* ``rpow(x, y) = x^y = exp(y log x)`` (IBEX's real power) on the domain ``x > 0``, extended by
+  its limits ``0^y = 0`` for ``y > 0``.  For fixed ``y`` it is monotone in ``x``, and for fixed
+  ``x`` monotone in ``y``, so over a box it is extreme at a corner (limits at ``x = 0`` or
+  ``x = inf`` included: ``0^y`` is ``inf, 1, 0`` and ``inf^y`` is ``0, 1, inf`` for ``y < 0, = 0,
+  > 0``, which are monotone in ``y`` too).
 """
 
 from __future__ import annotations
@@ -18,11 +36,31 @@ import numpy as np
 
 from .rounding import widen_down, widen_up
 
-__all__ = ["exp", "log", "sin", "cos"]
+__all__ = [
+    "exp",
+    "log",
+    "sin",
+    "cos",
+    "tan",
+    "sinh",
+    "cosh",
+    "tanh",
+    "asin",
+    "acos",
+    "atan",
+    "asinh",
+    "acosh",
+    "atanh",
+    "atan2",
+    "rpow",
+]
 
 _INF = np.inf
 _TWO_PI = 2.0 * np.pi
-_HUGE = 1e8  # beyond this, return [-1, 1] for sin/cos
+_HUGE = 1e8  # beyond this, return [-1, 1] for sin/cos ((-inf, inf) for tan)
+_MAX = float(np.finfo(np.float64).max)
+_HALF_PI_UP = float(np.nextafter(0.5 * np.pi, np.inf))  # > π/2 (float(π/2) is below it)
+_PI_UP = float(np.nextafter(np.pi, np.inf))  # > π
 
 
 def exp(alo, ahi):
@@ -81,3 +119,166 @@ def sin(alo, ahi):
 def _keep_empty(lo, hi, alo, ahi):
     emp = ~(alo <= ahi)
     return np.where(emp, _INF, lo), np.where(emp, -_INF, hi)
+
+
+def _finite_bounds(lo, hi):
+    """A lower bound never ``+inf`` and an upper bound never ``-inf`` (overflowed values)."""
+    return np.minimum(lo, _MAX), np.maximum(hi, -_MAX)
+
+
+def _increasing(fn, alo, ahi, rlo=-_INF, rhi=_INF):
+    """Enclosure of an increasing libm function, clipped to its range ``[rlo, rhi]``."""
+    with np.errstate(all="ignore"):
+        lo = widen_down(fn(alo))
+        hi = widen_up(fn(ahi))
+    lo, hi = _finite_bounds(np.maximum(lo, rlo), np.minimum(hi, rhi))
+    return _keep_empty(lo, hi, alo, ahi)
+
+
+def _restrict(alo, ahi, dlo, dhi, open_lo=False, open_hi=False):
+    """Intersect with the domain ``[dlo, dhi]``; mask of intervals with no point in it.
+
+    ``open_lo`` / ``open_hi`` exclude the end point itself (``atanh`` on ``(-1, 1)``).
+    """
+    lo = np.maximum(alo, dlo)
+    hi = np.minimum(ahi, dhi)
+    dead = ~(alo <= ahi) | (ahi < dlo) | (alo > dhi)
+    if open_lo:
+        dead |= ahi <= dlo
+    if open_hi:
+        dead |= alo >= dhi
+    return lo, hi, dead
+
+
+def _empty_where(lo, hi, dead):
+    return np.where(dead, _INF, lo), np.where(dead, -_INF, hi)
+
+
+def tan(alo, ahi):
+    """``tan`` between poles; ``(-inf, inf)`` when a pole ``π/2 + kπ`` may be inside."""
+    with np.errstate(all="ignore"):
+        ta = np.tan(alo)
+        tb = np.tan(ahi)
+        lo = widen_down(ta)
+        hi = widen_up(tb)
+        slack = 1e-9 * np.maximum(1.0, np.maximum(np.abs(alo), np.abs(ahi)))
+        k = np.ceil((alo - slack - 0.5 * np.pi) / np.pi)
+        pole = 0.5 * np.pi + k * np.pi <= ahi + slack
+        wide = ~(ahi - alo < np.pi) | ~(np.maximum(np.abs(alo), np.abs(ahi)) < _HUGE)
+        full = pole | wide | ~(lo <= hi)
+    lo = np.where(full, -_INF, lo)
+    hi = np.where(full, _INF, hi)
+    return _keep_empty(*_finite_bounds(lo, hi), alo, ahi)
+
+
+def sinh(alo, ahi):
+    return _increasing(np.sinh, alo, ahi)
+
+
+def cosh(alo, ahi):
+    """Even, decreasing then increasing: the minimum 1 is at 0."""
+    mig = np.where(ahi < 0.0, -ahi, np.where(alo > 0.0, alo, 0.0))
+    mag = np.maximum(np.abs(alo), np.abs(ahi))
+    with np.errstate(all="ignore"):
+        lo = np.maximum(widen_down(np.cosh(mig)), 1.0)
+        hi = widen_up(np.cosh(mag))
+    return _keep_empty(*_finite_bounds(lo, hi), alo, ahi)
+
+
+def tanh(alo, ahi):
+    return _increasing(np.tanh, alo, ahi, -1.0, 1.0)
+
+
+def atan(alo, ahi):
+    return _increasing(np.arctan, alo, ahi, -_HALF_PI_UP, _HALF_PI_UP)
+
+
+def asinh(alo, ahi):
+    return _increasing(np.arcsinh, alo, ahi)
+
+
+def asin(alo, ahi):
+    """``asin`` on ``[-1, 1]`` (domain restriction)."""
+    lo, hi, dead = _restrict(alo, ahi, -1.0, 1.0)
+    rlo, rhi = _increasing(np.arcsin, lo, hi, -_HALF_PI_UP, _HALF_PI_UP)
+    return _empty_where(rlo, rhi, dead)
+
+
+def acos(alo, ahi):
+    """``acos`` on ``[-1, 1]``, decreasing."""
+    lo, hi, dead = _restrict(alo, ahi, -1.0, 1.0)
+    with np.errstate(all="ignore"):
+        rlo = np.maximum(widen_down(np.arccos(hi)), 0.0)
+        rhi = np.minimum(widen_up(np.arccos(lo)), _PI_UP)
+    return _empty_where(rlo, rhi, dead)
+
+
+def acosh(alo, ahi):
+    """``acosh`` on ``[1, inf)``."""
+    lo, hi, dead = _restrict(alo, ahi, 1.0, _INF)
+    rlo, rhi = _increasing(np.arccosh, lo, hi, 0.0, _INF)
+    return _empty_where(rlo, rhi, dead)
+
+
+def atanh(alo, ahi):
+    """``atanh`` on ``(-1, 1)``: an end point at ``±1`` gives an infinite bound."""
+    lo, hi, dead = _restrict(alo, ahi, -1.0, 1.0, open_lo=True, open_hi=True)
+    rlo, rhi = _increasing(np.arctanh, lo, hi)
+    return _empty_where(rlo, rhi, dead)
+
+
+def atan2(ylo, yhi, xlo, xhi):
+    """The angle of ``(x, y)`` in ``(-π, π]`` over a box (see the module docstring).
+
+    Empty when the box is the origin alone (no point of the domain).
+    """
+    ylo, yhi, xlo, xhi = np.broadcast_arrays(
+        np.asarray(ylo, dtype=np.float64) + 0.0,  # -0.0 -> +0.0: atan2(+0, x < 0) = π
+        np.asarray(yhi, dtype=np.float64) + 0.0,
+        np.asarray(xlo, dtype=np.float64) + 0.0,
+        np.asarray(xhi, dtype=np.float64) + 0.0,
+    )
+    cut = (xlo < 0.0) & (ylo < 0.0) & (yhi >= 0.0)
+    with np.errstate(all="ignore"):
+        corners = []
+        for y in (ylo, yhi):
+            for x in (xlo, xhi):
+                origin = (x == 0.0) & (y == 0.0)
+                corners.append((np.arctan2(y, x), origin))
+    big = np.full(ylo.shape, _INF)
+    small = np.full(ylo.shape, -_INF)
+    for v, origin in corners:
+        big = np.where(origin, big, np.minimum(big, v))
+        small = np.where(origin, small, np.maximum(small, v))
+    dead = (xlo == 0.0) & (xhi == 0.0) & (ylo == 0.0) & (yhi == 0.0)
+    with np.errstate(all="ignore"):
+        lo = np.maximum(widen_down(big), -_PI_UP)
+        hi = np.minimum(widen_up(small), _PI_UP)
+    lo = np.where(cut, -_PI_UP, lo)
+    hi = np.where(cut, _PI_UP, hi)
+    dead |= ~(ylo <= yhi) | ~(xlo <= xhi)
+    return _empty_where(lo, hi, dead)
+
+
+def rpow(xlo, xhi, ylo, yhi):
+    """``x^y = exp(y log x)`` over ``x > 0`` (``0^y = 0`` for ``y > 0``): min/max of corners.
+
+    Empty where the box has no point of the domain (``x < 0``, or ``x = 0`` with ``y <= 0``).
+    """
+    xlo, xhi, ylo, yhi = np.broadcast_arrays(
+        *(np.asarray(v, dtype=np.float64) for v in (xlo, xhi, ylo, yhi))
+    )
+    a = np.maximum(xlo, 0.0)
+    big = np.full(a.shape, _INF)
+    small = np.full(a.shape, -_INF)
+    with np.errstate(all="ignore"):
+        for x in (a, xhi):
+            for y in (ylo, yhi):
+                v = np.power(x, y)
+                big = np.minimum(big, v)
+                small = np.maximum(small, v)
+        lo = np.maximum(widen_down(big), 0.0)
+        hi = widen_up(small)
+    lo, hi = _finite_bounds(lo, hi)
+    dead = (xhi < 0.0) | ((xhi == 0.0) & (yhi <= 0.0)) | ~(xlo <= xhi) | ~(ylo <= yhi)
+    return _empty_where(lo, hi, dead)

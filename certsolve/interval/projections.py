@@ -9,6 +9,13 @@ Naming follows IBEX (``bwd_add``, ``bwd_mul``, ...).  ``bwd_mul`` and ``bwd_div`
 gap of the extended division (:func:`mul_inverse`) before taking the hull, as IBEX does.
 ``bwd_sin`` and ``bwd_cos`` contract only through their range (``[z] ∩ [-1, 1]``) and
 leave the argument unchanged: sound, and cheap; interval Newton does the rest.
+
+The other elementary functions are inverted on their monotone branches: ``bwd_sinh``,
+``bwd_tanh``, ``bwd_asinh``, ``bwd_atanh``, ``bwd_atan``, ``bwd_asin``, ``bwd_acos``,
+``bwd_acosh`` (one branch), ``bwd_cosh`` (two, ``±acosh(z)``), ``bwd_tan`` (when the argument
+lies between two consecutive poles; otherwise no contraction), ``bwd_rpow`` (``x = z^(1/y)``
+for an exponent away from 0, and ``x >= 0`` always) and ``bwd_sign``.  ``atan2`` has no
+projection (no contraction of its arguments: sound).
 """
 
 from __future__ import annotations
@@ -16,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import arith, elementary
-from .rounding import down, up
+from .rounding import down, up, widen_down, widen_up
 
 __all__ = [
     "mul_inverse",
@@ -35,9 +42,26 @@ __all__ = [
     "bwd_abs",
     "bwd_min",
     "bwd_max",
+    "bwd_tan",
+    "bwd_sinh",
+    "bwd_cosh",
+    "bwd_tanh",
+    "bwd_atan",
+    "bwd_asin",
+    "bwd_acos",
+    "bwd_asinh",
+    "bwd_acosh",
+    "bwd_atanh",
+    "bwd_rpow",
+    "bwd_sign",
 ]
 
 _INF = np.inf
+_HALF_PI = 0.5 * np.pi  # the float below π/2
+_PI = float(np.pi)  # the float below π
+_HALF_PI_UP = float(np.nextafter(0.5 * np.pi, np.inf))
+_PI_LO = _PI
+_PI_HI = float(np.nextafter(np.pi, np.inf))
 
 
 def _meet(alo, ahi, blo, bhi):
@@ -241,3 +265,126 @@ def bwd_max(zlo, zhi, xlo, xhi, ylo, yhi):
     nxlo = np.where(yhi < zlo, np.maximum(xlo, zlo), xlo)
     nylo = np.where(xhi < zlo, np.maximum(ylo, zlo), ylo)
     return nxlo, nxhi, nylo, nyhi
+
+
+def bwd_sinh(zlo, zhi, xlo, xhi):
+    """z = sinh(x): x = asinh(z)."""
+    return _meet(xlo, xhi, *elementary.asinh(zlo, zhi))
+
+
+def bwd_asinh(zlo, zhi, xlo, xhi):
+    """z = asinh(x): x = sinh(z)."""
+    return _meet(xlo, xhi, *elementary.sinh(zlo, zhi))
+
+
+def bwd_tanh(zlo, zhi, xlo, xhi):
+    """z = tanh(x) ∈ (-1, 1): x = atanh(z)."""
+    return _meet(xlo, xhi, *elementary.atanh(zlo, zhi))
+
+
+def bwd_atanh(zlo, zhi, xlo, xhi):
+    """z = atanh(x): x = tanh(z) ∈ [-1, 1]."""
+    return _meet(xlo, xhi, *elementary.tanh(zlo, zhi))
+
+
+def bwd_cosh(zlo, zhi, xlo, xhi):
+    """z = cosh(x) >= 1: x ∈ ±acosh(z)."""
+    rlo, rhi = elementary.acosh(zlo, zhi)
+    return _hull_of_meets(xlo, xhi, rlo, rhi, -rhi, -rlo)
+
+
+def bwd_acosh(zlo, zhi, xlo, xhi):
+    """z = acosh(x) >= 0: x = cosh(z ∩ [0, inf)) >= 1."""
+    dead = zhi < 0.0
+    clo, chi = elementary.cosh(np.maximum(zlo, 0.0), zhi)
+    lo, hi = _meet(xlo, xhi, np.maximum(clo, 1.0), chi)
+    return np.where(dead, _INF, lo), np.where(dead, -_INF, hi)
+
+
+def _branch_inverse(fn, zlo, zhi, rlo, rhi, at_lo, at_hi, increasing=True):
+    """Image by ``fn`` of ``z ∩ [rlo, rhi]`` where ``fn`` is monotone on the branch.
+
+    ``rlo, rhi`` are floats *inside* the branch (the float below π/2, ...); a ``z`` bound beyond
+    them maps to ``at_lo`` / ``at_hi``, the value of the inverse at the branch's real end (or
+    beyond it), so the result is sound even though the float end is not the real one.
+    """
+    with np.errstate(all="ignore"):
+        a = np.clip(zlo, rlo, rhi)
+        b = np.clip(zhi, rlo, rhi)
+        fa = fn(a)
+        fb = fn(b)
+    if increasing:
+        lo = np.where(zlo <= rlo, at_lo, widen_down(fa))
+        hi = np.where(zhi >= rhi, at_hi, widen_up(fb))
+    else:
+        lo = np.where(zhi >= rhi, at_lo, widen_down(fb))
+        hi = np.where(zlo <= rlo, at_hi, widen_up(fa))
+    return lo, hi
+
+
+def bwd_atan(zlo, zhi, xlo, xhi):
+    """z = atan(x) ∈ (-π/2, π/2): x = tan(z)."""
+    lo, hi = _branch_inverse(np.tan, zlo, zhi, -_HALF_PI, _HALF_PI, -_INF, _INF)
+    dead = (zhi < -_HALF_PI_UP) | (zlo > _HALF_PI_UP)
+    lo, hi = _meet(xlo, xhi, lo, hi)
+    return np.where(dead, _INF, lo), np.where(dead, -_INF, hi)
+
+
+def bwd_asin(zlo, zhi, xlo, xhi):
+    """z = asin(x) ∈ [-π/2, π/2]: x = sin(z) ∈ [-1, 1]."""
+    lo, hi = _branch_inverse(np.sin, zlo, zhi, -_HALF_PI, _HALF_PI, -1.0, 1.0)
+    dead = (zhi < -_HALF_PI_UP) | (zlo > _HALF_PI_UP)
+    lo, hi = _meet(xlo, xhi, np.maximum(lo, -1.0), np.minimum(hi, 1.0))
+    return np.where(dead, _INF, lo), np.where(dead, -_INF, hi)
+
+
+def bwd_acos(zlo, zhi, xlo, xhi):
+    """z = acos(x) ∈ [0, π]: x = cos(z) ∈ [-1, 1] (decreasing)."""
+    lo, hi = _branch_inverse(np.cos, zlo, zhi, 0.0, _PI, -1.0, 1.0, increasing=False)
+    dead = (zhi < 0.0) | (zlo > _PI_HI)
+    lo, hi = _meet(xlo, xhi, np.maximum(lo, -1.0), np.minimum(hi, 1.0))
+    return np.where(dead, _INF, lo), np.where(dead, -_INF, hi)
+
+
+def bwd_tan(zlo, zhi, xlo, xhi):
+    """z = tan(x): x ∈ atan(z) + kπ when ``[x]`` lies between the poles around ``kπ``.
+
+    ``k`` is taken from the midpoint; the branch test and ``kπ`` use outward-rounded bounds
+    of π, so a box touching a pole is left unchanged (sound).
+    """
+    with np.errstate(all="ignore"):
+        k = np.round((0.5 * xlo + 0.5 * xhi) / _PI_LO)
+        k = np.where(np.abs(k) < 1e8, k, 0.0)  # also NaN / inf midpoints
+        klo, khi = arith.mul(k, k, np.float64(_PI_LO), np.float64(_PI_HI))  # ∋ kπ
+        half = 0.5 * _PI_LO  # <= π/2 (exact halving)
+        inside = (xlo > up(khi - half)) & (xhi < down(klo + half))
+        alo, ahi = elementary.atan(zlo, zhi)
+        blo, bhi = arith.add(alo, ahi, klo, khi)
+    lo, hi = _meet(xlo, xhi, blo, bhi)
+    return np.where(inside, lo, xlo), np.where(inside, hi, xhi)
+
+
+def bwd_rpow(zlo, zhi, xlo, xhi, ylo, yhi):
+    """z = x^y (x > 0, or x = 0 < y): x >= 0, and x = z^(1/y) when 0 ∉ [y]; y unchanged."""
+    xlo = np.maximum(xlo, 0.0)
+    zlo = np.maximum(zlo, 0.0)
+    away = (ylo > 0.0) | (yhi < 0.0)
+    one = np.ones_like(ylo)
+    with np.errstate(all="ignore"):
+        rlo, rhi = arith.div(one, one, ylo, yhi)
+        plo, phi = elementary.rpow(zlo, zhi, rlo, rhi)
+    nlo, nhi = _meet(xlo, xhi, plo, phi)
+    nlo = np.where(away, nlo, xlo)
+    nhi = np.where(away, nhi, xhi)
+    dead = zhi < 0.0
+    return np.where(dead, _INF, nlo), np.where(dead, -_INF, nhi), ylo, yhi
+
+
+def bwd_sign(zlo, zhi, xlo, xhi):
+    """z = sign(x) ∈ {-1, 0, 1}: x keeps the signs whose value lies in ``[z]``."""
+    neg = (zlo <= -1.0) & (zhi >= -1.0)
+    zero = (zlo <= 0.0) & (zhi >= 0.0)
+    pos = (zlo <= 1.0) & (zhi >= 1.0)
+    lo = np.where(neg, -_INF, np.where(zero, 0.0, np.where(pos, 0.0, _INF)))
+    hi = np.where(pos, _INF, np.where(zero, 0.0, np.where(neg, 0.0, -_INF)))
+    return _meet(xlo, xhi, lo, hi)

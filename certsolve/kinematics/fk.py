@@ -101,6 +101,8 @@ class FKResult:
             "variables": d["variables"],
             "undecided": d["undecided"],
             "pending": d["pending"],
+            **{k: d[k] for k in ("undecided_total", "undecided_dropped", "pending_total")},
+            "pending_boxes": d["pending_boxes"],
             "stats": d["stats"],
             "seeding": self.seeding,
             "notes": list(self.notes),

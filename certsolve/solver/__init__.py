@@ -9,6 +9,7 @@
 * :mod:`.parallel`        -- the same search over ``multiprocessing`` workers
 * :mod:`.verify`          -- independent re-proof of certificates with ``mpmath.iv``
 * :mod:`.result`          -- :class:`SolveResult` and friends (plain, JSON-ready data)
+* :mod:`.summary`         -- undecided / pending boxes as bounded lists of hulls with counts
 """
 
 from .branch_and_prune import Progress, SearchState, Solver, solve

@@ -9,11 +9,17 @@ symmetric domain does not land on a bisection face.  Variables narrower than ``e
 never chosen, nor variables outside an optional mask (IBEX's "auxiliary" variables:
 quantities determined by the others, like the wire lengths of forward kinematics, which
 contraction narrows as the others shrink).
+
+Split points and widths come from :mod:`certsolve.interval.core` (:func:`split_point`,
+:func:`splittable_width`): an unbounded interval is split at a finite point, and an interval
+with no float strictly inside is never chosen.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from ..interval.core import split_point, splittable_width
 
 __all__ = ["SmearSumRelative", "LargestFirst", "Prioritized", "split"]
 
@@ -21,9 +27,7 @@ __all__ = ["SmearSumRelative", "LargestFirst", "Prioritized", "split"]
 def split(lo, hi, var, ratio: float):
     """Split box ``k`` along ``var[k]``; returns the two halves as ``(lo, hi)`` pairs."""
     rows = np.arange(lo.shape[0])
-    a, b = lo[rows, var], hi[rows, var]
-    m = a + ratio * (b - a)
-    m = np.minimum(np.maximum(m, a), b)
+    m = split_point(lo[rows, var], hi[rows, var], ratio)
     lo1, hi1 = lo.copy(), hi.copy()
     lo2, hi2 = lo.copy(), hi.copy()
     hi1[rows, var] = m
@@ -36,7 +40,7 @@ class LargestFirst:
         self.ratio = ratio
 
     def choose(self, lo, hi, jlo=None, jhi=None, eps: float = 0.0, mask=None) -> np.ndarray:
-        w = hi - lo
+        w = splittable_width(lo, hi)
         if mask is not None:
             w = np.where(mask, w, -1.0)
         return np.argmax(w, axis=1)
@@ -48,7 +52,7 @@ class SmearSumRelative:
 
     def choose(self, lo, hi, jlo, jhi, eps: float = 0.0, mask=None) -> np.ndarray:
         """Variable to split per box; ``mask`` (n,) restricts the choice (default: all)."""
-        w = hi - lo
+        w = splittable_width(lo, hi)
         with np.errstate(all="ignore"):
             mag = np.maximum(np.abs(jlo), np.abs(jhi))  # (B, n, n)
             smear = mag * w[:, None, :]
@@ -85,7 +89,7 @@ class Prioritized:
         self._smear = SmearSumRelative(ratio)
 
     def choose(self, lo, hi, jlo, jhi, eps: float = 0.0, mask=None) -> np.ndarray:
-        w = hi - lo
+        w = splittable_width(lo, hi)
         prim = self.primary if mask is None else self.primary & mask
         sec = self.secondary if mask is None else self.secondary & mask
         best = self._smear.choose(lo, hi, jlo, jhi, eps, prim)

@@ -30,12 +30,14 @@ import numpy as np
 
 from ..expr.compiled import CompiledSystem
 from ..expr.system import System
+from ..interval.core import splittable_width
 from .bisectors import SmearSumRelative, split
 from .buffer import BoxStack
 from .certify import Certifier, SolutionSet, box_difference
 from .contractors import HC4, IntervalNewton, PartialNewton, log_volume_ratio
 from .result import Solution, SolveResult, Stats, Undecided
 from .shaving import CID
+from .summary import MAX_LISTED, summarize
 
 __all__ = ["Solver", "Progress", "solve"]
 
@@ -77,6 +79,8 @@ class Solver:
         Jacobian + CID need 2-3x fewer boxes on Katsura and the 6R system.
     subsystems:
         square sub-systems ``(equations, variables)`` also contracted by partial Newton.
+    max_undecided, max_pending:
+        caps on the undecided and pending hulls listed in the result (:mod:`.summary`).
     """
 
     def __init__(
@@ -92,9 +96,15 @@ class Solver:
         subsystems=(),
         newton_groups="variables",
         cid_slices: int = 4,
+        max_undecided: int = MAX_LISTED,
+        max_pending: int = MAX_LISTED,
     ):
         if not eps > 0:
             raise ValueError("eps must be positive")
+        if not (int(max_undecided) >= 0 and int(max_pending) >= 1):
+            raise ValueError("max_undecided must be >= 0 and max_pending >= 1")
+        self.max_undecided = int(max_undecided)
+        self.max_pending = int(max_pending)
         self.csys = system if isinstance(system, CompiledSystem) else CompiledSystem(system)
         self.system = self.csys.system
         self.n = self.csys.n
@@ -266,7 +276,7 @@ class Solver:
         lo2, hi2 = lo1[todo], hi1[todo]
         if lo2.shape[0] == 0:
             return
-        wid = hi2 - lo2
+        wid = splittable_width(lo2, hi2)  # 0 where no float is left inside
         if self.bisect_mask is not None:
             wid = wid[:, self.bisect_mask]
         small = np.all(wid <= self.eps, axis=1)
@@ -313,25 +323,33 @@ class Solver:
 
     # -- results -----------------------------------------------------------------------------
     def result(self, state: SearchState) -> SolveResult:
+        """The result of a search (undecided and pending boxes summarised, :mod:`.summary`)."""
         sols = [Solution(e0, e1, u0, u1) for e0, e1, u0, u1 in state.solutions.items("ok")]
         sols.sort(key=lambda s: tuple(s.midpoint))
-        und = list(state.undecided)
+        und = [(u.lo, u.hi, u.reason) for u in state.undecided]
         dlo, dhi = self.system.domain[:, 0], self.system.domain[:, 1]
         for e0, e1, _, _ in state.solutions.items("boundary"):
-            und.append(Undecided(np.maximum(e0, dlo), np.minimum(e1, dhi), "boundary"))
+            und.append((np.maximum(e0, dlo), np.minimum(e1, dhi), "boundary"))
         for e0, e1, _, _ in state.solutions.items("constraint"):
-            und.append(Undecided(e0, e1, "constraint"))
+            und.append((e0, e1, "constraint"))
         plo, phi = state.stack.snapshot()
-        status = "complete" if plo.shape[0] == 0 else "incomplete"
+        summ = summarize(
+            und, plo, phi, max_undecided=self.max_undecided, max_pending=self.max_pending
+        )
+        complete = summ.pending_total == 0 and summ.undecided_dropped == 0
         return SolveResult(
             variables=list(self.system.variables),
-            status=status,
+            status="complete" if complete else "incomplete",
             solutions=sols,
-            undecided=und,
-            pending_lo=plo,
-            pending_hi=phi,
+            undecided=[Undecided(a, b, r, k) for a, b, r, k in summ.undecided],
+            pending_lo=summ.pending_lo,
+            pending_hi=summ.pending_hi,
             stats=state.stats,
             eps=self.eps,
+            undecided_total=summ.undecided_total,
+            undecided_dropped=summ.undecided_dropped,
+            pending_boxes=summ.pending_boxes,
+            pending_total=summ.pending_total,
         )
 
 

@@ -11,8 +11,16 @@ A :class:`SolveResult` answers "where are the solutions of the system in the dom
   constraints could not be decided (``"constraint"``).
 * ``pending``: boxes not explored because a limit (time, boxes) stopped the search.
 
-``status == "complete"`` means nothing is pending: every solution of the system in the
-domain lies in a solution box or an undecided box.  Nothing is ever silently dropped.
+Undecided and pending boxes are listed as *hulls* with the number of boxes each contains
+(:mod:`.summary`): touching undecided boxes of the same reason are merged, and at most
+``max_undecided`` hulls are listed (``undecided_dropped`` counts the boxes of the others);
+pending boxes are merged by runs of the search stack into at most ``max_pending`` hulls
+(``pending_boxes``), which together contain every pending box.  ``undecided_total`` and
+``pending_total`` count the boxes themselves.
+
+``status == "complete"`` means nothing is pending and no undecided box was left out of the
+listing: every solution of the system in the domain lies in a solution box or a listed
+undecided hull.  Nothing is ever silently dropped.
 """
 
 from __future__ import annotations
@@ -60,13 +68,14 @@ class Undecided:
     lo: np.ndarray
     hi: np.ndarray
     reason: str  # "eps" | "boundary" | "constraint"
+    boxes: int = 1  # undecided boxes of the search in this hull
 
     @property
     def box(self) -> list[list[float]]:
         return _box_list(self.lo, self.hi)
 
     def to_dict(self) -> dict:
-        return {"box": self.box, "reason": self.reason}
+        return {"box": self.box, "reason": self.reason, "boxes": self.boxes}
 
 
 @dataclass
@@ -88,13 +97,17 @@ class Stats:
 @dataclass
 class SolveResult:
     variables: list[str]
-    status: str  # "complete" | "incomplete"
+    status: str  # "complete" | "incomplete" (see the module docstring)
     solutions: list[Solution] = field(default_factory=list)
     undecided: list[Undecided] = field(default_factory=list)
-    pending_lo: np.ndarray | None = None
+    pending_lo: np.ndarray | None = None  # hulls of the pending boxes
     pending_hi: np.ndarray | None = None
     stats: Stats = field(default_factory=Stats)
     eps: float = 0.0
+    undecided_total: int = 0  # undecided boxes of the search (hulls listed hold some of them)
+    undecided_dropped: int = 0  # undecided boxes in no listed hull (then not complete)
+    pending_boxes: np.ndarray | None = None  # pending boxes in each listed hull
+    pending_total: int = 0  # pending boxes of the search
 
     @property
     def pending(self) -> list[list[list[float]]]:
@@ -109,6 +122,10 @@ class SolveResult:
             "solutions": [s.to_dict() for s in self.solutions],
             "undecided": [u.to_dict() for u in self.undecided],
             "pending": self.pending,
+            "undecided_total": self.undecided_total,
+            "undecided_dropped": self.undecided_dropped,
+            "pending_total": self.pending_total,
+            "pending_boxes": [] if self.pending_boxes is None else self.pending_boxes.tolist(),
             "stats": self.stats.to_dict(),
             "eps": self.eps,
         }

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..interval.core import cut_points
+
 __all__ = ["CID"]
 
 
@@ -34,13 +36,7 @@ class CID:
         if B == 0:
             return lo.copy(), hi.copy(), np.zeros(0, dtype=bool)
         rows = np.arange(B)
-        a = lo[rows, var]
-        b = hi[rows, var]
-        t = np.arange(s + 1) / s  # slice boundaries as fractions
-        cuts = a[:, None] + (b - a)[:, None] * t[None, :]  # (B, s+1)
-        cuts[:, 0] = a
-        cuts[:, -1] = b
-        cuts = np.minimum(np.maximum(cuts, a[:, None]), b[:, None])
+        cuts = cut_points(lo[rows, var], hi[rows, var], s)  # (B, s+1), finite inside
         slo = np.repeat(lo, s, axis=0)
         shi = np.repeat(hi, s, axis=0)
         r2 = np.arange(B * s)

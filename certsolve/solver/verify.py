@@ -22,6 +22,46 @@ def _ivl(ctx, lo, hi):
     return ctx.mpf([lo, hi])
 
 
+def _exact(x) -> mpmath.mpf:
+    """The exact lower end point of an ``mpmath.iv`` value, as an ``mpf``."""
+    return mpmath.mpf(x._mpi_[0])
+
+
+def _monotone(ctx, fn, a, increasing=True, dlo=None, dhi=None):
+    """Enclosure of a monotone real function over ``a`` (restricted to ``[dlo, dhi]``).
+
+    The end points are evaluated 40 bits beyond the working precision and widened by one
+    unit of it: mpmath's real elementary functions are accurate to the last bit there.
+    """
+    with mpmath.workprec(ctx.prec + 40):
+        lo, hi = mpmath.mpf(a._mpi_[0]), mpmath.mpf(a._mpi_[1])
+        if dlo is not None:
+            lo = max(lo, dlo)
+        if dhi is not None:
+            hi = min(hi, dhi)
+        if lo > hi:
+            raise ValueError("argument outside the domain")
+        ends = (fn(lo), fn(hi)) if increasing else (fn(hi), fn(lo))
+        eps = mpmath.mpf(2) ** (-ctx.prec)
+        tiny = mpmath.mpf(2) ** (-10 * ctx.prec)
+        rlo = ends[0] - abs(ends[0]) * eps - tiny
+        rhi = ends[1] + abs(ends[1]) * eps + tiny
+    return ctx.mpf([rlo, rhi])
+
+
+# ops evaluated through a monotone real function: (function, increasing, domain)
+_MONOTONE = {
+    "sinh": (mpmath.sinh, True, None, None),
+    "tanh": (mpmath.tanh, True, None, None),
+    "atan": (mpmath.atan, True, None, None),
+    "asinh": (mpmath.asinh, True, None, None),
+    "asin": (mpmath.asin, True, -1, 1),
+    "acos": (mpmath.acos, False, -1, 1),
+    "acosh": (mpmath.acosh, True, 1, None),
+    "atanh": (mpmath.atanh, True, -1, 1),
+}
+
+
 def iv_eval(csys: CompiledSystem, nodes: list[int], lo, hi, ctx):
     """mpmath interval values of ``nodes`` for the box ``[lo, hi]`` (node by node)."""
     g = csys.graph
@@ -65,6 +105,17 @@ def iv_eval(csys: CompiledSystem, nodes: list[int], lo, hi, ctx):
             r = ctx.sin(a)
         elif op == "cos":
             r = ctx.cos(a)
+        elif op == "tan":
+            r = ctx.tan(a)
+        elif op == "cosh":
+            r = (ctx.exp(a) + ctx.exp(-a)) / 2
+        elif op in _MONOTONE:
+            fn, inc, dlo, dhi = _MONOTONE[op]
+            r = _monotone(ctx, fn, a, inc, dlo, dhi)
+        elif op == "atan2":
+            r = ctx.atan2(a, b)
+        elif op == "rpow":
+            r = ctx.exp(b * ctx.log(a)) if _exact(a) > 0 else ctx.mpf([0, "+inf"])
         elif op == "abs":
             r = abs(a)
         elif op == "cadd":

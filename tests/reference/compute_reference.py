@@ -57,6 +57,12 @@ Methods
     ``0 notin h'(piece)`` and ``h`` has strictly opposite signs at its end points; otherwise
     it is bisected.  Roots are then polished with ``mpmath.findroot`` (checked to stay in
     their piece).
+``monotone-newton-krawczyk``  (discrete boundary value problem, Troesch)
+    The system is ``A x + phi(x) = b`` with ``A = tridiag(-1, 2, -1)`` (positive definite) and
+    ``phi_i`` an increasing function of ``x_i`` alone: it is the gradient of a strictly convex,
+    coercive function, so it has exactly one real zero (the count, by this argument).  The zero
+    is computed by Newton in mpmath at 120 digits and certified by a Krawczyk test in
+    ``mpmath.iv`` on a box of radius 1e-45 around it; it must lie in the domain.
 ``interval-contraction-krawczyk``  (Broyden banded)
     Every solution in the domain satisfies ``x_i = h^-1(S_i(x) - 1)`` with ``h(t) = 2t + 5t^3``
     strictly increasing and ``S_i = sum_(j in J_i) x_j (1 + x_j)``: iterating this
@@ -101,6 +107,14 @@ def sys_circle_line():
 
 def sys_brown(n=5):
     x = sp.symbols(f"x1:{n + 1}")
+    s = sum(x)
+    eqs = [x[i] + s - (n + 1) for i in range(n - 1)] + [sp.Mul(*x) - 1]
+    return eqs, list(x), [(R("-1e8"), R("1e8"))] * n
+
+
+def sys_brown_vector(n=5):
+    """brown-5 written with a vector: the same equations, variables ``x[1]..x[n]``."""
+    x = sp.symbols(" ".join(f"x[{i}]" for i in range(1, n + 1)))
     s = sum(x)
     eqs = [x[i] + s - (n + 1) for i in range(n - 1)] + [sp.Mul(*x) - 1]
     return eqs, list(x), [(R("-1e8"), R("1e8"))] * n
@@ -176,6 +190,9 @@ CITE = {
     "D. McAllester, D. Kapur, SIAM J. Numer. Anal. 34 (1997), problem kin2: 10 solutions",
     "broyden": "More, Garbow, Hillstrom, ACM TOMS 7 (1981), problem 31; Van Hentenryck, "
     "McAllester, Kapur, SIAM J. Numer. Anal. 34 (1997): 1 solution in [-1, 1]^n",
+    "discrete-boundary": "More, Garbow, Hillstrom, ACM TOMS 7 (1981), problem 28; IBEX "
+    "benchmark DiscreteBoundary",
+    "troesch": "B. A. Troesch, J. Comput. Phys. 21 (1976); IBEX benchmark Troesch20",
 }
 
 
@@ -454,6 +471,12 @@ def krawczyk(eqs, gens, x0, radius):
     Y = mp.inverse(Jm)
     Fm = [_iv_eval(f, m) for f in F]
     JB = [[_iv_eval(Jt[i][j], B) for j in range(n)] for i in range(n)]
+    return krawczyk_inside(m, B, Y, Fm, JB)
+
+
+def krawczyk_inside(m, B, Y, Fm, JB) -> bool:
+    """``K(B) = m - Y F(m) + (I - Y J(B)) (B - m)`` inside ``int B`` (mpmath.iv)."""
+    n = len(m)
     for i in range(n):
         k = m[i] - sum((iv.mpf(Y[i, q]) * Fm[q] for q in range(n)), iv.mpf(0))
         for j in range(n):
@@ -672,6 +695,95 @@ def solve_broyden(n=10, log=print):
 
 
 # ---------------------------------------------------------------------------------------------
+# Monotone tridiagonal systems: A x + phi(x) = b has exactly one zero; Newton + Krawczyk
+# ---------------------------------------------------------------------------------------------
+def solve_monotone(n, phi, dphi, b, domain, log=print):
+    """The zero of ``F_i = 2 x_i - x_(i-1) - x_(i+1) + phi(i, x_i) - b_i`` (``x_0 = x_(n+1) = 0``).
+
+    ``phi(i, v, ctx)`` / ``dphi(i, v, ctx)`` evaluate with ``ctx`` = ``mp`` or ``iv``.
+    """
+
+    def F(x, ctx):
+        out = []
+        for i in range(n):
+            left = x[i - 1] if i > 0 else 0
+            right = x[i + 1] if i < n - 1 else 0
+            out.append(2 * x[i] - left - right + phi(i, x[i], ctx) - b[i])
+        return out
+
+    def J(x, ctx):
+        M = [[ctx.mpf(0)] * n for _ in range(n)]
+        for i in range(n):
+            M[i][i] = 2 + dphi(i, x[i], ctx)
+            if i > 0:
+                M[i][i - 1] = ctx.mpf(-1)
+            if i < n - 1:
+                M[i][i + 1] = ctx.mpf(-1)
+        return M
+
+    mp.dps = 3 * DIGITS
+    x = mp.matrix([mp.mpf(0)] * n)
+    for _ in range(200):  # Newton; F is the gradient of a strictly convex function
+        step = mp.lu_solve(mp.matrix(J(list(x), mp)), mp.matrix(F(list(x), mp)))
+        x -= step
+        if mp.norm(step) < mpmath.mpf(10) ** (-3 * DIGITS + 10):
+            break
+    sol = [x[i] for i in range(n)]
+    iv.dps = 3 * DIGITS
+    r = mpmath.mpf(10) ** -45
+    B = [iv.mpf([v - r, v + r]) for v in sol]
+    m = [iv.mpf(v) for v in sol]
+    Y = mp.inverse(mp.matrix(J(sol, mp)))
+    Fm = F(m, iv)
+    if not krawczyk_inside(m, B, Y, Fm, J(B, iv)):
+        raise RuntimeError("Krawczyk test failed around the Newton point")
+    log("  Krawczyk K(B) in int(B) at radius 1e-45: the (unique) zero is certified")
+    assert all(lo < v < hi for v, (lo, hi) in zip(sol, domain))
+    return [sol], {"newton_digits": 3 * DIGITS, "krawczyk_radius": "1e-45"}
+
+
+def _entry_discrete_boundary(n=10):
+    def run(log):
+        mp.dps = 3 * DIGITS
+        h = mpmath.mpf(1) / (n + 1)
+
+        def phi(i, v, ctx):  # h^2 (v + t_i + 1)^3 / 2
+            return ctx.mpf(h) ** 2 * (v + (i + 1) * ctx.mpf(h) + 1) ** 3 / 2
+
+        def dphi(i, v, ctx):
+            return 3 * ctx.mpf(h) ** 2 * (v + (i + 1) * ctx.mpf(h) + 1) ** 2 / 2
+
+        dom = [(-100, 100)] * n
+        sols, info = solve_monotone(n, phi, dphi, [0] * n, dom, log=log)
+        names = [f"x[{i}]" for i in range(1, n + 1)]
+        return names, dom, sols, "monotone-newton-krawczyk", CITE["discrete-boundary"], info
+
+    return run
+
+
+def _entry_troesch(n=10, r=10):
+    def run(log):
+        mp.dps = 3 * DIGITS
+        h = mpmath.mpf(1) / (n + 1)
+
+        def phi(i, v, ctx):  # r h^2 sinh(r v)
+            e = ctx.exp(r * v)
+            return r * ctx.mpf(h) ** 2 * (e - 1 / e) / 2
+
+        def dphi(i, v, ctx):  # r^2 h^2 cosh(r v)
+            e = ctx.exp(r * v)
+            return r * r * ctx.mpf(h) ** 2 * (e + 1 / e) / 2
+
+        b = [0] * (n - 1) + [1]  # x_(n+1) = 1
+        dom = [(-10, 10)] * n
+        sols, info = solve_monotone(n, phi, dphi, b, dom, log=log)
+        names = [f"x[{i}]" for i in range(1, n + 1)]
+        return names, dom, sols, "monotone-newton-krawczyk", CITE["troesch"], info
+
+    return run
+
+
+# ---------------------------------------------------------------------------------------------
 # Driver
 # ---------------------------------------------------------------------------------------------
 # command-line options (see main)
@@ -755,6 +867,9 @@ def _entry_kin2(log):
 SYSTEMS = {
     "circle-line": _entry_poly(sys_circle_line, "constructed: circle and line"),
     "brown-5": _entry_poly(sys_brown, CITE["brown"]),
+    "brown-5-vector": _entry_poly(sys_brown_vector, CITE["brown"] + " (vector form)"),
+    "discrete-boundary-10": _entry_discrete_boundary(10),
+    "troesch-10": _entry_troesch(10),
     "broyden-banded-10": _entry_broyden,
     "katsura-5": _entry_poly(lambda: sys_katsura(5), CITE["katsura"]),
     "katsura-6": _entry_poly(lambda: sys_katsura(6), CITE["katsura"]),

@@ -19,6 +19,12 @@ class SolveParams(Params):
     timeout: float | None = Field(default=None, gt=0, description="time limit (s)")
     max_boxes: int | None = Field(default=None, ge=1, description="limit on processed boxes")
     verify: bool = Field(default=False, description="re-prove solutions with mpmath")
+    max_undecided: int = Field(
+        default=1000, ge=0, le=100_000, description="undecided hulls listed in the answer"
+    )
+    max_pending: int = Field(
+        default=1000, ge=1, le=100_000, description="hulls listing the boxes left by a limit"
+    )
 
 
 def check_system(text: str) -> str:
@@ -29,8 +35,6 @@ def check_system(text: str) -> str:
         system = parse_minibex(text)
     except MinibexError as exc:
         raise ValueError(str(exc)) from None
-    except RecursionError:
-        raise ValueError("expression nested too deeply") from None
     if len(system.variables) > MAX_VARIABLES:
         raise ValueError(f"{len(system.variables)} variables; at most {MAX_VARIABLES}")
     return text
@@ -63,6 +67,8 @@ def run_solve(job: SolveJob, ctx: RunContext) -> Any:
         workers=1,
         verify=p.verify,
         progress=ctx.progress,
+        max_undecided=p.max_undecided,
+        max_pending=p.max_pending,
     )
     return plain_result(result)
 
