@@ -167,6 +167,7 @@ class FKSolver:
             bisector=bisector,
             newton_groups=_newton_groups(self.form.system.variables),
             cid_slices=0,
+            relax=False,
         )
         self.csys = self.solver.csys
 

@@ -46,6 +46,24 @@ class LargestFirst:
         return np.argmax(w, axis=1)
 
 
+def smear_scores(lo, hi, jlo, jhi, eps: float = 0.0, mask=None) -> np.ndarray:
+    """Smear-sum-relative score of every variable ``(B, n)``; -1 where not allowed.
+
+    ``score_j = Σ_i |J_ij| w_j / Σ_k |J_ik| w_k``: how much of each equation's variation
+    over the box comes from ``x_j`` (IBEX ``SmearSumRelative``).
+    """
+    w = splittable_width(lo, hi)
+    with np.errstate(all="ignore"):
+        mag = np.maximum(np.abs(jlo), np.abs(jhi))  # (B, n, n)
+        smear = mag * w[:, None, :]
+        rows = np.sum(smear, axis=2, keepdims=True)
+        rel = np.where(rows > 0, smear / rows, 0.0)
+        score = np.sum(rel, axis=1)
+    score = np.where(np.isfinite(score), score, 0.0)
+    allowed = w > eps if mask is None else (w > eps) & mask
+    return np.where(allowed, score, -1.0)
+
+
 class SmearSumRelative:
     def __init__(self, ratio: float = 0.45):
         self.ratio = ratio
@@ -53,15 +71,8 @@ class SmearSumRelative:
     def choose(self, lo, hi, jlo, jhi, eps: float = 0.0, mask=None) -> np.ndarray:
         """Variable to split per box; ``mask`` (n,) restricts the choice (default: all)."""
         w = splittable_width(lo, hi)
-        with np.errstate(all="ignore"):
-            mag = np.maximum(np.abs(jlo), np.abs(jhi))  # (B, n, n)
-            smear = mag * w[:, None, :]
-            rows = np.sum(smear, axis=2, keepdims=True)
-            rel = np.where(rows > 0, smear / rows, 0.0)
-            score = np.sum(rel, axis=1)
-        score = np.where(np.isfinite(score), score, 0.0)
         allowed = w > eps if mask is None else (w > eps) & mask
-        score = np.where(allowed, score, -1.0)
+        score = smear_scores(lo, hi, jlo, jhi, eps, mask)
         best = np.argmax(score, axis=1)
         # no information (all zero, or infinite Jacobian): widest allowed variable
         stuck = np.max(score, axis=1) <= 0.0

@@ -251,38 +251,60 @@ class Certifier:
         Elo, Ehi = np.fmax(klo, Ulo), np.fmin(khi, Uhi)
         return todo[sel], Elo, Ehi, Ulo, Uhi
 
-    def expand(self, elo, ehi, ulo, uhi, fractions=(0.3, 0.1, 0.03, 0.01, 3e-3, 1e-3, 3e-4, 1e-4)):
-        """Grow unicity boxes: the largest ``mid(E) ± f·(domain width)`` still proven unique.
+    def expand(self, elo, ehi, ulo, uhi, refine: int = 3):
+        """Epsilon-inflation: grow each unicity box as far as Krawczyk still proves it unique.
 
-        A larger unicity box lets the search discard more of the neighbourhood of a known
-        solution (where Newton cannot exclude boxes that nearly touch it).  A candidate is
-        accepted only if it contains ``E`` (hence the known solution) and passes Krawczyk.
+        Candidates are ``mid(E) ± f·s`` (``s``: the domain widths, or ``1 + |mid E|`` along an
+        unbounded variable), with ``f`` first on a grid from 0.3 down to 1e-9 (factor
+        ``√10``), then refined by ``refine`` bisections of ``log f`` between the largest
+        proven and the smallest failed candidate.  A candidate counts only if it contains
+        ``E`` (hence the known solution) and passes Krawczyk: a proof that it holds no other
+        solution, however close one may be.  A larger unicity box lets the search discard
+        more of the neighbourhood of a known solution, where Newton cannot exclude the boxes
+        that nearly touch it.
         """
         S = elo.shape[0]
         if S == 0:
             return ulo, uhi
-        dw = self.csys.system.domain[:, 1] - self.csys.system.domain[:, 0]
-        s = 0.5 * elo + 0.5 * ehi
+        mid = 0.5 * elo + 0.5 * ehi
+        dom = self.csys.system.domain
+        dw = dom[:, 1] - dom[:, 0]
+        scale = np.where(np.isfinite(dw), dw, 1.0 + np.abs(mid))  # (S, n)
         urad = 0.5 * (uhi - ulo)
-        F = len(fractions)
-        rad = np.maximum(np.asarray(fractions)[None, :, None] * dw[None, None, :], urad[:, None])
-        clo = (s[:, None, :] - rad).reshape(S * F, -1)
-        chi = (s[:, None, :] + rad).reshape(S * F, -1)
-        lin = linearize(self.csys, clo, chi)
-        _, _, proven = krawczyk(lin)
-        contains = np.all(
-            (clo <= np.repeat(elo, F, axis=0)) & (chi >= np.repeat(ehi, F, axis=0)), axis=1
+
+        def proven(f):  # f (S, F) -> candidates (S, F, n) and their proofs (S, F)
+            rad = np.maximum(f[:, :, None] * scale[:, None, :], urad[:, None, :])
+            clo, chi = mid[:, None, :] - rad, mid[:, None, :] + rad
+            F = f.shape[1]
+            lin = linearize(self.csys, clo.reshape(S * F, -1), chi.reshape(S * F, -1))
+            ok = krawczyk(lin)[2].reshape(S, F)
+            ok &= np.all((clo <= elo[:, None, :]) & (chi >= ehi[:, None, :]), axis=2)
+            return clo, chi, ok
+
+        grid = 10.0 ** -np.arange(0.5, 9.5, 0.5)
+        clo, chi, ok = proven(np.broadcast_to(grid, (S, grid.size)))
+        first = np.argmax(ok, axis=1)  # grid decreasing: the first proof is the largest box
+        found = ok[np.arange(S), first]
+        good = np.where(found, grid[first], 0.0)
+        bad = np.where(found & (first > 0), grid[np.maximum(first - 1, 0)], 0.0)
+        best_lo = np.where(found[:, None], clo[np.arange(S), first], ulo)
+        best_hi = np.where(found[:, None], chi[np.arange(S), first], uhi)
+        for _ in range(refine):
+            todo = bad > 0.0
+            if not np.any(todo):
+                break
+            f = np.sqrt(np.where(todo, good * bad, 1.0))
+            tlo, thi, tok = proven(f[:, None])
+            win = todo & tok[:, 0]
+            best_lo = np.where(win[:, None], tlo[:, 0], best_lo)
+            best_hi = np.where(win[:, None], thi[:, 0], best_hi)
+            good = np.where(win, f, good)
+            bad = np.where(todo & ~tok[:, 0], f, bad)
+        larger = np.all(best_hi - best_lo >= uhi - ulo, axis=1)
+        return (
+            np.where(larger[:, None], best_lo, ulo),
+            np.where(larger[:, None], best_hi, uhi),
         )
-        ok = (proven & contains).reshape(S, F)
-        out_lo, out_hi = ulo.copy(), uhi.copy()
-        for j in range(S):
-            hit = np.flatnonzero(ok[j])
-            if hit.size:
-                f = hit[0]  # fractions are decreasing: the first success is the largest
-                cand_lo, cand_hi = clo[j * F + f], chi[j * F + f]
-                if np.all(cand_hi - cand_lo >= uhi[j] - ulo[j]):
-                    out_lo[j], out_hi[j] = cand_lo, cand_hi
-        return out_lo, out_hi
 
     def tighten(self, lo, hi):
         """``E ← K(E) ∩ E`` a few times, starting from boxes proven to hold one zero each."""

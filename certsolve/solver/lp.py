@@ -1,0 +1,143 @@
+"""A batched dual active-set method for many tiny linear programs at once.
+
+Every program of the batch reads
+
+    minimise  c·x   subject to   g_t·x <= β_t   (t = 1..M),
+
+with ``n`` variables and ``M >= n`` constraints (the box bounds among them).  The method
+keeps an *active set* ``W`` of ``n`` constraints whose normals span ``R^n``, the vertex
+``x = N_W^{-1} β_W`` and the multipliers ``λ = -N_W^{-T} c``.  It starts dual feasible
+(``λ >= 0``) and, like the dual simplex method, repeatedly brings the most violated
+constraint ``t*`` into ``W``; the constraint leaving ``W`` is chosen by the ratio test
+``min λ_k / α_k`` over ``α = N_W^{-T} g_{t*} > 0``, which keeps ``λ >= 0``.  When no
+``α_k`` is positive the program is infeasible, and ``(1 at t*, -α on W)`` is a Farkas
+certificate.  ``N_W^{-1}`` follows by a rank-one update (its pivot is ``α_k > 0``).
+
+Nothing here needs to be exact: the caller turns the multipliers into *rigorous* bounds
+(any ``y >= 0`` gives a valid bound, Neumaier & Shcherbina 2004), so rounding, cycling or
+the iteration cap can only weaken a bound, never make it wrong.  Programs sharing a
+constraint set (one box, several objectives) share one ``(M, n)`` matrix: the violations of
+all of them come from one batched ``matmul`` per iteration; the other steps work on the
+programs still running, a handful of numpy calls each.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["LPBatch", "dual_active_set"]
+
+
+@dataclass(kw_only=True)
+class LPBatch:
+    """Multipliers of a batch of programs (``L`` programs, ``M`` constraints each)."""
+
+    y: np.ndarray  # (L, M) multipliers >= 0: approximately optimal, or a Farkas ray
+    infeasible: np.ndarray  # (L,) y is a Farkas certificate (the objective is not used)
+    iterations: int  # iterations of the longest-running program
+
+
+def dual_active_set(
+    G: np.ndarray,
+    beta: np.ndarray,
+    c: np.ndarray,
+    W0: np.ndarray,
+    lam0: np.ndarray,
+    Ninv0: np.ndarray | None = None,
+    *,
+    max_iter: int = 15,
+    tol: float = 1e-9,
+) -> LPBatch:
+    """Solve ``S·K`` programs: ``K`` objectives for each of ``S`` constraint sets.
+
+    ``G`` ``(S, M, n)`` and ``beta`` ``(S, M)`` are the constraint sets; program
+    ``l = s·K + k`` uses set ``s``, objective ``c[l]`` ``(n,)`` and starts from the active set
+    ``W0[l]`` (``n`` constraint indices) with multipliers ``lam0[l] >= 0`` such that
+    ``c + Σ_k lam0_k g_{W0_k} = 0`` (dual feasible); ``Ninv0`` is the inverse of the starting
+    active matrix (computed if not given).
+    """
+    L, n = c.shape
+    S, M, _ = G.shape
+    K = L // S
+    box = np.repeat(np.arange(S), K)
+    norms = np.sqrt(np.einsum("smn,smn->sm", G, G))
+    inv_norm = 1.0 / np.where(norms > 0.0, norms, 1.0)
+    GT = np.ascontiguousarray(np.swapaxes(G * inv_norm[:, :, None], 1, 2))  # (S, n, M)
+    beta_n = beta * inv_norm
+    Gf = G.reshape(S * M, n)
+    bf = beta.reshape(S * M)
+    W = W0.copy()
+    lam = lam0.astype(float)
+    with np.errstate(all="ignore"):
+        Ninv = np.linalg.inv(Gf[(box * M)[:, None] + W]) if Ninv0 is None else Ninv0.copy()
+        x = np.einsum("lij,lj->li", Ninv, bf[(box * M)[:, None] + W])
+    y = np.zeros((L, M))
+    infeasible = np.zeros(L, dtype=bool)
+    done = ~np.all(np.isfinite(Ninv), axis=(1, 2))
+    iterations = 0
+    with np.errstate(all="ignore"):
+        while iterations < max_iter:
+            iterations += 1
+            act = np.flatnonzero(~done)
+            if act.size == 0:
+                break
+            # normalised violations; the most violated constraint enters
+            if 3 * act.size > L:
+                V = np.matmul(x.reshape(S, K, n), GT).reshape(L, M)[act]
+            else:
+                V = np.matmul(x[act][:, None, :], GT[box[act]])[:, 0, :]
+            V -= beta_n[box[act]]
+            V[np.arange(act.size)[:, None], W[act]] = -np.inf
+            t = np.argmax(V, axis=1)
+            vmax = V[np.arange(act.size), t]
+            conv = vmax <= tol * (1.0 + np.max(np.abs(x[act]), axis=1))
+            done[act[conv]] = True
+            run, t = act[~conv], t[~conv]
+            if run.size == 0:
+                break
+            gs = Gf[box[run] * M + t]
+            Ni = Ninv[run]
+            alpha = np.einsum("lij,li->lj", Ni, gs)  # g_t = Σ_k α_k g_{W_k}
+            lr = lam[run]
+            pos = alpha > 1e-12 * np.max(np.abs(alpha), axis=1, keepdims=True)
+            ratio = np.where(pos, lr / np.where(pos, alpha, 1.0), np.inf)
+            k = np.argmin(ratio, axis=1)
+            farkas = ~np.any(pos, axis=1)
+            if np.any(farkas):  # every α_k <= 0: infeasible
+                fr = run[farkas]
+                rows = np.arange(fr.size)
+                fy = np.zeros((fr.size, M))
+                fy[rows, t[farkas]] = 1.0
+                np.add.at(fy, (rows[:, None], W[fr]), -alpha[farkas])
+                y[fr] = np.maximum(fy, 0.0)
+                infeasible[fr] = True
+                done[fr] = True
+                keep = ~farkas
+                run, t, k, gs, Ni, alpha, lr = (
+                    run[keep], t[keep], k[keep], gs[keep], Ni[keep], alpha[keep], lr[keep]
+                )  # fmt: skip
+                if run.size == 0:
+                    continue
+            ar = np.arange(run.size)
+            ak = alpha[ar, k]
+            s = lr[ar, k] / ak
+            lr = np.maximum(lr - s[:, None] * alpha, 0.0)
+            lr[ar, k] = s
+            lam[run] = lr
+            Wr = W[run]
+            Wr[ar, k] = t
+            W[run] = Wr
+            # N' = N + e_k (g_t - g_k)ᵀ  =>  N'^{-1} = N^{-1} - N^{-1} e_k (α - e_k)ᵀ / α_k
+            col = Ni[ar, :, k]
+            alpha[ar, k] -= 1.0
+            Ni -= col[:, :, None] * (alpha / ak[:, None])[:, None, :]
+            Ninv[run] = Ni
+            xr = np.einsum("lij,lj->li", Ni, bf[(box[run] * M)[:, None] + Wr])
+            bad = ~np.all(np.isfinite(xr), axis=1)
+            x[run] = np.where(bad[:, None], x[run], xr)
+            done[run[bad]] = True
+    feasible = np.flatnonzero(~infeasible)
+    np.add.at(y, (feasible[:, None], W[feasible]), np.maximum(lam[feasible], 0.0))
+    return LPBatch(y=np.where(np.isfinite(y), y, 0.0), infeasible=infeasible, iterations=iterations)

@@ -1,0 +1,184 @@
+"""Linear relaxation of a box and its polytope hull (IBEX ``LinearizerXTaylor`` +
+``CtcPolytopeHull``), batched and rigorous.
+
+**Relaxation.**  For a box ``X = [l, h]``, a corner ``a`` of it and every ``x ∈ X``, the mean
+value theorem gives ``f_i(x) ∈ f_i(a) + J_i(X)·(x - a)``, and ``x - a`` has a known sign in
+every component.  At the lower corner (``d = x - l ∈ [0, w]``, ``w = h - l``) a zero of
+``f_i`` therefore satisfies the two linear inequalities
+
+    J̲_i·d <= -f̲_i(l),        -J̄_i·d <= f̄_i(l),
+
+and at the upper corner (``x - h = d - w <= 0``)
+
+    J̄_i·d <= -f̲_i(h) + J̄_i·w,   -J̲_i·d <= f̄_i(h) - J̲_i·w,
+
+with ``[f̲, f̄]`` rigorous enclosures of ``f`` at the corners and ``[J̲, J̄]`` of the Jacobian
+over ``X`` (Araya, Trombettoni, Neveu 2012: "X-Newton").  The right-hand sides are rounded up,
+so every solution in ``X`` satisfies all ``4n`` inequalities exactly, in real arithmetic.
+
+**Polytope hull.**  The smallest and largest ``d_j`` over ``{d ∈ [0, w] : G d <= ρ}`` are
+linear programs; :func:`.lp.dual_active_set` solves them for a whole batch of boxes at once,
+in floating point.  Its multipliers ``y >= 0`` are then turned into *proven* bounds
+(Neumaier & Shcherbina 2004): for every feasible ``d``,
+
+    ±d_j >= ±d_j + y·(G d - ρ) >= Σ_k min(0, g_k) w_k - y·ρ,   g = ±e_j + Gᵀ y,
+
+evaluated with outward rounding, so an inaccurate multiplier only loosens a bound.  With
+``c = 0`` the same inequality, if its right-hand side is positive, proves the box empty
+(Farkas).  The contractor is sound whatever the LP solver returns.
+
+Only the ``directions`` variables with the largest smear (IBEX ``SmearSumRelative``) get
+their two programs: every program can prove the box empty, and on ``examples/systems`` three
+directions cost a third of all ``2n`` programs for 5-10% more boxes.  The relaxation needs
+``f`` differentiable on ``X``: boxes where ``f`` is not defined everywhere or an enclosure is
+not finite are left unchanged.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..expr.compiled import CompiledSystem
+from ..interval.linalg import gamma
+from ..interval.rounding import down, up
+from .bisectors import smear_scores
+from .lp import dual_active_set
+
+__all__ = ["PolytopeHull", "xtaylor_rows", "proven_lower_bounds"]
+
+_TINY = 2.0**-1000
+
+
+def xtaylor_rows(csys: CompiledSystem, lo, hi):
+    """The ``4n`` relaxation rows ``G d <= ρ`` of every box (``d = x - lo``).
+
+    Returns ``G`` ``(B, 4n, n)``, ``rho`` ``(B, 4n)`` (rounded up), ``w`` ``(B, n)`` (an upper
+    bound of ``hi - lo``) and the ``(B,)`` mask of boxes where the relaxation is valid.
+    """
+    _, _, jlo, jhi, defined = csys.eval_fj(lo, hi, check_domain=True)
+    flo_l, fhi_l = csys.eval_f_at(lo)
+    flo_h, fhi_h = csys.eval_f_at(hi)
+    with np.errstate(all="ignore"):
+        w = up(hi - lo)
+        wl = np.maximum(down(hi - lo), 0.0)
+        G = np.concatenate([jlo, -jhi, jhi, -jlo], axis=1)
+        rho = np.concatenate(
+            [
+                -flo_l,
+                fhi_l,
+                up(-flo_h + _row_dot_bound(jhi, wl, w, upper=True)),
+                up(fhi_h - _row_dot_bound(jlo, wl, w, upper=False)),
+            ],
+            axis=1,
+        )
+    ok = (
+        defined
+        & np.all(np.isfinite(G), axis=(1, 2))
+        & np.all(np.isfinite(rho), axis=1)
+        & np.all(np.isfinite(w), axis=1)
+    )
+    return G, rho, w, ok
+
+
+def _row_dot_bound(J, wl, wh, upper: bool):
+    """Rigorous upper (or lower) bound of ``J_i·W`` over ``W ∈ [wl, wh]``, per row ``i``."""
+    n = J.shape[-1]
+    a, b = J * wl[:, None, :], J * wh[:, None, :]
+    t = np.maximum(a, b) if upper else np.minimum(a, b)
+    err = gamma(n + 1) * np.sum(np.abs(t), axis=2) + n * _TINY
+    s = np.sum(t, axis=2)
+    return up(s + err) if upper else down(s - err)
+
+
+def _sum_bound(t, axis):
+    """``(sum, error bound)`` of a floating-point sum of rounded products along ``axis``."""
+    k = t.shape[axis]
+    return np.sum(t, axis=axis), gamma(k + 2) * np.sum(np.abs(t), axis=axis) + (k + 2) * _TINY
+
+
+def proven_lower_bounds(G, rho, w, y, sign, j):
+    """Proven lower bounds of ``sign·d_j`` over ``{d ∈ [0, w] : G d <= ρ}``, from ``y >= 0``.
+
+    ``G`` ``(L, m, n)``, ``rho`` ``(L, m)``, ``w`` ``(L, n)``, ``y`` ``(L, m)``, ``sign`` ``(L,)``
+    of ±1 and ``j`` ``(L,)`` variable indices; ``j = -1`` means ``c = 0``: a positive bound
+    then proves the set empty.  Rounding: each sum is enlarged by its a priori error bound
+    (Higham, Thm 3.1) and every final operation is rounded outward.
+    """
+    g, gerr = _sum_bound(y[:, :, None] * G, axis=1)
+    has = j >= 0
+    rows = np.flatnonzero(has)
+    g[rows, j[has]] += sign[has]
+    part = np.minimum(down(g - gerr), 0.0) * w
+    low, low_err = _sum_bound(part, axis=1)
+    yrho, yrho_err = _sum_bound(y * rho, axis=1)
+    return down(down(low - low_err) - up(yrho + yrho_err))
+
+
+class PolytopeHull:
+    """Contract boxes to the proven hull of their X-Taylor linear relaxation."""
+
+    def __init__(self, csys: CompiledSystem, directions: int = 3, max_iter: int = 15):
+        self.csys = csys
+        self.directions = int(directions)
+        self.max_iter = int(max_iter)
+
+    def contract(self, lo, hi):
+        """Returns ``(lo, hi, empty)`` for a batch of boxes ``(B, n)``."""
+        B, n = lo.shape
+        lo, hi = lo.copy(), hi.copy()
+        empty = np.zeros(B, dtype=bool)
+        if B == 0:
+            return lo, hi, empty
+        G, rho, w, ok = xtaylor_rows(self.csys, lo, hi)
+        idx = np.flatnonzero(ok)
+        if idx.size == 0:
+            return lo, hi, empty
+        G, rho, w = G[idx], rho[idx], w[idx]
+        S, m = rho.shape
+        # the programs: min d_j and max d_j for the top-smear variables of each box
+        t = min(self.directions, n)
+        jmag = np.maximum(np.abs(G[:, :n]), np.abs(G[:, n : 2 * n]))
+        score = smear_scores(np.zeros_like(w), w, jmag, jmag)
+        top = np.argsort(-score, axis=1)[:, :t]
+        K = 2 * t
+        j = np.concatenate([top, top], axis=1).ravel()
+        sign = np.tile(np.repeat([1.0, -1.0], t), S)
+        L = S * K
+        # constraints: the rows, then d <= w (index m + k), then -d <= 0 (index m + n + k);
+        # start at the corner d_j = 0 (min) or d_j = w_j (max), the other d_k = 0
+        eye = np.eye(n)
+        GA = np.concatenate(
+            [G, np.broadcast_to(eye, (S, n, n)), np.broadcast_to(-eye, (S, n, n))], 1
+        )
+        betaA = np.concatenate([rho, w, np.zeros((S, n))], axis=1)
+        c = np.zeros((L, n))
+        c[np.arange(L), j] = sign
+        W0 = np.tile(m + n + np.arange(n), (L, 1))
+        upper = np.flatnonzero(sign < 0)
+        W0[upper, j[upper]] = m + j[upper]
+        lam0 = np.abs(c)
+        N0inv = np.swapaxes(GA[np.repeat(np.arange(S), K)[:, None], W0], 1, 2)  # signed permutation
+        box = np.repeat(np.arange(S), K)
+        with np.errstate(all="ignore"):
+            lp = dual_active_set(GA, betaA, c, W0, lam0, N0inv, max_iter=self.max_iter)
+            bound = proven_lower_bounds(
+                G[box], rho[box], w[box], lp.y[:, :m], sign, np.where(lp.infeasible, -1, j)
+            )
+        bound = np.where(np.isfinite(bound), bound, -np.inf)
+        emp = np.zeros(S, dtype=bool)
+        np.logical_or.at(emp, box, lp.infeasible & (bound > 0.0))
+        dlo = np.zeros((S, n))
+        dhi = w.copy()
+        rows = ~lp.infeasible & (sign > 0)
+        np.maximum.at(dlo, (box[rows], j[rows]), bound[rows])
+        rows = ~lp.infeasible & (sign < 0)
+        np.minimum.at(dhi, (box[rows], j[rows]), -bound[rows])
+        with np.errstate(all="ignore"):
+            base = lo[idx]
+            nlo = np.fmax(base, down(base + dlo))
+            nhi = np.fmin(hi[idx], up(base + dhi))
+        emp |= np.any(nlo > nhi, axis=1)
+        lo[idx] = np.where(emp[:, None], lo[idx], nlo)
+        hi[idx] = np.where(emp[:, None], hi[idx], nhi)
+        empty[idx] = emp
+        return lo, hi, empty
