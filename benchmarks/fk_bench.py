@@ -1,13 +1,23 @@
-"""Forward-kinematics benchmark: all-solutions searches, tracking steps, IK Algorithm 2.
+"""Forward-kinematics benchmark: all-solutions searches, the cost curve, start-up, tracking
+and IK Algorithm 2.
 
     python benchmarks/fk_bench.py [--runs 3] [--workers 1,2] [--timeout 300] [--cases ...]
-                                  [--formulation auto|general-19|T-16|...]
+                                  [--formulation auto|general-19|T-16|...] [--curve]
+                                  [--startup] [--skip-fk] [--skip-realtime]
 
-For each system (robot file, tau_max, control vector u) it prints the median wall and CPU
-time of a complete all-solutions search with 1 and 2 worker processes, the status, number of
-certified poses and boxes; then the median time of a certified tracking step (Newton +
-Krawczyk in a ±1 mm box) and of IK Algorithm 2, over a trajectory.  Compare with
-../shared/TARGETS.md; run on an idle machine and note it.
+Searches: for each case (robot, tau_max, control vector u) the median wall and CPU time of a
+complete all-solutions search with each worker count, with the status, certified poses,
+boxes and bisections beside them.  Cases marked ``target`` are the targets of issue 10
+(../shared/TARGETS.md); ``u~S(seed)`` is u drawn uniformly in the strokes with that seed,
+``random-general-N`` / ``random-T-N`` the perturbed designs of
+:func:`certsolve.robot.presets.random_marionet`.
+
+``--curve``: how time and boxes grow with tau_max (10, 20, 40, 60 N) and with the stroke
+range (u drawn in 1/4, 1/2 and all of the strokes, seed 1), for T-16 and general-19, one
+run each: the table a user needs to plan a run.  ``--startup``: the whole ``certsolve fk``
+process on the planar example and ``certsolve --help`` (median of 5).  Then the median time
+of a certified tracking step (Newton + Krawczyk in a ±1 mm box) and of IK Algorithm 2 over a
+trajectory.  Run on an idle machine and note it.
 """
 
 from __future__ import annotations
@@ -16,22 +26,39 @@ import argparse
 import os
 import platform
 import statistics
+import subprocess
+import sys
 import time
 
 import numpy as np
 
 from certsolve.kinematics import FKSolver, Tracker, inverse_kinematics, with_tau_max
 from certsolve.robot import Pose, Robot
+from certsolve.robot.presets import random_marionet
 
 R = "examples/robots"
+ZERO4, ZERO7 = [0.0] * 4, [0.0] * 7
+#: name -> (robot, tau_max, u: a list, or ("S", seed, fraction) drawn in the strokes)
 CASES = {
     "planar-10 tau<=10": ("planar", 10.0, [0.5, 0.5, 0.5, 0.5]),
     "planar-10 tau<=60": ("planar", 60.0, [0.8, 1.8, -2.5, -3.6]),
-    "almost-planar-13 tau<=10": ("almost-planar", 10.0, [0.0, 0.0, 0.0, 0.0]),
-    "T-16 tau<=10": ("marionet-t", 10.0, [0.0] * 7),
-    "T-16 tau<=60": ("marionet-t", 60.0, [2.0] * 7),
-    "general-19 tau<=10": ("marionet", 10.0, [0.0] * 7),
+    "almost-planar-13 tau<=10": ("almost-planar", 10.0, ZERO4),
+    "almost-planar-13 tau<=60 (target)": ("almost-planar", 60.0, ZERO4),
+    "T-16 tau<=10 (target)": ("marionet-t", 10.0, ZERO7),
+    "T-16 tau<=60 u=2 (target)": ("marionet-t", 60.0, [2.0] * 7),
+    "T-16 tau<=60 u~S(1)": ("marionet-t", 60.0, ("S", 1, 1.0)),
+    "general-19 tau<=10 (target)": ("marionet", 10.0, ZERO7),
+    "general-19 tau<=20 u~S(1)": ("marionet", 20.0, ("S", 1, 1.0)),
+    "general-19 tau<=40 u~S(1)": ("marionet", 40.0, ("S", 1, 1.0)),
+    "general-19 tau<=60 u~S(1) (target)": ("marionet", 60.0, ("S", 1, 1.0)),
+    "general-19 tau<=60 u~S(2) (target)": ("marionet", 60.0, ("S", 2, 1.0)),
+    "general-19 tau<=60 u~S(3) (target)": ("marionet", 60.0, ("S", 3, 1.0)),
+    "random-T-0 tau<=60 u~S(7)": ("random-T-0", 60.0, ("S", 7, 1.0)),
+    "random-general-0 tau<=60 u~S(7)": ("random-general-0", 60.0, ("S", 7, 1.0)),
+    "random-general-1 tau<=60 u~S(7)": ("random-general-1", 60.0, ("S", 7, 1.0)),
 }
+CURVE_TAUS = (10.0, 20.0, 40.0, 60.0)
+CURVE_STROKES = (0.25, 0.5, 1.0)
 TRACK = {
     "general-19": ("marionet", (111, 58, 107, 0, 0, 0)),
     "T-16": ("marionet-t", (115, 60, 118, 0, 0, 0)),
@@ -39,27 +66,94 @@ TRACK = {
 }
 
 
-def bench_fk(args) -> None:
-    print(
-        f"{'case':<26} {'w':>2} {'status':<10} {'poses':>5} {'boxes':>8} {'wall s':>8} {'cpu s':>8}"
+def load(name: str) -> Robot:
+    """A bundled example, or ``random-<kind>-<seed>`` (a perturbed MARIONET design)."""
+    if name.startswith("random-"):
+        _, kind, seed = name.split("-")
+        return Robot.load(random_marionet(kind, int(seed)))
+    return Robot.load(f"{R}/{name}.json")
+
+
+def control(robot: Robot, u) -> np.ndarray:
+    """A control vector: given, or ``("S", seed, fraction)``: uniform in that share of the
+    strokes around their middle."""
+    if isinstance(u, tuple):
+        _, seed, frac = u
+        mid = 0.5 * (robot.u_min + robot.u_max)
+        half = 0.5 * frac * (robot.u_max - robot.u_min)
+        return np.random.default_rng(seed).uniform(mid - half, mid + half)
+    return np.asarray(u, dtype=float)
+
+
+def run_case(robot: Robot, u, args, workers: int):
+    """Median wall and CPU over ``args.runs`` runs, and the last result."""
+    walls, cpus, res = [], [], None
+    for _ in range(args.runs):
+        fk = FKSolver(robot, args.formulation)
+        t, c = time.perf_counter(), time.process_time()
+        res = fk.solve(u, timeout=args.timeout, workers=workers)
+        walls.append(time.perf_counter() - t)
+        cpus.append(time.process_time() - c)
+    return statistics.median(walls), statistics.median(cpus), res
+
+
+HEAD = (
+    f"{'case':<36} {'w':>2} {'status':<10} {'poses':>5} {'boxes':>8} {'bisect':>7} "
+    f"{'wall s':>8} {'cpu s':>8}"
+)
+
+
+def row(name, w, res, wall, cpu) -> str:
+    return (
+        f"{name:<36} {w:>2} {res.status:<10} {len(res.solutions):>5} {res.stats.boxes:>8} "
+        f"{res.stats.bisections:>7} {wall:>8.2f} {cpu:>8.2f}"
     )
+
+
+def bench_fk(args) -> None:
+    print(HEAD)
     for name in args.cases or CASES:
         robot_name, tau, u = CASES[name]
-        robot = with_tau_max(Robot.load(f"{R}/{robot_name}.json"), tau)
+        robot = with_tau_max(load(robot_name), tau)
+        uu = control(robot, u)
         for w in args.workers:
-            walls, cpus, res = [], [], None
-            for _ in range(args.runs):
-                fk = FKSolver(robot, args.formulation)
-                t, c = time.perf_counter(), time.process_time()
-                res = fk.solve(u, timeout=args.timeout, workers=w)
-                walls.append(time.perf_counter() - t)
-                cpus.append(time.process_time() - c)
-            print(
-                f"{name:<26} {w:>2} {res.status:<10} {len(res.solutions):>5} "
-                f"{res.stats.boxes:>8} {statistics.median(walls):>8.3f} "
-                f"{statistics.median(cpus):>8.3f}",
-                flush=True,
+            wall, cpu, res = run_case(robot, uu, args, w)
+            print(row(name, w, res, wall, cpu), flush=True)
+
+
+def bench_curve(args) -> None:
+    """Time and boxes against tau_max and the stroke range (one run each)."""
+    print(f"\ncost curve (u drawn in a share of the strokes, seed 1; 1 run each)\n{HEAD}")
+    one = argparse.Namespace(**{**vars(args), "runs": 1})
+    for robot_name, label in (("marionet-t", "T-16"), ("marionet", "general-19")):
+        for tau in CURVE_TAUS:
+            for frac in CURVE_STROKES:
+                robot = with_tau_max(load(robot_name), tau)
+                uu = control(robot, ("S", 1, frac))
+                for w in args.workers:
+                    wall, cpu, res = run_case(robot, uu, one, w)
+                    name = f"{label} tau<={tau:g} stroke x{frac:g}"
+                    print(row(name, w, res, wall, cpu), flush=True)
+
+
+def bench_startup(args) -> None:
+    """The whole ``certsolve`` process: ``--help`` and planar FK (median of 5 runs)."""
+    cmds = {
+        "certsolve --help": ["--help"],
+        "certsolve fk planar (tau<=10)": [
+            "fk", f"{R}/planar.json", "--u", "0.5,0.5,0.5,0.5", "--tau-max", "10"
+        ],
+    }  # fmt: skip
+    print(f"\n{'process':<36} {'median s':>9} {'min s':>7}")
+    for name, argv in cmds.items():
+        times = []
+        for _ in range(5):
+            t = time.perf_counter()
+            subprocess.run(
+                [sys.executable, "-m", "certsolve", *argv], check=True, capture_output=True
             )
+            times.append(time.perf_counter() - t)
+        print(f"{name:<36} {statistics.median(times):>9.3f} {min(times):>7.3f}", flush=True)
 
 
 def trajectory(robot, start, n, seed=0):
@@ -114,6 +208,9 @@ def main() -> None:
     ap.add_argument("--timeout", type=float, default=300.0)
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--cases", nargs="*", choices=list(CASES), default=None)
+    ap.add_argument("--curve", action="store_true", help="the cost curve over tau_max, strokes")
+    ap.add_argument("--startup", action="store_true", help="whole-process start-up times")
+    ap.add_argument("--skip-realtime", action="store_true")
     ap.add_argument(
         "--formulation", default="auto", help="auto (platform frame) or a paper system name"
     )
@@ -125,9 +222,14 @@ def main() -> None:
         f"{platform.python_version()}; median of {args.runs} runs; "
         f"formulation {args.formulation}"
     )
+    if args.startup:
+        bench_startup(args)
     if not args.skip_fk:
         bench_fk(args)
-    bench_realtime(args)
+    if args.curve:
+        bench_curve(args)
+    if not args.skip_realtime:
+        bench_realtime(args)
 
 
 if __name__ == "__main__":

@@ -43,6 +43,7 @@ __all__ = [
     "almost_planar",
     "planar",
     "krut_planar",
+    "random_marionet",
     "all_presets",
 ]
 
@@ -184,6 +185,40 @@ def krut_planar(n: int = 3, radius: float = 100.0, tau=(50.0, 500.0)) -> dict:
         for t in theta
     ]
     return {"name": f"krut-{n}", "dof": 2, "wires": wires}
+
+
+def random_marionet(kind: str = "general", seed: int = 0, spread: float = 15.0) -> dict:
+    """A perturbed MARIONET design, for benchmarks and tests on robots nobody tuned.
+
+    The anchors of Table I move by up to ``spread`` cm along each axis (z kept in [0, 180]);
+    ``kind="general"`` moves the seven attachments by up to 3 cm, ``kind="T"`` keeps the
+    T-platform's three attachment points (moved by up to 3 cm in its plane).  ``V`` and
+    ``L0`` follow the same recipe as :func:`marionet` (u = 0 at the max-margin middle of the
+    workspace), so every control vector in the strokes is a sensible command.  Raises
+    ``RuntimeError`` if the middle pose is not wrench-feasible for the drawn anchors.
+    """
+    if kind not in ("general", "T"):
+        raise ValueError("kind must be 'general' or 'T'")
+    rng = np.random.default_rng(seed)
+    A = np.array(MARIONET_A, dtype=float) + rng.uniform(-spread, spread, (7, 3))
+    A[:, 2] = np.clip(A[:, 2], 0.0, 180.0)
+    if kind == "general":
+        B = np.array(MARIONET_B, dtype=float) + rng.uniform(-3.0, 3.0, (7, 3))
+        com, middle = [0.0, 0.0, 5.0], MARIONET_MIDDLE
+    else:
+        shift = rng.uniform(-3.0, 3.0, (3, 3)) * np.array([1.0, 1.0, 0.0])
+        group = [0, 1, 2, 0, 0, 1, 2]  # the T-platform's wires per attachment point
+        B = np.array(MARIONET_T_B, dtype=float) + shift[group]
+        com, middle = [0.0, 0.0, 0.0], MARIONET_T_MIDDLE
+    spec = {
+        "name": f"random-{kind}-{seed}",
+        "dof": 6,
+        "gravity": _G,
+        "platform": {"mass": _MASS, "center_of_mass": com},
+        "wires": [_elastic_wire(a, b) for a, b in zip(A, B, strict=True)],
+        "domain": {"points": PAPER_DOMAIN},
+    }
+    return _calibrate(spec, middle, np.eye(3))
 
 
 def all_presets() -> dict[str, dict]:
