@@ -9,17 +9,18 @@ from fastapi import APIRouter
 from certsolve.jobs.kinds import KINDS, KindUnavailable, library_function, public_kinds
 
 from ..deps import Service, Settings
+from ..schemas import errors
 
 router = APIRouter(tags=["service"])
 
 
 @router.get("/healthz")
 def healthz(service: Service) -> dict[str, Any]:
-    """Liveness: workers alive and the queue depth."""
+    """Liveness: workers alive and the queue depth (public: no token needed)."""
     return service.health()
 
 
-@router.get("/v1/kinds")
+@router.get("/v1/kinds", responses=errors(401, 429))
 def list_kinds(settings: Settings) -> dict[str, Any]:
     """The job kinds, their parameters (JSON Schema) and whether this build has them."""
     out = []

@@ -38,6 +38,7 @@ if TYPE_CHECKING:
         Kind,
         KindUnavailable,
         Params,
+        QuickCall,
         Request,
         RunContext,
         library_function,
@@ -53,13 +54,14 @@ if TYPE_CHECKING:
         PoseParams,
         call_isotropic,
     )
-    from .registry import KINDS, job_request_type, public_kinds, request_adapter
+    from .registry import KINDS, QUICK_CALLS, job_request_type, public_kinds, request_adapter
     from .sleep import SleepJob, SleepParams
     from .solve import MAX_SYSTEM_CHARS, MAX_VARIABLES, SolveJob, SolveParams
     from .workspace import WorkspaceJob, WorkspaceParams
 
 _WHERE = {
     "KINDS": ".registry",
+    "QUICK_CALLS": ".registry",
     "job_request_type": ".registry",
     "public_kinds": ".registry",
     "request_adapter": ".registry",
@@ -68,6 +70,7 @@ _WHERE = {
     "Kind": ".base",
     "KindUnavailable": ".base",
     "Params": ".base",
+    "QuickCall": ".base",
     "Request": ".base",
     "RunContext": ".base",
     "library_function": ".base",
@@ -119,6 +122,8 @@ __all__ = [
     "MAX_VARIABLES",
     "Params",
     "PoseParams",
+    "QUICK_CALLS",
+    "QuickCall",
     "Request",
     "RunContext",
     "SleepJob",

@@ -34,6 +34,7 @@ __all__ = [
     "Model",
     "Orientation",
     "Params",
+    "QuickCall",
     "Request",
     "RunContext",
     "Wrench",
@@ -43,7 +44,6 @@ __all__ = [
     "check_wires",
     "library_function",
     "orientation_arg",
-    "plain_result",
     "robot_model",
     "wrench_dim",
 ]
@@ -166,10 +166,6 @@ def library_function(kind: str, module: str, name: str) -> Callable:
         raise KindUnavailable(f"kind {kind} is not available in this build") from None
 
 
-def plain_result(result: Any) -> Any:
-    return result.to_dict() if hasattr(result, "to_dict") else result
-
-
 # passed when the library takes them, else enforced by the worker (progress callback, kill)
 _ADVISORY = frozenset({"timeout", "max_boxes", "progress"})
 
@@ -207,7 +203,10 @@ def robot_model(spec: RobotSpec):
 # -- the registry entry ---------------------------------------------------------------------------
 @dataclass(frozen=True, kw_only=True)
 class Kind:
-    """A job kind: its request model, params model, runner and library function."""
+    """A job kind: its request model, params model, runner and library function.
+
+    ``run(request, context)`` returns the library's result object (the worker bounds and
+    stores it, :mod:`..partial`)."""
 
     name: str
     model: type[Job]
@@ -229,3 +228,20 @@ class Kind:
     @property
     def has_max_boxes(self) -> bool:
         return "max_boxes" in self.params.model_fields
+
+
+@dataclass(frozen=True, kw_only=True)
+class QuickCall:
+    """A quick synchronous call (``POST /v1/<name>``): its request model, the function
+    answering it (request -> plain result), and ``cost(request)``, an estimate of its
+    seconds on one core from the request's size alone (wires, dof, method), by which
+    :mod:`..quick` puts it in the light or the heavy lane, or refuses it (submit ``job``
+    instead)."""
+
+    name: str
+    model: type[Request]
+    run: Callable[[Any], Any]
+    cost: Callable[[Any], float]
+    library: tuple[str, str]  # module, function (loaded when a quick-call process starts)
+    job: str  # the job that computes the same (for the refusal message)
+    cost_field: str = "robot.wires"  # what the cost grows with (where a refusal points)

@@ -15,16 +15,26 @@ from .base import (
     Job,
     Kind,
     Params,
+    QuickCall,
     Request,
     RunContext,
     check_pose,
     check_wires,
     library_function,
-    plain_result,
     robot_model,
 )
 
-__all__ = ["KIND", "FkJob", "FkParams", "TrackCall", "TrackParams", "call_track", "run_fk"]
+__all__ = [
+    "KIND",
+    "QUICK",
+    "FkJob",
+    "FkParams",
+    "TrackCall",
+    "TrackParams",
+    "call_track",
+    "run_fk",
+    "track_cost",
+]
 
 
 class FkParams(Params):
@@ -64,7 +74,7 @@ def run_fk(job: FkJob, ctx: RunContext) -> Any:
         seeded_only=p.seeded_only,
         progress=ctx.progress,
     )
-    return plain_result(result)
+    return result
 
 
 KIND = Kind(
@@ -102,4 +112,20 @@ def call_track(req: TrackCall) -> Any:
     robot = robot_model(req.robot)
     p = req.params
     near = Pose.from_params(robot.dof, p.near_pose)
-    return plain_result(fn(robot, list(p.u), near, half_width=p.half_width))
+    return fn(robot, list(p.u), near, half_width=p.half_width)
+
+
+def track_cost(req: TrackCall) -> float:
+    """Seconds, roughly: compiling the tracking system grows with the wires; one Newton
+    and Krawczyk step is milliseconds."""
+    return 0.2 + 0.02 * len(req.robot.wires)
+
+
+QUICK = QuickCall(
+    name="fk/track",
+    model=TrackCall,
+    run=call_track,
+    cost=track_cost,
+    library=("certsolve.kinematics", "track"),
+    job='a job of kind "fk"',
+)

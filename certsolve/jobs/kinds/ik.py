@@ -13,15 +13,15 @@ from .base import (
     Job,
     Kind,
     Params,
+    QuickCall,
     Request,
     RunContext,
     check_pose,
     library_function,
-    plain_result,
     robot_model,
 )
 
-__all__ = ["KIND", "IkCall", "IkJob", "IkParams", "call_ik", "run_ik"]
+__all__ = ["KIND", "QUICK", "IkCall", "IkJob", "IkParams", "call_ik", "ik_cost", "run_ik"]
 
 
 class IkParams(Params):
@@ -48,7 +48,7 @@ def run_ik(job: IkJob, ctx: RunContext) -> Any:
 
     robot = robot_model(job.robot)
     pose = Pose.from_params(robot.dof, job.params.pose)
-    return plain_result(ik(robot, pose, method=job.params.method))
+    return ik(robot, pose, method=job.params.method)
 
 
 KIND = Kind(
@@ -71,3 +71,20 @@ class IkCall(Request):
 def call_ik(req: IkCall) -> Any:
     job = IkJob(kind="ik", robot=req.robot, params=req.params)
     return run_ik(job, RunContext(time_limit=0, max_boxes=0))
+
+
+def ik_cost(req: IkCall) -> float:
+    """Seconds, roughly: Algorithm 1 searches until its time limit (10 s); the others take
+    milliseconds."""
+    return 10.0 if req.params.method == "alg1" else 0.05
+
+
+QUICK = QuickCall(
+    name="ik",
+    model=IkCall,
+    run=call_ik,
+    cost=ik_cost,
+    library=("certsolve.kinematics", "inverse_kinematics"),
+    job='a job of kind "ik"',
+    cost_field="params.method",
+)

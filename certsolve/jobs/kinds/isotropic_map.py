@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+from math import comb
 from typing import Any, Literal
 
 from pydantic import Field, model_validator
@@ -15,6 +16,7 @@ from .base import (
     Kind,
     Orientation,
     Params,
+    QuickCall,
     Request,
     RunContext,
     Wrench,
@@ -23,7 +25,6 @@ from .base import (
     check_pose,
     library_function,
     orientation_arg,
-    plain_result,
     robot_model,
     wrench_dim,
 )
@@ -36,11 +37,14 @@ __all__ = [
     "IsotropicMapJob",
     "IsotropicMapParams",
     "PoseParams",
+    "QUICK",
     "call_isotropic",
+    "isotropic_cost",
     "run_isotropic_map",
 ]
 
 MAX_GRID_POINTS = 250_000  # nx * ny of an isotropic map
+KRUT_MAX_SYSTEMS = 1_000_000  # = certsolve.force.krut.krut_polytope's max_combinations
 MAX_GRID_SIDE = 2000
 
 
@@ -87,9 +91,7 @@ def run_isotropic_map(job: IsotropicMapJob, ctx: RunContext) -> Any:
     ys = np.linspace(ymin, ymax, p.ny)
     robot = robot_model(job.robot)
     rotation = orientation_arg(p.orientation)
-    return plain_result(
-        call_supported(imap, robot, xs, ys, z=p.z, rotation=rotation, external=p.external)
-    )
+    return call_supported(imap, robot, xs, ys, z=p.z, rotation=rotation, external=p.external)
 
 
 KIND = Kind(
@@ -127,4 +129,34 @@ def call_isotropic(req: IsotropicCall) -> Any:
     robot = robot_model(req.robot)
     p = req.params
     pose = Pose.from_params(robot.dof, p.pose)
-    return plain_result(call_supported(fn, robot, pose, algorithm=p.algorithm, external=p.external))
+    return call_supported(fn, robot, pose, algorithm=p.algorithm, external=p.external)
+
+
+def isotropic_cost(req: IsotropicCall) -> float:
+    """Seconds, roughly (fitted on the project's 2-core machine, random robots).
+
+    Hyperplane shifting finds ``F = 2 C(m, w - 1)`` facet planes and removes duplicates in
+    ``O(F^2)`` (7e-6 s per pair: 5.7 s for 11 wires, dof 6); the force section of dof 3
+    and 6 enumerates the ``2^m`` vertices of the tension box (about ``m 2^m`` 1e-6 s: 18 s
+    for 20 wires, dof 3); Krut's algorithm solves ``C(2^m, w)`` linear systems (4e-5 s
+    each: 21 s for 10 wires, dof 2) and refuses more than a million at once.
+    """
+    m, w = len(req.robot.wires), req.robot.dof
+    planes = 2 * comb(m, w - 1)
+    cost = 0.05 + 7e-6 * planes * planes
+    if w != 2:
+        cost += 1e-6 * m * 2.0**m
+    if req.params.algorithm == "krut":
+        systems = comb(2**m, w)
+        cost += 4e-5 * systems if systems <= KRUT_MAX_SYSTEMS else 0.0  # else refused at once
+    return cost
+
+
+QUICK = QuickCall(
+    name="isotropic",
+    model=IsotropicCall,
+    run=call_isotropic,
+    cost=isotropic_cost,
+    library=("certsolve.force", "isotropic_force"),
+    job='a job of kind "isotropic-map" (a grid of one point) for the force value',
+)

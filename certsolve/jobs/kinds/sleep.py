@@ -1,5 +1,6 @@
 """The hidden test kind ``sleep`` (``enable_test_kinds`` only): sleeps, reports progress,
-and on request fails, allocates memory, ignores its limits or crashes the worker."""
+and on request fails, allocates memory (at once, or more at every progress report, as a
+search whose memory grows), ignores its limits or crashes the worker."""
 
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ class SleepParams(Params):
     crash: bool = Field(default=False, description="exit the worker abruptly halfway")
     fail: str | None = Field(default=None, max_length=200, description="raise this error")
     allocate_mb: int = Field(default=0, ge=0, le=1_000_000, description="allocate memory first")
+    grow_mb: int = Field(default=0, ge=0, le=1000, description="allocate more every tick")
     cooperative: bool = Field(default=True, description="report progress, honour limits")
 
 
@@ -45,6 +47,7 @@ def run_sleep(job: SleepJob, ctx: RunContext) -> Any:
     t0 = time.monotonic()
     ticks = 0
     stopped = None
+    grown = []
     while (elapsed := time.monotonic() - t0) < p.seconds:
         if p.crash and elapsed >= p.seconds / 2:
             os._exit(17)
@@ -55,12 +58,14 @@ def run_sleep(job: SleepJob, ctx: RunContext) -> Any:
             stopped = "timeout"
             break
         ticks += 1
+        if p.grow_mb:
+            grown.append(bytearray(p.grow_mb * 2**20))
         progress = _SleepProgress(boxes=ticks, pending=0, solutions=0, undecided=0, elapsed=elapsed)
         if ctx.progress(progress) is False:
             stopped = "cancelled"
             break
         time.sleep(min(0.02, max(0.0, p.seconds - elapsed)))
-    del ballast
+    del ballast, grown
     return {"slept": time.monotonic() - t0, "ticks": ticks, "stopped_by": stopped}
 
 

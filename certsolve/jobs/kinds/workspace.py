@@ -21,7 +21,6 @@ from .base import (
     check_count,
     library_function,
     orientation_arg,
-    plain_result,
     robot_model,
 )
 from .isotropic_map import check_external
@@ -76,7 +75,7 @@ def run_workspace(job: WorkspaceJob, ctx: RunContext) -> Any:
         eps_angle=p.eps_angle,
         external=p.external,
     )
-    return plain_result(result)
+    return result
 
 
 KIND = Kind(
