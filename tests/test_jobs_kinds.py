@@ -40,7 +40,16 @@ def run_one(service, request: dict):
 
 
 def test_registry_and_models():
-    assert set(KINDS) == {"solve", "fk", "ik", "isotropic-map", "workspace", "sleep"}
+    assert set(KINDS) == {
+        "solve",
+        "fk",
+        "ik",
+        "ik-sweep",
+        "isotropic-map",
+        "workspace",
+        "design",
+        "sleep",
+    }
     assert KINDS["sleep"].hidden and not KINDS["solve"].hidden
     assert KINDS["solve"].has_timeout and KINDS["solve"].has_max_boxes
     assert not KINDS["ik"].has_timeout

@@ -235,9 +235,10 @@ class JobService:
         self.close()
 
     # -- requests -----------------------------------------------------------------------------
-    def validate(self, data: Any):
-        """A request dict -> the kind's model (raises pydantic ``ValidationError``)."""
-        return self.adapter.validate_python(data)
+    def validate(self, data: Any, memo: dict | None = None):
+        """A request dict -> the kind's model (raises pydantic ``ValidationError``);
+        ``memo`` keeps the answers of costly checks across the requests of one batch."""
+        return self.adapter.validate_python(data, context={"memo": memo})
 
     def limits_for(self, req) -> dict[str, Any]:
         """Effective limits of a validated request; :class:`LimitError` above a ceiling."""
@@ -317,6 +318,7 @@ class JobService:
         if len(items) > most:
             raise BatchError(f"{len(items)} jobs in one batch; at most {most}", too_large=True)
         reqs, details = [], []
+        memo: dict = {}  # one robot, many params: its costly checks run once
         for i, item in enumerate(items):
             prefix: tuple = ()
             if batch.jobs is not None:
@@ -330,7 +332,7 @@ class JobService:
                 if batch.limits is not None:
                     data["limits"] = batch.limits.model_dump()
             try:
-                req = self.validate(data)
+                req = self.validate(data, memo)
                 self.limits_for(req)
                 reqs.append(req)
             except ValidationError as exc:

@@ -13,9 +13,14 @@ kind (module)       library call                                    input
 solve               ``certsolve.solver.solve``                      ``system`` (Minibex text)
 fk                  ``certsolve.kinematics.forward_kinematics``     ``robot``
 ik                  ``certsolve.kinematics.inverse_kinematics``     ``robot``
+ik-sweep            ``certsolve.kinematics.ik_sweep.ik_sweep``      ``robot``
 isotropic-map       ``certsolve.force.isotropic_map``               ``robot``
 workspace           ``certsolve.force.certified_workspace``         ``robot``
+design              ``certsolve.force.design.design``               ``robot``
 ==================  ==============================================  =========================
+
+The quick calls (``QUICK_CALLS``: ``ik``, ``isotropic``, ``fk/track``) live in the module
+of their kind, with their cost estimate (:class:`.base.QuickCall`).
 
 The library modules are imported lazily inside the runners: a build without one of them
 still serves the others, and such jobs fail with "kind X is not available in this build".
@@ -43,8 +48,10 @@ if TYPE_CHECKING:
         RunContext,
         library_function,
     )
+    from .design import DesignJob, DesignParameter, DesignParams
     from .fk import FkJob, FkParams, TrackCall, TrackParams, call_track
     from .ik import IkCall, IkJob, IkParams, call_ik
+    from .ik_sweep import IkSweepJob, IkSweepParams
     from .isotropic_map import (
         MAX_GRID_POINTS,
         MAX_GRID_SIDE,
@@ -74,6 +81,11 @@ _WHERE = {
     "Request": ".base",
     "RunContext": ".base",
     "library_function": ".base",
+    "DesignJob": ".design",
+    "DesignParameter": ".design",
+    "DesignParams": ".design",
+    "IkSweepJob": ".ik_sweep",
+    "IkSweepParams": ".ik_sweep",
     "FkJob": ".fk",
     "FkParams": ".fk",
     "TrackCall": ".fk",
@@ -103,11 +115,16 @@ _WHERE = {
 __getattr__, __dir__ = lazy_exports(__name__, _WHERE)
 
 __all__ = [
+    "DesignJob",
+    "DesignParameter",
+    "DesignParams",
     "FkJob",
     "FkParams",
     "IkCall",
     "IkJob",
     "IkParams",
+    "IkSweepJob",
+    "IkSweepParams",
     "IsotropicCall",
     "IsotropicMapJob",
     "IsotropicMapParams",

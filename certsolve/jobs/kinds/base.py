@@ -4,9 +4,13 @@ against the robot, the run context, and the lookup of the library function.
 Requests are pydantic models with ``extra="forbid"`` and no NaN / Infinity; every bound
 the validation enforces on a single value (finite, range, length) is written as a
 ``Field`` constraint, so the published JSON Schema states it.  What needs the robot (``u``
-has one value per wire, a pose has the robot's length ...) is checked in one place:
+has one value per wire, a pose has the robot's length, no wire has zero length at an IK
+pose, the FK equations can be written for the platform ...) is checked in one place:
 :meth:`Params.check_robot`, called by :class:`Request` for every job and quick call that
-carries a robot -- and by the command line, which builds the same parameter models.
+carries a robot -- and by the command line, which builds the same parameter models.  Its
+errors name a params field (``u: ...``) or a robot field (``robot.wires: ...``).  A check
+that costs milliseconds may keep its answers in ``memo``, a dict the caller passes as the
+validation context ``{"memo": {}}`` (a batch of jobs on one robot checks it once).
 """
 
 from __future__ import annotations
@@ -18,7 +22,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, model_validator
 
 from ...robot.schema import RobotSpec
 
@@ -41,9 +45,11 @@ __all__ = [
     "call_supported",
     "check_count",
     "check_pose",
+    "check_wire_lengths",
     "check_wires",
     "library_function",
     "orientation_arg",
+    "require_elastic",
     "robot_model",
     "wrench_dim",
 ]
@@ -78,8 +84,9 @@ class Model(BaseModel):
 class Params(Model):
     """The ``params`` of a kind or quick call."""
 
-    def check_robot(self, robot: RobotSpec) -> None:
-        """Checks that need the robot; raise ``ValueError("field: message")``."""
+    def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
+        """Checks that need the robot; raise ``ValueError("field: message")`` for a field
+        of the params, ``ValueError("robot.field: message")`` for one of the robot."""
 
 
 class Request(Model):
@@ -89,14 +96,16 @@ class Request(Model):
     """
 
     @model_validator(mode="after")
-    def _fits_robot(self):
+    def _fits_robot(self, info: ValidationInfo):
         robot = getattr(self, "robot", None)
         params = getattr(self, "params", None)
         if isinstance(robot, RobotSpec) and isinstance(params, Params):
+            memo = info.context.get("memo") if isinstance(info.context, dict) else None
             try:
-                params.check_robot(robot)
+                params.check_robot(robot, memo)
             except ValueError as exc:
-                raise ValueError(f"params.{exc}") from None
+                msg = str(exc)
+                raise ValueError(msg if msg.startswith("robot.") else f"params.{msg}") from None
         return self
 
 
@@ -127,6 +136,33 @@ def check_pose(robot: RobotSpec, values: Sequence[float], name: str) -> None:
         Pose.from_params(robot.dof, values)
     except ValueError as exc:
         raise ValueError(f"{name}: {exc}") from None
+
+
+def check_wire_lengths(robot: RobotSpec, pose: Sequence[float], name: str) -> None:
+    """No wire has zero length at ``pose`` (an attachment on its anchor: the wire has no
+    direction, the IK equations are undefined)."""
+    from ...robot.geometry import Pose, wire_geometry
+
+    p = Pose.from_params(robot.dof, pose)
+    model = robot_model(robot)
+    rho = wire_geometry(model, p.position[None], p.rotation[None])[0][0]
+    scale = 1.0 + float(abs(model.A).max(initial=0.0))
+    for i, r in enumerate(rho.tolist()):
+        if not r > 1e-12 * scale:
+            raise ValueError(
+                f"{name}: wire {i + 1} has zero length at this pose (its attachment "
+                "coincides with its anchor)"
+            )
+
+
+def require_elastic(robot: RobotSpec, what: str, hint: str = "") -> None:
+    """Every wire has the elastic model ``what`` needs (``robot.wires[i].k: ...``)."""
+    from ...robot.schema import RobotFileError
+
+    try:
+        robot_model(robot).require_elastic(what)
+    except RobotFileError as exc:
+        raise ValueError(f"robot.{exc}: the robot has no elastic wire model{hint}") from None
 
 
 def check_count(values: Sequence | None, count: int, name: str, what: str) -> None:

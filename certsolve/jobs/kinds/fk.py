@@ -1,6 +1,13 @@
 """Kind ``fk``: every equilibrium pose for actuator values ``u``
 (``certsolve.kinematics.forward_kinematics``); and the quick call ``POST /v1/fk/track``
-(one certified tracking step near a known pose, ``certsolve.kinematics.track``)."""
+(one certified tracking step near a known pose, ``certsolve.kinematics.track``).
+
+At submission the robot must admit the FK equations: a rigid platform (dof 3 or 6), the
+elastic model on every wire, and attachment points from which the formulation's affine
+frame can be built (3 or 4 distinct, affinely independent points).  The judge is the
+library's own formulation builder (:func:`~certsolve.kinematics.fk_systems.build_formulation`,
+a few milliseconds), so what is accepted can be run.
+"""
 
 from __future__ import annotations
 
@@ -14,6 +21,7 @@ from .base import (
     Coord,
     Job,
     Kind,
+    KindUnavailable,
     Params,
     QuickCall,
     Request,
@@ -21,6 +29,7 @@ from .base import (
     check_pose,
     check_wires,
     library_function,
+    require_elastic,
     robot_model,
 )
 
@@ -32,6 +41,7 @@ __all__ = [
     "TrackCall",
     "TrackParams",
     "call_track",
+    "check_fk_geometry",
     "run_fk",
     "track_cost",
 ]
@@ -49,8 +59,50 @@ class FkParams(Params):
     seed_planar: bool = False
     seeded_only: bool = False
 
-    def check_robot(self, robot: RobotSpec) -> None:
+    def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_wires(robot, self.u, "u")
+        check_fk_geometry(robot, self.formulation, memo)
+
+
+def check_fk_geometry(robot: RobotSpec, formulation: str, memo: dict | None = None) -> None:
+    """The FK equations of ``formulation`` can be written for ``robot`` (module docstring);
+    else ``ValueError`` naming ``robot.dof``, ``robot.wires[i].k`` ..., ``robot.wires``
+    (the attachment points) or ``formulation`` (a formulation this robot cannot use)."""
+    key = ("fk", robot.model_dump_json(), formulation)
+    if memo is not None and key in memo:
+        if memo[key]:
+            raise ValueError(memo[key])
+        return
+    problem = _fk_geometry_problem(robot, formulation)
+    if memo is not None:
+        memo[key] = problem
+    if problem:
+        raise ValueError(problem)
+
+
+def _fk_geometry_problem(robot: RobotSpec, formulation: str) -> str | None:
+    if robot.dof == 2:
+        return "robot.dof: a point platform (dof 2) has no pose to find; FK needs dof 3 or 6"
+    try:
+        require_elastic(robot, "forward kinematics")
+    except ValueError as exc:
+        return str(exc)
+    try:
+        build = library_function("fk", "certsolve.kinematics.fk_systems", "build_formulation")
+    except KindUnavailable:
+        return None  # the job will say the kind is missing
+    model = robot_model(robot)
+    try:
+        build(model, formulation)
+    except ValueError as exc:
+        if formulation in ("auto", "frame"):
+            return f"robot.wires: {exc}"
+        try:
+            build(model, "auto")
+        except ValueError as auto:
+            return f"robot.wires: {auto}"
+        return f"formulation: {exc}"
+    return None
 
 
 class FkJob(Job):
@@ -93,9 +145,10 @@ class TrackParams(Params):
     near_pose: list[Coord] = Field(min_length=2, max_length=6, description="see IkParams.pose")
     half_width: float = Field(default=0.1, gt=0, le=1e4)
 
-    def check_robot(self, robot: RobotSpec) -> None:
+    def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_wires(robot, self.u, "u")
         check_pose(robot, self.near_pose, "near_pose")
+        check_fk_geometry(robot, "auto", memo)
 
 
 class TrackCall(Request):

@@ -17,7 +17,9 @@ from .base import (
     Request,
     RunContext,
     check_pose,
+    check_wire_lengths,
     library_function,
+    require_elastic,
     robot_model,
 )
 
@@ -32,8 +34,15 @@ class IkParams(Params):
     )
     method: Literal["tension", "alg1", "alg2"] = "tension"
 
-    def check_robot(self, robot: RobotSpec) -> None:
+    def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_pose(robot, self.pose, "pose")
+        check_wire_lengths(robot, self.pose, "pose")
+        if self.method != "tension":
+            require_elastic(
+                robot,
+                f"inverse kinematics ({self.method})",
+                "; use method 'tension' for the tensions only",
+            )
 
 
 class IkJob(Job):

@@ -69,7 +69,7 @@ class IsotropicMapParams(Params):
             raise ValueError(f"nx * ny = {self.nx * self.ny} points; at most {MAX_GRID_POINTS}")
         return self
 
-    def check_robot(self, robot: RobotSpec) -> None:
+    def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         if self.z is not None and robot.dof != 6:
             raise ValueError(f"z: a dof-{robot.dof} robot is planar (no z)")
         check_external(robot, self.external)
@@ -110,7 +110,7 @@ class PoseParams(Params):
     algorithm: Literal["shifting", "krut"] = "shifting"
     external: Wrench | None = None
 
-    def check_robot(self, robot: RobotSpec) -> None:
+    def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_pose(robot, self.pose, "pose")
         check_external(robot, self.external)
 

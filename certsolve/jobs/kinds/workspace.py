@@ -48,7 +48,7 @@ class WorkspaceParams(Params):
                 raise ValueError(f"box[{i}]: need lo <= hi")
         return v
 
-    def check_robot(self, robot: RobotSpec) -> None:
+    def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_count(self.box, robot.dim, "box", "intervals, [lo, hi] per axis")
         check_external(robot, self.external)
 
