@@ -80,28 +80,58 @@ def create_app(
     app.include_router(jobs.router(job_request_type(settings.enable_test_kinds)))
     app.include_router(sync.router)
     app.include_router(admin.router)
-    if settings.access is not None:
-        _declare_bearer(app)
+    _finish_openapi(app, settings)
     return app
 
 
-def _declare_bearer(app: FastAPI) -> None:
-    """The OpenAPI schema states that every ``/v1/`` operation needs a bearer token."""
+def _finish_openapi(app: FastAPI, settings: ServiceSettings) -> None:
+    """What the OpenAPI schema says of this service: the ceilings of its job limits
+    (``timeout`` at most ``max_timeout`` ...), that the ``jobs`` of a batch are job
+    requests as ``POST /v1/jobs`` takes them (the service validates each item itself, to
+    name it by its index), and, with tokens, that every ``/v1/`` operation needs a bearer
+    token."""
     build = app.openapi
+    ceilings = {
+        "timeout": {"maximum": settings.max_timeout},
+        "max_boxes": {"maximum": settings.max_max_boxes},
+        "memory_mb": {"minimum": settings.min_memory_mb, "maximum": settings.max_memory_mb},
+    }
+
+    def state_ceilings(node: Any) -> None:
+        if isinstance(node, list):
+            for item in node:
+                state_ceilings(item)
+            return
+        if not isinstance(node, dict):
+            return
+        for name, prop in (node.get("properties") or {}).items():
+            for branch in prop.get("anyOf", [prop]) if isinstance(prop, dict) else ():
+                if name in ceilings and branch.get("type") in ("number", "integer"):
+                    branch.update(ceilings[name])
+        for value in node.values():
+            state_ceilings(value)
 
     def openapi() -> dict[str, Any]:
         if app.openapi_schema is None:
             schema = build()
-            schemes = schema.setdefault("components", {}).setdefault("securitySchemes", {})
-            schemes["bearer"] = {
-                "type": "http",
-                "scheme": "bearer",
-                "description": "a token of the service's token table (certsolve serve --tokens)",
-            }
-            for path, ops in schema.get("paths", {}).items():
-                if path.startswith("/v1/"):
-                    for op in ops.values():
-                        op["security"] = [{"bearer": []}]
+            components = schema.get("components", {}).get("schemas", {})
+            state_ceilings(components)
+            job = schema["paths"]["/v1/jobs"]["post"]["requestBody"]["content"]
+            jobs = components["BatchRequest"]["properties"]["jobs"]
+            for branch in jobs.get("anyOf", [jobs]):
+                if branch.get("type") == "array":
+                    branch["items"] = job["application/json"]["schema"]
+            if settings.access is not None:
+                schemes = schema.setdefault("components", {}).setdefault("securitySchemes", {})
+                schemes["bearer"] = {
+                    "type": "http",
+                    "scheme": "bearer",
+                    "description": "a token of the service's token table (serve --tokens)",
+                }
+                for path, ops in schema.get("paths", {}).items():
+                    if path.startswith("/v1/"):
+                        for op in ops.values():
+                            op["security"] = [{"bearer": []}]
             app.openapi_schema = schema
         return app.openapi_schema
 

@@ -106,6 +106,11 @@ def test_zero_length_wires_and_elastic_model(client):
     assert "wire 1 has zero length" in d["params.pose"]["msg"]
     r = client.post("/v1/ik", json={"robot": PLANAR, "params": {"pose": [10, 5, 0]}})
     assert "params.pose" in fields(r)
+    # found by schemathesis: the force polytope at a pose on an anchor (was a 422 from
+    # scipy's linprog about NaN, naming nothing)
+    anchor = KRUT3["wires"][0]["base"]
+    r = client.post("/v1/isotropic", json={"robot": KRUT3, "params": {"pose": anchor}})
+    assert "wire 1 has zero length" in fields(r)["params.pose"]["msg"]
     assert "robot.wires.0.k" in fields(
         submit(client, "ik", KRUT3, {"pose": [0, 0], "method": "alg2"})
     )
@@ -199,3 +204,14 @@ def test_design_job_gives_the_library_answer(tmp_path):
     assert got["status"] == "complete" and got["counts"] == want["counts"]
     assert got["good_boxes"] == want["good_boxes"] and got["best"] == want["best"]
     assert got["counts"]["good"] >= 1
+
+
+def test_flat_polytope_with_krut_algorithm(client):
+    """Found by schemathesis: Krut's algorithm on fewer wires than wrench components was a
+    422 from numpy's SVD ('Last 2 dimensions of the array must be square'); the polytope
+    is flat, as hyperplane shifting already said."""
+    one = {"dof": 3, "wires": [{"base": [0.0, 0.0], "platform": [1.0, 0.0], "tau": [0.0, 1.0]}]}
+    for algorithm in ("krut", "shifting"):
+        body = {"robot": one, "params": {"pose": [5, 5, 0], "algorithm": algorithm}}
+        r = client.post("/v1/isotropic", json=body)
+        assert r.status_code == 200 and r.json()["status"] == "degenerate", r.text

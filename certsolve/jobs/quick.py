@@ -287,6 +287,16 @@ class _Lane:
         with self._cond:
             return [p.proc.pid for p in self._all if p.proc.pid is not None]
 
+    def stats(self) -> dict[str, Any]:
+        with self._cond:
+            return {
+                "processes": len(self._all),
+                "busy": self.size - self._free,
+                "waiting": self._waiting,
+                "started": self.started,
+                "timeout": self.timeout,
+            }
+
 
 class QuickCalls:
     """Runs the quick calls of one service in its lanes (see the module docstring)."""
@@ -372,6 +382,11 @@ class QuickCalls:
 
     def pids(self) -> list[int]:
         return [pid for lane in self.lanes.values() for pid in lane.pids()]
+
+    def stats(self) -> dict[str, Any]:
+        """Per lane: processes, calls running and waiting, processes started in all (the
+        first ones and every replacement of a killed one), the deadline."""
+        return {name: lane.stats() for name, lane in self.lanes.items()}
 
 
 def _exit(proc: _Proc) -> str:

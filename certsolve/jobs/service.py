@@ -97,9 +97,14 @@ class BatchError(ValueError):
 _ONE_OF: list[Any] = [
     {
         "required": ["jobs"],
+        "properties": {"jobs": {"type": "array"}},
         "not": {"anyOf": [{"required": [k]} for k in ("kind", "robot", "system", "params")]},
     },
-    {"required": ["kind", "params"], "not": {"required": ["jobs"]}},
+    {
+        "required": ["kind", "params"],
+        "properties": {"kind": {"type": "string"}, "params": {"type": "array"}},
+        "not": {"required": ["jobs"]},
+    },
 ]
 
 

@@ -560,8 +560,8 @@ class JobStore:
             total += n
             if n < chunk:
                 break
-        if total:
-            self._conn().execute("PRAGMA incremental_vacuum").fetchall()
+        if total:  # stepped to the end (sqlite3's execute frees one page per step)
+            self._conn().executescript("PRAGMA incremental_vacuum;")
         self.checkpoint()
         return total
 

@@ -19,7 +19,7 @@ from typing import Annotated, Any, Literal
 from pydantic import Field
 
 from ...force.design_spec import DEFAULT_EPS, MAX_PARAMETERS, DesignOptions, ParameterSpec
-from ...robot.schema import RobotSpec
+from ...robot.schema import RobotSpec, robot_dof_schema
 from .base import (
     MAX_FORCE,
     Angle,
@@ -28,6 +28,8 @@ from .base import (
     Kind,
     Params,
     RunContext,
+    angles_schema,
+    check_angles,
     check_count,
     library_function,
     wrench_dim,
@@ -81,18 +83,22 @@ class DesignParams(Params, DesignOptions):
         default=None, ge=1, description="limit on evaluated (parameter, pose) pairs"
     )
 
+    @classmethod
+    def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
+        return {
+            "workspace": 6 if dof == 6 else 4,
+            "orientation": angles_schema(dof, ranges=False),
+        }
+
+    @classmethod
+    def robot_schema(cls, dof: int) -> dict:
+        return robot_dof_schema(dof, min_wires=dof)
+
     def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         from ...robot.params import AffineRobot
 
         check_count(self.workspace, 2 * robot.dim, "workspace", "numbers, [lo, hi] per axis")
-        angles = {2: 0, 3: 1, 6: 3}[robot.dof]
-        given = self.orientation
-        if given is not None and angles == 0:
-            raise ValueError("orientation: a point platform (dof 2) has no orientation")
-        if isinstance(given, list):
-            check_count(given, angles, "orientation", "angles (degrees)")
-        elif given is not None and angles != 1:
-            raise ValueError(f"orientation: expected {angles} angles (degrees)")
+        check_angles(robot, self.orientation, "orientation", ranges=False)
         if len(robot.wires) < wrench_dim(robot):
             raise ValueError(
                 f"robot.wires: {len(robot.wires)} wires cannot resist a force in every direction"

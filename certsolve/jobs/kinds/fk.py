@@ -15,9 +15,10 @@ from typing import Any, Literal
 
 from pydantic import Field
 
-from ...robot.schema import MAX_WIRES, RobotSpec
+from ...robot.schema import MAX_WIRES, RobotSpec, robot_dof_schema
 from .base import (
     MAX_FORCE,
+    POSE_LENGTH,
     Coord,
     Job,
     Kind,
@@ -42,9 +43,16 @@ __all__ = [
     "TrackParams",
     "call_track",
     "check_fk_geometry",
+    "fk_robot_schema",
     "run_fk",
     "track_cost",
 ]
+
+
+# = certsolve.kinematics.fk_systems.FORMULATIONS (tested), by the dof they are written for
+FORMULATIONS = ("auto", "frame", "reduced", "pose")
+PLANAR_FORMULATIONS = ("planar-10",)
+SPATIAL_FORMULATIONS = ("general-19", "T-16", "almost-planar-13", "points")
 
 
 class FkParams(Params):
@@ -55,13 +63,33 @@ class FkParams(Params):
     timeout: float | None = Field(default=None, gt=0, description="time limit (s)")
     max_boxes: int | None = Field(default=None, ge=1)
     tau_max: float | None = Field(default=None, ge=0, le=MAX_FORCE, description="tension cap")
-    formulation: str = Field(default="auto", max_length=32, pattern=r"^[A-Za-z0-9_-]+$")
+    formulation: Literal[FORMULATIONS + PLANAR_FORMULATIONS + SPATIAL_FORMULATIONS] = Field(
+        default="auto", description="the FK equations (docs: README, forward kinematics)"
+    )
     seed_planar: bool = False
     seeded_only: bool = False
+
+    @classmethod
+    def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
+        if dof == 2:
+            return None
+        names = FORMULATIONS + (PLANAR_FORMULATIONS if dof == 3 else SPATIAL_FORMULATIONS)
+        return {"formulation": {"enum": list(names), "default": "auto", "type": "string"}}
+
+    @classmethod
+    def robot_schema(cls, dof: int) -> dict:
+        return fk_robot_schema(dof)
 
     def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_wires(robot, self.u, "u")
         check_fk_geometry(robot, self.formulation, memo)
+
+
+def fk_robot_schema(dof: int) -> dict:
+    """Robots FK can take: the elastic model, and at least the 3 (planar) or 4 (spatial)
+    attachment points of the formulation's frame (that they are distinct and span it is
+    checked by :func:`check_fk_geometry`)."""
+    return robot_dof_schema(dof, elastic=True, min_wires=3 if dof == 3 else 4)
 
 
 def check_fk_geometry(robot: RobotSpec, formulation: str, memo: dict | None = None) -> None:
@@ -144,6 +172,14 @@ class TrackParams(Params):
     u: list[Coord] = Field(min_length=1, max_length=MAX_WIRES)
     near_pose: list[Coord] = Field(min_length=2, max_length=6, description="see IkParams.pose")
     half_width: float = Field(default=0.1, gt=0, le=1e4)
+
+    @classmethod
+    def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
+        return None if dof == 2 else {"near_pose": POSE_LENGTH[dof]}
+
+    @classmethod
+    def robot_schema(cls, dof: int) -> dict:
+        return fk_robot_schema(dof)
 
     def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_wires(robot, self.u, "u")

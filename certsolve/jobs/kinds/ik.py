@@ -7,14 +7,16 @@ from typing import Any, Literal
 
 from pydantic import Field
 
-from ...robot.schema import RobotSpec
+from ...robot.schema import RobotSpec, robot_dof_schema
 from .base import (
+    POSE_LENGTH,
     Coord,
     Job,
     Kind,
     Params,
     QuickCall,
     Request,
+    Required,
     RunContext,
     check_pose,
     check_wire_lengths,
@@ -33,6 +35,16 @@ class IkParams(Params):
         description="x,y,z,yaw,pitch,roll (dof 6), x,y,theta (dof 3) or x,y (dof 2); cm, deg",
     )
     method: Literal["tension", "alg1", "alg2"] = "tension"
+
+    @classmethod
+    def schema_variants(cls, dof: int) -> list[tuple[dict, dict[str, Any]]]:
+        """The tension method takes any robot; Algorithms 1 and 2 need the elastic model."""
+        tension = {"const": "tension", "default": "tension", "type": "string"}
+        algorithms = Required({"enum": ["alg1", "alg2"], "type": "string"})
+        return [
+            (robot_dof_schema(dof), {"pose": POSE_LENGTH[dof], "method": tension}),
+            (robot_dof_schema(dof, elastic=True), {"pose": POSE_LENGTH[dof], "method": algorithms}),
+        ]
 
     def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_pose(robot, self.pose, "pose")

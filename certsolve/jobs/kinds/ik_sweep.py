@@ -13,8 +13,9 @@ from typing import Any, Literal
 
 from pydantic import Field
 
-from ...robot.schema import MAX_WIRES, RobotSpec
+from ...robot.schema import MAX_WIRES, RobotSpec, robot_dof_schema
 from .base import (
+    POSE_LENGTH,
     Coord,
     Job,
     Kind,
@@ -54,6 +55,14 @@ class IkSweepParams(Params):
         default=1e-4, gt=0, le=1, description="relative half-width of the certificate's box"
     )
     timeout: float | None = Field(default=None, gt=0, description="time limit (s)")
+
+    @classmethod
+    def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
+        return None if dof == 2 else {"pose": POSE_LENGTH[dof], "u_start": dof + 1}
+
+    @classmethod
+    def robot_schema(cls, dof: int) -> dict:
+        return robot_dof_schema(dof, elastic=True, wires=dof + 1)
 
     def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         m, w = len(robot.wires), wrench_dim(robot)

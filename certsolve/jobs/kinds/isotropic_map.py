@@ -11,6 +11,7 @@ from pydantic import Field, model_validator
 
 from ...robot.schema import RobotSpec
 from .base import (
+    POSE_LENGTH,
     Coord,
     Job,
     Kind,
@@ -20,9 +21,12 @@ from .base import (
     Request,
     RunContext,
     Wrench,
+    angles_schema,
     call_supported,
+    check_angles,
     check_count,
     check_pose,
+    check_wire_lengths,
     library_function,
     orientation_arg,
     robot_model,
@@ -69,10 +73,18 @@ class IsotropicMapParams(Params):
             raise ValueError(f"nx * ny = {self.nx * self.ny} points; at most {MAX_GRID_POINTS}")
         return self
 
+    @classmethod
+    def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
+        shapes: dict[str, Any] = {"external": dof, "orientation": angles_schema(dof, ranges=False)}
+        if dof != 6:
+            shapes["z"] = None
+        return shapes
+
     def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         if self.z is not None and robot.dof != 6:
             raise ValueError(f"z: a dof-{robot.dof} robot is planar (no z)")
         check_external(robot, self.external)
+        check_angles(robot, self.orientation, "orientation", ranges=False)
 
 
 class IsotropicMapJob(Job):
@@ -110,8 +122,13 @@ class PoseParams(Params):
     algorithm: Literal["shifting", "krut"] = "shifting"
     external: Wrench | None = None
 
+    @classmethod
+    def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
+        return {"pose": POSE_LENGTH[dof], "external": dof}
+
     def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_pose(robot, self.pose, "pose")
+        check_wire_lengths(robot, self.pose, "pose")  # a wire with no direction: no H
         check_external(robot, self.external)
 
 

@@ -18,8 +18,8 @@ KINDS: dict[str, Kind] = {
     for module in (solve, fk, ik, ik_sweep, isotropic_map, workspace, design, sleep)
 }
 QUICK_CALLS: dict[str, QuickCall] = {
-    module.QUICK.name: module.QUICK for module in (ik, isotropic_map, fk)
-}
+    module.QUICK.name: module.QUICK for module in (ik, isotropic_map, fk, sleep)
+}  # "sleep" has no route: tests of the quick-call processes
 
 
 def public_kinds(include_hidden: bool = False) -> list[str]:
