@@ -178,3 +178,19 @@ def test_without_tokens_everything_is_open(tmp_path):
         r = c.post("/v1/admin/purge", json={"older_than_days": 30})
         assert r.status_code == 200
         assert "securitySchemes" not in c.get("/openapi.json").json().get("components", {})
+
+
+def test_serve_refuses_an_open_host_without_tokens(tmp_path, capsys, monkeypatch):
+    from certsolve.cli import main
+
+    monkeypatch.delenv("CERTSOLVE_TOKENS", raising=False)
+    data = str(tmp_path / "d")
+    assert main(["serve", "--host", "0.0.0.0", "--port", "0", "--data-dir", data]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: --host 0.0.0.0") and "--tokens" in err and "--insecure" in err
+    bad = tmp_path / "tokens.json"
+    bad.write_text('{"alice": {"token": "short"}}')
+    assert main(["serve", "--tokens", str(bad), "--data-dir", data]) == 2
+    assert "alice.token" in capsys.readouterr().err
+    assert main(["serve", "--keep-days", "0", "--data-dir", data]) == 2
+    assert "--keep-days" in capsys.readouterr().err

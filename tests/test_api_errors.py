@@ -102,3 +102,11 @@ def test_openapi_lists_the_errors(client):
                 if code.startswith(("4", "5")):
                     ref = resp["content"]["application/json"]["schema"]["$ref"]
                     assert ref.endswith("/ErrorBody"), (method, path, code)
+
+
+def test_a_body_nested_100000_deep(tmp_path):
+    """The issue's case, within the default 16 MiB body limit: a 400 naming the body."""
+    with TestClient(create_app(ServiceSettings(data_dir=tmp_path, workers=0))) as c:
+        raw = b"[" * 100_000 + b"]" * 100_000
+        (d,) = error(c.post("/v1/jobs", content=raw, headers=JSON), 400)
+        assert d["field"] == "body" and "nested too deeply" in d["msg"]

@@ -243,3 +243,18 @@ def test_batch_expansion_in_the_service(service):
     with pytest.raises(BatchError) as info:
         service.expand_batch(over)
     assert info.value.details[0]["field"] == "jobs.0.limits.timeout"
+
+
+def test_housekeeping_purges_old_finished_jobs(tmp_path):
+    import time
+
+    from certsolve.jobs.retention import Housekeeper
+
+    settings = ServiceSettings(data_dir=tmp_path, workers=0, keep_days=1e-6)  # 86 ms
+    with JobService(settings) as svc:
+        old, new = svc.submit([svc.validate({"kind": "solve", "system": CIRCLE})] * 2)
+        svc.cancel(old)
+        time.sleep(0.2)
+        assert Housekeeper(svc.store, settings).run_once() == 1
+        assert svc.store.get(old) is None and svc.store.get(new).status == "queued"
+        assert svc.store.file_sizes()["wal"] == 0
