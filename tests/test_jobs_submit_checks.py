@@ -215,3 +215,12 @@ def test_flat_polytope_with_krut_algorithm(client):
         body = {"robot": one, "params": {"pose": [5, 5, 0], "algorithm": algorithm}}
         r = client.post("/v1/isotropic", json=body)
         assert r.status_code == 200 and r.json()["status"] == "degenerate", r.text
+
+
+def test_fk_formulations_are_the_librarys():
+    from typing import get_args
+
+    from certsolve.kinematics.fk_systems import FORMULATIONS
+
+    names = fk_kind.FORMULATIONS + fk_kind.PLANAR_FORMULATIONS + fk_kind.SPATIAL_FORMULATIONS
+    assert set(get_args(fk_kind.Formulation)) == set(names) == set(FORMULATIONS)

@@ -108,7 +108,9 @@ def _table(data: Any, source: str) -> AccessTable:
         raise AccessError(f"{source}: " + "; ".join(parts)) from None
     if not table:
         raise AccessError(f"{source}: no clients (an object mapping names to tokens)")
-    clients, digests, seen = [], [], {}
+    clients: list[Client] = []
+    digests: list[bytes] = []
+    seen: dict[bytes, str] = {}
     for name, entry in table.items():
         if not re.match(_NAME, name):
             raise AccessError(f"{source}: client name {name!r}: letters, digits, _ . @ - only")

@@ -99,7 +99,7 @@ def validation_details(errors: Sequence[Mapping[str, Any]], prefix: tuple = ()) 
                     sub = sub[1:]
                 ploc = [*loc, *sub]
                 piece = m.group(2)
-            item = {
+            item: dict[str, Any] = {
                 "loc": [_json_safe(p) for p in ploc],
                 "field": field_of(ploc),
                 "msg": piece,

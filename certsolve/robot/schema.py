@@ -257,7 +257,7 @@ def _zeros(prop: dict, n: int) -> dict:
 def _field_schema(model: type[BaseModel], name: str) -> dict:
     """The JSON Schema of one field of ``model`` (its type and constraints)."""
     info = model.model_fields[name]
-    return TypeAdapter(Annotated[info.annotation, info]).json_schema()
+    return TypeAdapter(Annotated[info.annotation, info]).json_schema()  # type: ignore[arg-type]
 
 
 def robot_dof_schema(

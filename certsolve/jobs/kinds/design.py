@@ -63,7 +63,9 @@ class DesignParameter(ParameterSpec):
 
 
 class DesignParams(Params, DesignOptions):
-    parameters: list[DesignParameter] = Field(min_length=2, max_length=MAX_PARAMETERS)
+    parameters: list[DesignParameter] = Field(  # type: ignore[assignment]
+        min_length=2, max_length=MAX_PARAMETERS
+    )
     workspace: list[Coord] = Field(
         min_length=4, max_length=6, description="xmin, xmax, ymin, ymax[, zmin, zmax] (cm)"
     )

@@ -53,6 +53,10 @@ __all__ = [
 FORMULATIONS = ("auto", "frame", "reduced", "pose")
 PLANAR_FORMULATIONS = ("planar-10",)
 SPATIAL_FORMULATIONS = ("general-19", "T-16", "almost-planar-13", "points")
+Formulation = Literal[
+    "auto", "frame", "reduced", "pose", "planar-10", "general-19", "T-16", "almost-planar-13",
+    "points",
+]  # fmt: skip
 
 
 class FkParams(Params):
@@ -63,7 +67,7 @@ class FkParams(Params):
     timeout: float | None = Field(default=None, gt=0, description="time limit (s)")
     max_boxes: int | None = Field(default=None, ge=1)
     tau_max: float | None = Field(default=None, ge=0, le=MAX_FORCE, description="tension cap")
-    formulation: Literal[FORMULATIONS + PLANAR_FORMULATIONS + SPATIAL_FORMULATIONS] = Field(
+    formulation: Formulation = Field(
         default="auto", description="the FK equations (docs: README, forward kinematics)"
     )
     seed_planar: bool = False
