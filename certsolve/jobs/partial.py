@@ -11,12 +11,15 @@ grace the job has before it is killed -- and makes a result nobody can read.
   converted to JSON data (other results count their boxes from their arrays, so those are
   cut after conversion, below);
 * every other top-level list longer than ``max_items`` is then cut too
-  (:func:`.jsonutil.truncate_lists`);
+  (:func:`.jsonutil.truncate_lists`), before the result is made plain JSON data (the
+  workspace's and the design's box lists come out of ``to_dict`` in one numpy call);
 * ``truncated`` records the full length of each list that was cut, so nothing is dropped
   silently: what is not listed is counted.
 
 Pending boxes are the unexplored part of the domain; the first ``max_items`` of them (in
-the search's order) and their count describe a stopped search.  When the solver merges
+the search's order) and their count describe a stopped search.  (A workspace or design
+result is converted whole before it is cut -- its counts and measures come from its
+arrays -- which costs about 2.3 s per million boxes.)  When the solver merges
 its pending boxes into hulls itself (a bounded summary with counts), there is nothing left
 to cut here and the summary is stored as it is.
 """
@@ -61,8 +64,9 @@ def _cut(obj: Any, max_items: int, counts: dict[str, int], depth: int = 0) -> An
 def stored_result(result: Any, max_items: int) -> Any:
     """The JSON data a job stores for the library's ``result`` (module docstring)."""
     counts: dict[str, int] = {}
-    data = plain(_cut(result, max_items, counts))
-    data = truncate_lists(data, max_items)
+    cut = _cut(result, max_items, counts)
+    data = cut.to_dict() if hasattr(cut, "to_dict") else cut
+    data = plain(truncate_lists(data, max_items))  # cut first: plain() visits every item
     if counts and isinstance(data, dict):
         data["truncated"] = {**counts, **data.get("truncated", {})}
     return data
