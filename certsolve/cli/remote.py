@@ -44,7 +44,7 @@ def register(sub) -> None:
         "file is sent as one batch), or a job built from --kind and the options below.",
     )
     p.add_argument("job", nargs="?", help="job file (.json), batch (.jsonl) or '-'")
-    p.add_argument("--kind", help="solve, fk, ik, isotropic-map, workspace")
+    p.add_argument("--kind", help="solve, fk, ik, ik-sweep, isotropic-map, workspace, design")
     p.add_argument("--robot", help="robot file (JSON)")
     p.add_argument("--system", help="Minibex file (kind solve)")
     p.add_argument("--params", help="parameters as a JSON object")
