@@ -1,20 +1,24 @@
 """The HTTP API of the solver service (FastAPI).
 
 ``create_app(settings)`` builds the application around a :class:`certsolve.jobs.JobService`:
-jobs are queued in the service's SQLite store and run by its worker processes; the HTTP
-process only validates, stores and reads.  Routes live in one router per resource
-(:mod:`.routers.jobs`, :mod:`.routers.sync`, :mod:`.routers.meta`, the pictures of finished
-jobs :mod:`.routers.pictures`, the bundled robots :mod:`.routers.examples`, and the web
-page at ``/`` :mod:`.routers.pages`) and get the settings and services through FastAPI
-dependencies (:mod:`.deps`).  Run it with ``certsolve serve``
-or ``uvicorn certsolve.api.app:create_app --factory`` (settings from ``CERTSOLVE_*``
-variables).  See ``docs/api.md``.
+jobs are queued in the service's SQLite store and run by its worker processes, quick calls
+run in the processes of :class:`certsolve.jobs.quick.QuickCalls`; the HTTP process only
+validates, stores and reads.  Routes live in one router per resource
+(:mod:`.routers.jobs`, :mod:`.routers.sync`, :mod:`.routers.meta`, :mod:`.routers.admin`, the
+pictures of finished jobs :mod:`.routers.pictures`, the bundled robots :mod:`.routers.examples`,
+and the web page at ``/`` :mod:`.routers.pages`)
+and get the settings, services and calling client through FastAPI dependencies
+(:mod:`.deps`).  With a token table (``settings.access``) every ``/v1/`` request needs a
+bearer token (:class:`.middleware.AccessMiddleware`), and the OpenAPI schema says so.
+Run it with ``certsolve serve`` or ``uvicorn certsolve.api.app:create_app --factory``
+(settings from ``CERTSOLVE_*`` variables).  See ``docs/api.md``.
 """
 
 from __future__ import annotations
 
 import logging
 from contextlib import asynccontextmanager
+from typing import Any
 
 from fastapi import FastAPI
 
@@ -25,8 +29,8 @@ from certsolve.jobs.service import JobService
 from certsolve.jobs.settings import ServiceSettings
 
 from .errors import install_error_handlers
-from .middleware import BodyLimitMiddleware
-from .routers import examples, jobs, meta, pages, pictures, sync
+from .middleware import AccessMiddleware, BodyLimitMiddleware
+from .routers import admin, examples, jobs, meta, pages, pictures, sync
 
 __all__ = ["API_VERSION", "create_app"]
 
@@ -38,9 +42,11 @@ API_VERSION = "1"
 def create_app(
     settings: ServiceSettings | None = None, service: JobService | None = None
 ) -> FastAPI:
-    """The FastAPI application; the lifespan starts and stops the service's workers."""
+    """The FastAPI application; the lifespan starts and stops the service's workers and
+    its quick-call processes."""
     settings = settings or ServiceSettings.from_env()
     service = service or JobService(settings)
+    quick = QuickCalls(settings)
 
     @asynccontextmanager
     async def lifespan(app: FastAPI):
@@ -48,6 +54,7 @@ def create_app(
         try:
             yield
         finally:
+            quick.close()
             service.close()
 
     app = FastAPI(
@@ -57,20 +64,82 @@ def create_app(
         description=(
             "Submit solver jobs (`POST /v1/jobs`), poll them (`GET /v1/jobs/{id}`), cancel "
             "them (`DELETE /v1/jobs/{id}`). Jobs run in worker processes and survive "
-            'restarts. Errors are JSON `{"error": ..., "detail": [...]}`.'
+            'restarts. Every error is JSON `{"error": ..., "detail": [{"loc", "field", '
+            '"msg", "type"}, ...]}`.'
         ),
         lifespan=lifespan,
     )
     app.state.settings = settings
     app.state.service = service
-    app.state.quick = QuickCalls(settings)
+    app.state.quick = quick
     app.state.pictures = Pictures(service.store, settings.data_dir / "pictures")
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
+    app.add_middleware(
+        AccessMiddleware,
+        access=settings.access,
+        default_rate=settings.quota_requests_per_minute,
+    )
     install_error_handlers(app)
     app.include_router(meta.router)
     app.include_router(jobs.router(job_request_type(settings.enable_test_kinds)))
     app.include_router(sync.router)
+    app.include_router(admin.router)
     app.include_router(pictures.router)
     app.include_router(examples.router)
     app.include_router(pages.router)
+    _finish_openapi(app, settings)
     return app
+
+
+def _finish_openapi(app: FastAPI, settings: ServiceSettings) -> None:
+    """What the OpenAPI schema says of this service: the ceilings of its job limits
+    (``timeout`` at most ``max_timeout`` ...), that the ``jobs`` of a batch are job
+    requests as ``POST /v1/jobs`` takes them (the service validates each item itself, to
+    name it by its index), and, with tokens, that every ``/v1/`` operation needs a bearer
+    token."""
+    build = app.openapi
+    ceilings = {
+        "timeout": {"maximum": settings.max_timeout},
+        "max_boxes": {"maximum": settings.max_max_boxes},
+        "memory_mb": {"minimum": settings.min_memory_mb, "maximum": settings.max_memory_mb},
+    }
+
+    def state_ceilings(node: Any) -> None:
+        if isinstance(node, list):
+            for item in node:
+                state_ceilings(item)
+            return
+        if not isinstance(node, dict):
+            return
+        for name, prop in (node.get("properties") or {}).items():
+            for branch in prop.get("anyOf", [prop]) if isinstance(prop, dict) else ():
+                if name in ceilings and branch.get("type") in ("number", "integer"):
+                    branch.update(ceilings[name])
+        for value in node.values():
+            state_ceilings(value)
+
+    def openapi() -> dict[str, Any]:
+        if app.openapi_schema is None:
+            schema = build()
+            components = schema.get("components", {}).get("schemas", {})
+            state_ceilings(components)
+            job = schema["paths"]["/v1/jobs"]["post"]["requestBody"]["content"]
+            jobs = components["BatchRequest"]["properties"]["jobs"]
+            for branch in jobs.get("anyOf", [jobs]):
+                if branch.get("type") == "array":
+                    branch["items"] = job["application/json"]["schema"]
+            if settings.access is not None:
+                schemes = schema.setdefault("components", {}).setdefault("securitySchemes", {})
+                schemes["bearer"] = {
+                    "type": "http",
+                    "scheme": "bearer",
+                    "description": "a token of the service's token table (serve --tokens)",
+                }
+                for path, ops in schema.get("paths", {}).items():
+                    if path.startswith("/v1/"):
+                        for op in ops.values():
+                            op["security"] = [{"bearer": []}]
+            app.openapi_schema = schema
+        return app.openapi_schema
+
+    app.openapi = openapi  # type: ignore[method-assign]

@@ -1,10 +1,14 @@
-"""A request-body size limit (413) as plain ASGI middleware."""
+"""Plain ASGI middleware: the request-body size limit (413) and access control (401, 429)."""
 
 from __future__ import annotations
 
 import json
+import math
+import time
 
-__all__ = ["BodyLimitMiddleware"]
+from .errors import error_body, problem
+
+__all__ = ["AccessMiddleware", "BodyLimitMiddleware"]
 
 
 class BodyLimitMiddleware:
@@ -58,18 +62,84 @@ class BodyLimitMiddleware:
         await self.app(scope, replay, send)
 
     async def _refuse(self, send) -> None:
-        body = json.dumps(
-            {"error": f"request body too large (at most {self.max_bytes} bytes)"}
-        ).encode()
-        await send(
-            {
-                "type": "http.response.start",
-                "status": 413,
-                "headers": [
-                    (b"content-type", b"application/json"),
-                    (b"content-length", str(len(body)).encode()),
-                    (b"connection", b"close"),
-                ],
-            }
-        )
-        await send({"type": "http.response.body", "body": body})
+        msg = f"request body too large (at most {self.max_bytes} bytes)"
+        await _send_error(send, 413, msg, ("body",), "too_large", [(b"connection", b"close")])
+
+
+class AccessMiddleware:
+    """Bearer tokens and per-client request rates for every path under ``/v1/``.
+
+    With a token table (:class:`certsolve.jobs.access.AccessTable`) a request without a
+    valid ``Authorization: Bearer <token>`` gets 401 (with ``WWW-Authenticate``) before its
+    body is read; a valid one has its client put in ``scope["state"]["client"]`` (read by
+    :func:`api.deps.get_caller`).  Each client may make ``requests_per_minute`` requests (a
+    token bucket of that size, refilled continuously); past it the answer is 429 with
+    ``Retry-After``.  Without a table every request passes (client None).  ``/healthz`` and
+    the documentation are public.  Tokens are never logged or echoed.
+    """
+
+    def __init__(self, app, access, default_rate: int):
+        self.app = app
+        self.access = access
+        self.default_rate = int(default_rate)
+        self._buckets: dict[str, tuple[float, float]] = {}  # client -> (tokens, time)
+
+    async def __call__(self, scope, receive, send):
+        if scope["type"] != "http" or self.access is None or not scope["path"].startswith("/v1/"):
+            await self.app(scope, receive, send)
+            return
+        token = None
+        for name, value in scope.get("headers", ()):
+            if name == b"authorization":
+                scheme, _, rest = value.decode("latin-1").strip().partition(" ")
+                if scheme.lower() == "bearer":
+                    token = rest.strip()
+                break
+        client = self.access.client_for(token)
+        if client is None:
+            given = token is not None
+            msg = "invalid token" if given else "this service needs a token"
+            msg += ": send Authorization: Bearer <token>"
+            challenge = 'Bearer realm="certsolve"' + (', error="invalid_token"' if given else "")
+            await _send_error(
+                send, 401, msg, ("header", "Authorization"), "unauthorized",
+                [(b"www-authenticate", challenge.encode())],
+            )  # fmt: skip
+            return
+        wait = self._spend(client.name, client.requests_per_minute or self.default_rate)
+        if wait > 0:
+            retry = max(1, math.ceil(wait))
+            msg = f"too many requests from {client.name}; retry in {retry} s"
+            await _send_error(
+                send, 429, msg, (), "rate_limited", [(b"retry-after", str(retry).encode())]
+            )
+            return
+        scope.setdefault("state", {})["client"] = client
+        await self.app(scope, receive, send)
+
+    def _spend(self, name: str, per_minute: int) -> float:
+        """Take one request from ``name``'s bucket: 0, or the seconds until one is free."""
+        now = time.monotonic()
+        tokens, then = self._buckets.get(name, (float(per_minute), now))
+        tokens = min(float(per_minute), tokens + (now - then) * per_minute / 60.0)
+        if tokens < 1.0:
+            self._buckets[name] = (tokens, now)
+            return (1.0 - tokens) * 60.0 / per_minute
+        self._buckets[name] = (tokens - 1.0, now)
+        return 0.0
+
+
+async def _send_error(send, status: int, msg: str, loc, typ: str, headers=()) -> None:
+    body = json.dumps(error_body(status, msg, [problem(msg, loc, typ)])).encode()
+    await send(
+        {
+            "type": "http.response.start",
+            "status": status,
+            "headers": [
+                (b"content-type", b"application/json"),
+                (b"content-length", str(len(body)).encode()),
+                *headers,
+            ],
+        }
+    )
+    await send({"type": "http.response.body", "body": body})

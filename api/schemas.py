@@ -20,8 +20,10 @@ __all__ = [
     "JobList",
     "JobProgress",
     "JobRecord",
-    "SUBMIT_ERRORS",
-    "SYNC_ERRORS",
+    "Problem",
+    "PurgeRequest",
+    "PurgeResult",
+    "errors",
 ]
 
 
@@ -64,6 +66,7 @@ class JobRecord(BaseModel):
     cancel_requested: bool
     worker_pid: int | None
     error: str | None
+    owner: str | None = Field(description="the client that submitted it (None without tokens)")
     result: Any = Field(default=None, description="the library's result, when done")
 
 
@@ -80,21 +83,63 @@ class BatchStatus(BaseModel):
     jobs_url: str
 
 
+class Problem(BaseModel):
+    """One problem of an error answer: where (``loc``, ``field``), what and what kind."""
+
+    loc: list[str | int | None] = Field(description="path into the request, e.g. body.robot")
+    field: str = Field(description="dotted path without its first part ('' if none)")
+    msg: str
+    type: str
+    line: int | None = Field(default=None, description="Minibex text / JSON body: line")
+    column: int | None = Field(default=None, description="Minibex text / JSON body: column")
+
+
 class ErrorBody(BaseModel):
+    """Every error answer: a one-line message and each problem."""
+
     error: str
-    detail: list[dict[str, Any]] | None = None
+    detail: list[Problem] = Field(min_length=1)
 
 
-_ERRORS = {
-    413: {"description": "request too large"},
-    422: {"description": "invalid request: each problem with its field path"},
-    429: {"description": "the queue is full, or too many quick calls at once"},
+class PurgeRequest(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    older_than_days: float = Field(
+        ge=0, le=1e5, description="delete finished jobs that finished longer ago than this"
+    )
+
+
+class PurgeResult(BaseModel):
+    deleted: int
+    older_than_days: float
+    db: int = Field(description="bytes of the job store after the purge")
+    wal: int = Field(description="bytes of its write-ahead log after the checkpoint")
+
+
+_WHY = {
+    400: "the body cannot be read as JSON (not JSON, not UTF-8, nested too deeply)",
+    401: "no valid token (a service started with tokens); see WWW-Authenticate",
+    403: "an admin token is needed",
+    404: "no such job or batch (or not the caller's)",
+    409: "conflict with the job's state",
+    413: "request body too large, or too many jobs in one batch",
+    422: "invalid request: each problem with its field path",
+    429: "the queue or the client's quota is full, too many requests, or no free "
+    "quick-call process; retry after Retry-After seconds",
+    501: "not available in this build",
 }
-SUBMIT_ERRORS: dict[int | str, dict[str, Any]] = {
-    k: {"model": ErrorBody, **v} for k, v in _ERRORS.items()
+_HEADERS = {
+    401: {"WWW-Authenticate": {"schema": {"type": "string"}}},
+    429: {"Retry-After": {"schema": {"type": "integer"}, "description": "seconds"}},
 }
-SYNC_ERRORS: dict[int | str, dict[str, Any]] = {
-    422: {"model": ErrorBody},
-    429: {"model": ErrorBody},
-    501: {"model": ErrorBody, "description": "not available in this build"},
-}
+
+
+def errors(*codes: int, **why: str) -> dict[int | str, dict[str, Any]]:
+    """The ``responses`` of a route for its error ``codes`` (every error answer is an
+    :class:`ErrorBody`); ``why`` overrides a description (``e409="..."``)."""
+    out: dict[int | str, dict[str, Any]] = {}
+    for code in codes:
+        entry: dict[str, Any] = {"model": ErrorBody, "description": why.get(f"e{code}", _WHY[code])}
+        if code in _HEADERS:
+            entry["headers"] = _HEADERS[code]
+        out[code] = entry
+    return out

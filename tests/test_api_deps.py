@@ -14,10 +14,8 @@ PLANAR = (Path(__file__).resolve().parents[1] / "examples/robots/planar.json").r
 
 
 class FullQuickCalls:
-    def ik(self, req):
-        raise Busy("no slot")
-
-    track = isotropic = ik
+    def run(self, name, req, gone):
+        raise Busy("no slot", retry_after=3)
 
 
 def test_quick_calls_are_injected(tmp_path):
@@ -26,7 +24,8 @@ def test_quick_calls_are_injected(tmp_path):
     body = '{"robot": ' + PLANAR + ', "params": {"pose": [90, 60, 0]}}'
     with TestClient(app) as client:
         r = client.post("/v1/ik", content=body, headers={"content-type": "application/json"})
-        assert r.status_code == 429 and r.json() == {"error": "no slot"}
+        assert r.status_code == 429 and r.json()["error"] == "no slot"
+        assert r.headers["retry-after"] == "3" and r.json()["detail"][0]["type"] == "busy"
         app.dependency_overrides.clear()
         r = client.post("/v1/ik", content=body, headers={"content-type": "application/json"})
         assert r.status_code == 200 and r.json()["status"] == "ok"

@@ -110,3 +110,18 @@ def test_wait_polls_until_final(stub):
     stub.replies["/v1/jobs/j2"] = [(200, {**record("running"), "id": "j2"})]
     with pytest.raises(TimeoutError):
         ServiceClient(url(stub)).wait("j2", poll=0.01, timeout=0.1)
+
+
+def test_cli_sends_the_token_of_token_file(stub, tmp_path, monkeypatch, capsys):
+    from certsolve.cli import main
+
+    stub.replies["/v1/jobs?limit=20"] = [(200, {"items": [], "next_cursor": None})]
+    monkeypatch.setenv("CERTSOLVE_TOKEN", "from-the-environment")
+    token = tmp_path / "token"
+    token.write_text("from-the-file-0123456789\n")
+    assert main(["status", "--server", url(stub), "--token-file", str(token)]) == 0
+    assert stub.seen[-1][2]["Authorization"] == "Bearer from-the-file-0123456789"
+    assert main(["status", "--server", url(stub)]) == 0
+    assert stub.seen[-1][2]["Authorization"] == "Bearer from-the-environment"
+    assert main(["status", "--server", url(stub), "--token-file", str(tmp_path / "no")]) == 2
+    assert "--token-file" in capsys.readouterr().err

@@ -182,11 +182,11 @@ def test_cli_json_and_plot(capsys, tmp_path):
     [
         ("1:0.1:10:8", "expected J=START:STOP:N"),
         ("x=0:1:3", "the wire J must be an integer"),
-        ("9=0:1:3", "wire 9: the robot has wires 1..4"),
+        ("9=0:1:3", "--sweep J: the robot has wires 1..4"),
         ("1=0:1", "expected J=START:STOP:N"),
         ("1=a:1:3", "expected J=START:STOP:N"),
         ("1=0:1:2.5", "N must be an integer"),
-        ("1=0:1:1", "N must be between 2"),
+        ("1=0:1:1", "--sweep N: must be greater than or equal to 2"),
         ("1=0:nan:3", "finite"),
     ],
 )
@@ -201,7 +201,7 @@ def test_cli_bad_sweep(capsys, sweep, message):
     [
         (["--method", "alg2"], "drop --method"),
         (["--tau-fixed", "3"], "--tau-fixed does not apply"),
-        (["--timeout", "0"], "--timeout must be positive"),
+        (["--timeout", "0"], "--timeout: must be greater than 0"),
     ],
 )
 def test_cli_sweep_conflicts(capsys, extra, message):

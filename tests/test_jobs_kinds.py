@@ -40,7 +40,16 @@ def run_one(service, request: dict):
 
 
 def test_registry_and_models():
-    assert set(KINDS) == {"solve", "fk", "ik", "isotropic-map", "workspace", "sleep"}
+    assert set(KINDS) == {
+        "solve",
+        "fk",
+        "ik",
+        "ik-sweep",
+        "isotropic-map",
+        "workspace",
+        "design",
+        "sleep",
+    }
     assert KINDS["sleep"].hidden and not KINDS["solve"].hidden
     assert KINDS["solve"].has_timeout and KINDS["solve"].has_max_boxes
     assert not KINDS["ik"].has_timeout
@@ -116,6 +125,8 @@ def test_cancel_through_the_monitor(service):
     run_job(service.store, job, lease, service.settings)
     row = service.store.get(job_id)
     assert row.status == "cancelled" and json.loads(row.result)["stopped_by"] == "cancelled"
+    # the partial result of a cancelled job is its result, with the job's status
+    assert service.result_text(job_id) == ("cancelled", row.result)
 
 
 def test_monitor_throttles_and_notices_lost_jobs(service):
@@ -155,6 +166,63 @@ def test_results_are_truncated(service):
     assert len(res["pending"]) == 3 and res["truncated"]["pending"] > 3
 
 
+LINE = (
+    "Variables\n x in [-1e6, 1e6];\n y in [-1e6, 1e6];\n"
+    "Constraints\n x - y = 0;\n 2*x - 2*y = 0;\nend\n"
+)
+
+
+def listed_and_counted(res: dict) -> tuple[int, int]:
+    """Pending boxes listed in a stored result, and how many the search left (the count
+    a bounded result keeps: ``truncated.pending``, or a summary's ``pending_total``)."""
+    listed = len(res["pending"])
+    total = res.get("pending_total") or res.get("truncated", {}).get("pending") or listed
+    return listed, total
+
+
+def test_stopped_search_keeps_a_bounded_result(service):
+    """The issue's line system at eps 1e-12 leaves a pending box per step along the line:
+    stopped by its time limit, the job is done with a result of bounded size that counts
+    what it does not list."""
+    row = run_one(
+        service, {"kind": "solve", "system": LINE, "params": {"eps": 1e-12, "timeout": 1}}
+    )
+    res = json.loads(row.result)
+    assert row.status == "done" and res["status"] == "incomplete"
+    assert res["stats"]["stopped_by"] == "timeout"
+    listed, total = listed_and_counted(res)
+    assert listed <= service.settings.max_result_items < total
+    assert len(row.result) < 20_000  # max_result_items = 3 boxes, and the rest of the result
+    assert row.finished_at - row.started_at < 1 + service.settings.kill_grace
+
+
+def test_memory_stop_keeps_the_result(tmp_path):
+    """Past memory_stop of its memory limit a job stops through its progress callback and
+    is done with its partial result, marked stopped_by memory."""
+    settings = ServiceSettings(
+        data_dir=tmp_path, workers=0, enable_test_kinds=True, memory_stop=1e-6
+    )
+    with JobService(settings) as svc:
+        row = run_one(svc, {"kind": "sleep", "params": {"seconds": 30}})
+    res = json.loads(row.result)
+    assert row.status == "done" and row.error is None
+    assert res["stopped_by"] == "memory" and row.progress["stopped_by"] == "memory"
+    assert res["slept"] < 10
+
+
+def test_monitor_memory_guard(service):
+    (job_id,) = service.submit([service.validate({"kind": "sleep"})])
+    job, lease = service.store.claim(1)
+    mon = JobMonitor(
+        service.store, job, lease, interval=0, parent_pid=None, memory_stop_bytes=2**60
+    )
+    assert mon(Progress(1, 2, 0, 0, 0.1)) is True and mon.stopped_by is None
+    used = mon.address_space()
+    assert used is not None and used > 2**20
+    mon.memory_stop_bytes = used // 2
+    assert mon(Progress(2, 2, 0, 0, 0.2)) is False and mon.stopped_by == "memory"
+
+
 def test_batch_expansion_in_the_service(service):
     from certsolve.jobs.service import BatchError, BatchRequest
 
@@ -176,3 +244,18 @@ def test_batch_expansion_in_the_service(service):
     with pytest.raises(BatchError) as info:
         service.expand_batch(over)
     assert info.value.details[0]["field"] == "jobs.0.limits.timeout"
+
+
+def test_housekeeping_purges_old_finished_jobs(tmp_path):
+    import time
+
+    from certsolve.jobs.retention import Housekeeper
+
+    settings = ServiceSettings(data_dir=tmp_path, workers=0, keep_days=1e-6)  # 86 ms
+    with JobService(settings) as svc:
+        old, new = svc.submit([svc.validate({"kind": "solve", "system": CIRCLE})] * 2)
+        svc.cancel(old)
+        time.sleep(0.2)
+        assert Housekeeper(svc.store, settings).run_once() == 1
+        assert svc.store.get(old) is None and svc.store.get(new).status == "queued"
+        assert svc.store.file_sizes()["wal"] == 0

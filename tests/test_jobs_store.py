@@ -3,6 +3,7 @@
 import json
 import sqlite3
 import threading
+import time
 
 import pytest
 
@@ -196,3 +197,71 @@ def test_statuses_are_enum_members(store):
     assert row.status is JobStatus.DONE and row.final and row.status in FINAL_STATUSES
     assert store.counts() == {s: int(s is JobStatus.DONE) for s in JobStatus}
     assert store.result_text(job_id)[0] is JobStatus.DONE
+
+
+# -- owners, retention, migration -----------------------------------------------------------------
+def owned(owner):
+    job = new()
+    job.owner = owner
+    return job
+
+
+def test_owners_quotas_and_running_limits(store):
+    store.add([owned("a"), owned("a"), owned("a"), owned("b")])
+    with pytest.raises(QueueFull, match="a has 3 queued jobs"):
+        store.add([owned("a")], owner_max_queued=3)
+    store.add([owned("b")], owner_max_queued=3)  # b has 1
+    assert store.counts(owner="a")["queued"] == 3
+    rows, _ = store.list(owner="b")
+    assert {r.owner for r in rows} == {"b"} and len(rows) == 2
+    # a may run one job at a time: the workers skip its other jobs while it runs one
+    store.set_owner_limits({"a": 1, "b": None})
+    first, _ = store.claim(1)
+    second, _ = store.claim(2)
+    third, _ = store.claim(3)
+    assert (first.owner, second.owner, third.owner) == ("a", "b", "b")
+    assert store.claim(4) is None  # only a's jobs are left, and a is at its limit
+    store.release("done", worker_pids=[1], count_attempt=False)
+    assert store.claim(5)[0].owner == "a"
+
+
+def test_purge_and_checkpoint(store):
+    ids = store.add([new() for _ in range(5)])
+    for pid in range(3):
+        job, lease = store.claim(pid)
+        store.finish(job.id, lease, "done", result='{"x": "' + "y" * 10_000 + '"}')
+    store.request_cancel(ids[3])  # cancelled while queued: finished
+    assert store.purge(time.time() - 3600) == 0  # nothing is an hour old
+    sizes = store.file_sizes()
+    assert sizes["wal"] == 0 and sizes["db"] > 30_000  # checkpointed, results in the file
+    assert store.purge(time.time() + 1) == 4
+    assert [r.id for r in store.list()[0]] == [ids[4]]  # the queued one stays
+    assert store.file_sizes()["db"] < sizes["db"]  # freed pages go back (auto_vacuum)
+
+
+def test_version_1_store_is_migrated(tmp_path):
+    path = tmp_path / "old.sqlite3"
+    con = sqlite3.connect(path)
+    con.executescript(
+        """
+        CREATE TABLE jobs (
+            seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE, kind TEXT NOT NULL,
+            status TEXT NOT NULL, request TEXT NOT NULL, limits TEXT NOT NULL, batch TEXT,
+            created_at REAL NOT NULL, started_at REAL, finished_at REAL,
+            attempts INTEGER NOT NULL DEFAULT 0, max_attempts INTEGER NOT NULL,
+            worker_pid INTEGER, lease TEXT, progress TEXT, heartbeat_at REAL,
+            cancel_requested_at REAL, result TEXT, error TEXT, fseq INTEGER);
+        INSERT INTO jobs (id, kind, status, request, limits, created_at, max_attempts)
+            VALUES ('old1', 'solve', 'queued', '{}', '{}', 1.0, 2);
+        PRAGMA user_version = 1;
+        """
+    )
+    con.close()
+    store = JobStore(path)
+    assert store.schema_version() == 2
+    row = store.get("old1")
+    assert row.status == "queued" and row.owner is None
+    (job_id,) = store.add([owned("a")])
+    assert store.get(job_id).owner == "a"
+    assert store.claim(1)[0].id == "old1"
+    store.close()

@@ -210,7 +210,8 @@ def test_cancel_running_solve(server):
     assert res["stats"]["stopped_by"] == "cancelled" and res["status"] == "incomplete"
     assert res["pending"] and len(res["solutions"]) == j["progress"]["solutions"]
     r = server.http.get(f"/v1/jobs/{job_id}/result")
-    assert r.status_code == 200
+    assert r.status_code == 200 and r.headers["certsolve-job-status"] == "cancelled"
+    assert r.json() == res
     assert server.http.delete(f"/v1/jobs/{job_id}").status_code == 200
 
 
@@ -251,6 +252,45 @@ def test_memory_limit(server):
     assert server.wait(server.submit({"kind": "sleep", "params": {"seconds": 0}}))["status"] == (
         "done"
     )
+
+
+def test_memory_stop_keeps_the_partial_result(server):
+    """A job whose memory grows stops through its progress callback at 85 % of its limit:
+    done, with its partial result, instead of failed on a memory error."""
+    j = server.wait(
+        server.submit(
+            {
+                "kind": "sleep",
+                "params": {"seconds": 60, "grow_mb": 20},
+                "limits": {"memory_mb": 1024},
+            }
+        )
+    )
+    assert j["status"] == "done", j
+    assert j["result"]["stopped_by"] == "memory" and j["progress"]["stopped_by"] == "memory"
+    assert server.http.get(f"/v1/jobs/{j['id']}/result").status_code == 200
+
+
+def test_time_limited_search_keeps_a_bounded_result(server):
+    """The issue's reproducer (defect 3): a search that leaves hundreds of thousands of
+    pending boxes, stopped by its time limit, ends done -- not killed -- with a result
+    that lists a bounded number of them and counts the rest."""
+    line = (
+        "Variables\n x in [-1e6, 1e6];\n y in [-1e6, 1e6];\n"
+        "Constraints\n x - y = 0;\n 2*x - 2*y = 0;\nend\n"
+    )
+    job_id = server.submit(
+        {"kind": "solve", "system": line, "params": {"eps": 1e-12, "timeout": 8}}
+    )
+    j = server.wait(job_id, timeout=60)
+    assert j["status"] == "done" and j["result"]["status"] == "incomplete", j["error"]
+    res = j["result"]
+    listed = len(res["pending"])
+    total = res.get("pending_total") or res.get("truncated", {}).get("pending") or listed
+    assert listed <= 20_000 and total >= listed and total > 1000
+    assert j["elapsed"] < 8 + 5  # within the time limit and the kill grace
+    r = server.http.get(f"/v1/jobs/{job_id}/result")
+    assert r.status_code == 200 and len(r.content) < 5_000_000
 
 
 def test_time_limits(server):

@@ -1,2 +1,2 @@
 """One router per resource: :mod:`.jobs` (jobs and batches), :mod:`.sync` (the quick
-synchronous calls) and :mod:`.meta` (health, kinds)."""
+synchronous calls), :mod:`.meta` (health, kinds) and :mod:`.admin` (purge)."""

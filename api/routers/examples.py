@@ -13,7 +13,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Path, Request
 
 from ..errors import APIError
-from ..schemas import ErrorBody
+from ..schemas import errors
 
 __all__ = ["router"]
 
@@ -28,7 +28,7 @@ def _bundled() -> dict[str, dict[str, Any]]:
     return {file.removesuffix(".json"): spec for file, spec in all_presets().items()}
 
 
-@router.get("/v1/robots")
+@router.get("/v1/robots", responses=errors(401, 429))
 def list_robots(request: Request) -> dict[str, Any]:
     """The bundled robots: name, dof, number of wires and the URL of the robot file."""
     items = [
@@ -43,7 +43,7 @@ def list_robots(request: Request) -> dict[str, Any]:
     return {"robots": items}
 
 
-@router.get("/v1/robots/{name}", responses={404: {"model": ErrorBody}})
+@router.get("/v1/robots/{name}", responses=errors(401, 404, 422, 429))
 def get_robot(name: _NAME) -> dict[str, Any]:
     """One bundled robot file (the JSON of ``examples/robots/<name>.json``)."""
     robots = _bundled()

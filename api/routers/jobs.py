@@ -1,6 +1,9 @@
 """Jobs and batches: ``/v1/jobs``, ``/v1/jobs/batch``, ``/v1/jobs/{id}``,
 ``/v1/jobs/{id}/result``, ``/v1/batches/{id}``.
 
+Every route passes the calling client (:data:`..deps.Caller`) to the job service: a
+client reads, lists and cancels its own jobs only (another client's job is a 404).
+
 The body of ``POST /v1/jobs`` is the union of the job kinds' models, which depends on the
 settings (the hidden test kind), so :func:`router` builds the router for a request type
 (and this module keeps its annotations evaluated: no ``from __future__ import annotations``).
@@ -22,22 +25,25 @@ from certsolve.jobs.service import (
 from certsolve.jobs.status import JobStatus
 from certsolve.jobs.store import JobRow, QueueFull
 
-from ..deps import Service
+from ..deps import Caller, Service, Settings
 from ..errors import APIError, validation_details
 from ..schemas import (
-    SUBMIT_ERRORS,
     BatchCreated,
     BatchRequest,
     BatchStatus,
-    ErrorBody,
     JobCreated,
     JobList,
     JobRecord,
+    errors,
 )
 
-__all__ = ["router"]
+__all__ = ["JOB_STATUS_HEADER", "router"]
 
 _ID = Annotated[str, Path(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9_-]+$")]
+JOB_STATUS_HEADER = "Certsolve-Job-Status"  # the job's status, beside a bare result
+
+_SUBMIT = errors(400, 401, 413, 422, 429)
+_READ = errors(401, 404, 422, 429)
 
 
 # -- HTTP <-> service translation ---------------------------------------------------------------
@@ -66,16 +72,20 @@ def _limit_error(exc: LimitError) -> APIError:
     return APIError(422, str(exc), _body(d))
 
 
-def _queue_error(exc: Exception) -> APIError:
+def _queue_error(exc: Exception, retry_after: int) -> APIError:
     if isinstance(exc, QueueFull):
-        return APIError(429, str(exc))
+        return APIError(429, str(exc), type="queue_full", headers={"Retry-After": str(retry_after)})
     if isinstance(exc, LimitError):
         return _limit_error(exc)
     if isinstance(exc, BatchError):
         if exc.too_large:
-            return APIError(413, exc.message)
+            return APIError(413, exc.message, loc=("body", "jobs"), type="too_large")
         return APIError(422, exc.message, None if exc.details is None else _body(exc.details))
     raise exc
+
+
+def _missing(exc: NoSuchJob, name: str = "job_id") -> APIError:
+    return APIError(404, str(exc), loc=("path", name))
 
 
 # -- the routes -----------------------------------------------------------------------------------
@@ -83,47 +93,54 @@ def router(job_request: Any) -> APIRouter:
     """The jobs router for the request type ``job_request`` (a union of kinds' models)."""
     r = APIRouter(tags=["jobs"])
 
-    @r.post("/v1/jobs", status_code=202, response_model=JobCreated, responses=SUBMIT_ERRORS)
+    @r.post("/v1/jobs", status_code=202, response_model=JobCreated, responses=_SUBMIT)
     def submit_job(
         job: Annotated[job_request, Body()],
         request: Request,
         response: Response,
         service: Service,
+        settings: Settings,
+        caller: Caller,
     ):
         """Queue one job; poll its URL for progress and the result."""
         try:
-            (job_id,) = service.submit([job])
+            (job_id,) = service.submit([job], client=caller)
         except (QueueFull, LimitError) as exc:
-            raise _queue_error(exc) from None
+            raise _queue_error(exc, settings.retry_after) from None
         url = _url(request, job_id)
         response.headers["Location"] = url
         return {"id": job_id, "url": url, "status": JobStatus.QUEUED}
 
-    @r.post("/v1/jobs/batch", status_code=202, response_model=BatchCreated, responses=SUBMIT_ERRORS)
-    def submit_batch(batch: BatchRequest, request: Request, service: Service):
+    @r.post("/v1/jobs/batch", status_code=202, response_model=BatchCreated, responses=_SUBMIT)
+    def submit_batch(
+        batch: BatchRequest, request: Request, service: Service, settings: Settings, caller: Caller
+    ):
         """Queue many jobs at once (all or none).
 
         Either ``{"jobs": [job, ...]}`` or ``{"kind": "fk", "robot": {...}, "params":
         [{"u": [...]}, {"u": [...]}, ...]}`` (one job per params object)."""
         try:
-            batch_id, ids = service.submit_batch(batch)
+            batch_id, ids = service.submit_batch(batch, client=caller)
         except (QueueFull, BatchError) as exc:
-            raise _queue_error(exc) from None
+            raise _queue_error(exc, settings.retry_after) from None
         url = str(request.url_for("get_batch", batch_id=batch_id))
         return {"batch": batch_id, "url": url, "ids": ids}
 
-    @r.get("/v1/jobs", response_model=JobList)
+    @r.get("/v1/jobs", response_model=JobList, responses=errors(401, 422, 429))
     def list_jobs(
         request: Request,
         service: Service,
+        caller: Caller,
         status: JobStatus | None = None,
         kind: Annotated[str | None, Query(max_length=32)] = None,
         batch: Annotated[str | None, Query(max_length=64)] = None,
         limit: Annotated[int, Query(ge=1, le=500)] = 50,
         cursor: Annotated[str | None, Query(pattern=r"^[0-9]{1,18}$")] = None,
     ):
-        """Jobs, newest first, without results; filter by status, kind or batch."""
-        rows, nxt = service.store.list(
+        """The caller's jobs (an admin's: all), newest first, without results; filter by
+        status, kind or batch."""
+        rows, nxt = service.jobs(
+            caller,
             status=status,
             kind=kind,
             batch=batch,
@@ -133,53 +150,70 @@ def router(job_request: Any) -> APIRouter:
         items = [_record(request, row) for row in rows]
         return JSONResponse({"items": items, "next_cursor": str(nxt) if nxt else None})
 
-    @r.get("/v1/jobs/{job_id}", response_model=JobRecord, responses={404: {"model": ErrorBody}})
-    def get_job(job_id: _ID, request: Request, service: Service, result: bool = True):
-        """Status, progress and (when done, or partial when cancelled) the result."""
-        row = service.store.get(job_id, result=result)
-        if row is None:
-            raise APIError(404, f"no job {job_id}")
+    @r.get("/v1/jobs/{job_id}", response_model=JobRecord, responses=_READ)
+    def get_job(
+        job_id: _ID, request: Request, service: Service, caller: Caller, result: bool = True
+    ):
+        """Status, progress and the result: when done, and the partial result of a job
+        stopped by a limit or a cancel."""
+        try:
+            row = service.job(job_id, caller, result=result)
+        except NoSuchJob as exc:
+            raise _missing(exc) from None
         return _record_response(request, row, result=result)
 
     @r.get(
         "/v1/jobs/{job_id}/result",
-        responses={404: {"model": ErrorBody}, 409: {"model": ErrorBody}},
+        responses={
+            200: {
+                "description": "the result; the job's status is in the "
+                f"{JOB_STATUS_HEADER} header (done, or cancelled with a partial result)",
+                "headers": {JOB_STATUS_HEADER: {"schema": {"type": "string"}}},
+            },
+            **errors(401, 404, 409, 422, 429, e409="the job has no result (yet)"),
+        },
     )
-    def get_result(job_id: _ID, service: Service):
-        """Only the result (the library's JSON); 409 while the job has none."""
+    def get_result(job_id: _ID, service: Service, caller: Caller):
+        """Only the result (the library's JSON) -- partial when a limit or a cancel stopped
+        the job; 409 while the job has none."""
         try:
-            text = service.result_text(job_id)
+            status, text = service.result_text(job_id, caller)
         except NoSuchJob as exc:
-            raise APIError(404, str(exc)) from None
+            raise _missing(exc) from None
         except NoResult as exc:
-            raise APIError(409, str(exc)) from None
-        return Response(text, media_type="application/json")
+            raise APIError(409, str(exc), loc=("path", "job_id"), type="no_result") from None
+        return Response(text, media_type="application/json", headers={JOB_STATUS_HEADER: status})
 
     @r.delete(
         "/v1/jobs/{job_id}",
         response_model=JobRecord,
-        responses={404: {"model": ErrorBody}, 409: {"model": ErrorBody}},
+        responses=errors(401, 404, 409, 422, 429, e409="the job has already finished"),
     )
-    def cancel_job(job_id: _ID, request: Request, service: Service):
-        """Cancel: a queued job at once, a running one within about a second."""
-        row = service.cancel(job_id)
-        if row is None:
-            raise APIError(404, f"no job {job_id}")
+    def cancel_job(job_id: _ID, request: Request, service: Service, caller: Caller):
+        """Cancel: a queued job at once, a running one within a few seconds (keeping its
+        partial result)."""
+        try:
+            row = service.cancel(job_id, caller)
+        except NoSuchJob as exc:
+            raise _missing(exc) from None
         if row.status in (JobStatus.DONE, JobStatus.FAILED):
-            raise APIError(409, f"job {job_id} already finished ({row.status})")
+            raise APIError(
+                409,
+                f"job {job_id} already finished ({row.status})",
+                loc=("path", "job_id"),
+                type="conflict",
+            )
         resp = _record_response(request, row, result=False)
         resp.status_code = 202 if row.status is JobStatus.RUNNING else 200
         return resp
 
-    @r.get(
-        "/v1/batches/{batch_id}", response_model=BatchStatus, responses={404: {"model": ErrorBody}}
-    )
-    def get_batch(batch_id: _ID, request: Request, service: Service):
+    @r.get("/v1/batches/{batch_id}", response_model=BatchStatus, responses=_READ)
+    def get_batch(batch_id: _ID, request: Request, service: Service, caller: Caller):
         """How many jobs of a batch are in each status."""
         try:
-            status = service.batch_status(batch_id)
+            status = service.batch_status(batch_id, caller)
         except NoSuchJob as exc:
-            raise APIError(404, str(exc)) from None
+            raise _missing(exc, "batch_id") from None
         jobs_url = request.url_for("list_jobs").include_query_params(batch=batch_id)
         return {**status, "jobs_url": str(jobs_url)}
 

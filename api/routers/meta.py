@@ -8,18 +8,20 @@ from fastapi import APIRouter
 
 from certsolve.jobs.kinds import KINDS, KindUnavailable, library_function, public_kinds
 
-from ..deps import Service, Settings
+from ..deps import Quick, Service, Settings
+from ..schemas import errors
 
 router = APIRouter(tags=["service"])
 
 
 @router.get("/healthz")
-def healthz(service: Service) -> dict[str, Any]:
-    """Liveness: workers alive and the queue depth."""
-    return service.health()
+def healthz(service: Service, quick: Quick) -> dict[str, Any]:
+    """Liveness: workers alive, the queue depth and the quick-call processes (public: no
+    token needed)."""
+    return {**service.health(), "quick": quick.stats()}
 
 
-@router.get("/v1/kinds")
+@router.get("/v1/kinds", responses=errors(401, 429))
 def list_kinds(settings: Settings) -> dict[str, Any]:
     """The job kinds, their parameters (JSON Schema) and whether this build has them."""
     out = []

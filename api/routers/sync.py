@@ -1,48 +1,92 @@
-"""The quick synchronous calls: ``POST /v1/ik``, ``/v1/isotropic``, ``/v1/fk/track``."""
+"""The quick synchronous calls: ``POST /v1/ik``, ``/v1/isotropic``, ``/v1/fk/track``.
+
+Each runs in a quick-call process of the service (:mod:`certsolve.jobs.quick`), never in
+the HTTP process; while it runs, the route checks that the client is still there, and a
+client that went away has its computation stopped.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
-from fastapi import APIRouter
-from fastapi.responses import JSONResponse
+import anyio.from_thread
+from fastapi import APIRouter, Request
+from fastapi.responses import Response
 
 from certsolve.jobs.kinds import IkCall, IsotropicCall, KindUnavailable, TrackCall
-from certsolve.jobs.quick import Busy
+from certsolve.jobs.quick import Busy, Gone, QuickFailure, TooCostly
 
 from ..deps import Quick
-from ..errors import APIError
-from ..schemas import SYNC_ERRORS
+from ..errors import APIError, validation_details
+from ..schemas import errors
 
-router = APIRouter(tags=["quick"], responses=SYNC_ERRORS)
+router = APIRouter(
+    tags=["quick"],
+    responses=errors(
+        400,
+        401,
+        413,
+        422,
+        429,
+        501,
+        e422="invalid request, or a call too costly for a quick call (submit a job)",
+    ),
+)
 
 
-def _answer(call: Callable[[Any], Any], req: Any) -> JSONResponse:
+def _answer(quick: Any, name: str, req: Any, request: Request) -> Response:
     """HTTP around one quick call: its result, or 429 / 501 / 422."""
+
+    def gone() -> bool:
+        return anyio.from_thread.run(request.is_disconnected)
+
     try:
-        return JSONResponse(call(req))
+        text = quick.run(name, req, gone=gone)
     except Busy as exc:
-        raise APIError(429, str(exc)) from None
+        raise APIError(
+            429, str(exc), type="busy", headers={"Retry-After": str(exc.retry_after)}
+        ) from None
     except KindUnavailable as exc:
         raise APIError(501, str(exc).replace("kind ", "", 1)) from None
+    except TooCostly as exc:
+        loc = ("body", *exc.field.split(".")) if exc.field else ("body",)
+        raise APIError(422, str(exc), loc=loc, type="too_costly") from None
+    except Gone:
+        return Response(status_code=499)  # nobody reads it
+    except QuickFailure as exc:
+        raise RuntimeError(str(exc)) from None  # a 500, logged
     except (ValueError, ArithmeticError) as exc:  # the input's fault
-        raise APIError(422, str(exc) or type(exc).__name__) from None
+        raise _input_error(str(exc) or type(exc).__name__, req) from None
+    return Response(text, media_type="application/json")
+
+
+def _input_error(msg: str, req: Any) -> APIError:
+    """The library refused the input: a 422 at the field its message names (``pose:
+    ...`` is ``params.pose``, ``wires[2].k: ...`` is ``robot.wires.2.k``)."""
+    head = msg.split(":", 1)[0].split("[", 1)[0].split(".", 1)[0]
+    if head in type(req.params).model_fields:
+        loc: tuple = ("body", "params")
+    elif head in type(req.robot).model_fields:
+        loc = ("body", "robot")
+    else:
+        loc = ("body",)
+    detail = validation_details([{"loc": loc, "msg": msg, "type": "value_error"}])
+    return APIError(422, msg, detail)
 
 
 @router.post("/v1/ik")
-def ik(req: IkCall, quick: Quick) -> Any:
+def ik(req: IkCall, quick: Quick, request: Request) -> Any:
     """Inverse kinematics at one pose (synchronous)."""
-    return _answer(quick.ik, req)
+    return _answer(quick, "ik", req, request)
 
 
 @router.post("/v1/isotropic")
-def isotropic(req: IsotropicCall, quick: Quick) -> Any:
+def isotropic(req: IsotropicCall, quick: Quick, request: Request) -> Any:
     """Isotropic force at one pose (synchronous)."""
-    return _answer(quick.isotropic, req)
+    return _answer(quick, "isotropic", req, request)
 
 
 @router.post("/v1/fk/track")
-def fk_track(req: TrackCall, quick: Quick) -> Any:
+def fk_track(req: TrackCall, quick: Quick, request: Request) -> Any:
     """Forward kinematics near a known pose (synchronous tracking step)."""
-    return _answer(quick.track, req)
+    return _answer(quick, "fk/track", req, request)

@@ -11,9 +11,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 
-from .common import CliError, parse_floats, print_json, progress_reporter
+from .common import CliError, parse_floats, print_json, progress_reporter, validated
 
 DEFAULT_EPS = 1 / 16  # = certsolve.force.design_spec.DEFAULT_EPS, without importing it here
 
@@ -82,30 +81,43 @@ def _axes(text: str, k: int) -> tuple[int, int]:
     return i - 1, j - 1
 
 
+# the fields of a design job's params that come from the spec file, not from options
+_SPEC_FIELDS = ("parameters", "workspace", "min_force", "orientation")
+
+
 def run(args: argparse.Namespace) -> int:
     from ..force.design import design
     from ..force.design_spec import load_design_spec
+    from ..jobs.kinds.design import DesignParams
+    from ..robot import RobotFileError, load_robot_spec
 
-    for flag, val in (("--eps", args.eps), ("--workspace-eps", args.workspace_eps)):
-        if val is not None and not (math.isfinite(val) and val > 0):
-            raise CliError(f"{flag} must be a positive number")
-    if args.eps is not None and args.eps > 1:
-        raise CliError("--eps is a fraction of each parameter range: at most 1")
-    if args.timeout is not None and not args.timeout > 0:
-        raise CliError("--timeout must be positive (seconds)")
-    if args.max_boxes is not None and args.max_boxes < 1:
-        raise CliError("--max-boxes must be at least 1")
     spec = load_design_spec(args.spec)
+    try:
+        robot = load_robot_spec(spec.robot)
+    except RobotFileError as exc:
+        raise CliError(f"robot: {exc}".replace("\n", "; ")) from None
+    # the options and the spec are the design job's params: one validation (its model)
+    values = {name: getattr(spec, name) for name in _SPEC_FIELDS}
+    values["parameters"] = [q.model_dump(exclude_none=True) for q in spec.parameters]
+    for name in ("eps", "workspace_eps"):
+        if getattr(args, name) is None:
+            values[name] = getattr(spec, name)
+    args.options = {
+        **getattr(args, "options", {}),
+        **{f"spec_{name}": f"{args.spec}: {name}" for name in _SPEC_FIELDS},
+    }
+    option = {name: f"spec_{name}" for name in _SPEC_FIELDS}
+    params = validated(DesignParams, args, values, robot=robot, option=option)
     axes = _axes(args.axes, len(spec.parameters))
     progress, stop = progress_reporter(not args.json, line=_design_line)
     try:
         res = design(
             spec=spec,
-            eps=args.eps,
-            workspace_eps=args.workspace_eps,
+            eps=params.eps,
+            workspace_eps=params.workspace_eps,
             progress=progress,
-            timeout=args.timeout,
-            max_boxes=args.max_boxes,
+            timeout=params.timeout,
+            max_boxes=params.max_boxes,
         )
     finally:
         stop()

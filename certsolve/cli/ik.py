@@ -11,7 +11,7 @@ import argparse
 import numpy as np
 
 from ..kinematics.ik import METHODS, IKResult, inverse_kinematics
-from ..kinematics.ik_sweep import MAX_POINTS, IKSweepResult, ik_sweep
+from ..kinematics.ik_sweep import IKSweepResult, ik_sweep
 from ..robot import Pose, Robot, load_robot_spec
 from .common import CliError, parse_floats, print_json, print_result, validated
 
@@ -113,8 +113,13 @@ def _options(args: argparse.Namespace, robot: Robot) -> dict:
     }
 
 
-def parse_sweep(text: str, m: int) -> tuple[int, float, float, int]:
-    """``"J=START:STOP:N"`` -> ``(J, START, STOP, N)`` with errors naming ``--sweep``."""
+# the parts of --sweep J=START:STOP:N, as the ik-sweep job's params name them
+SWEEP_PARTS = {"joint": "J", "start": "START", "stop": "STOP", "count": "N"}
+
+
+def parse_sweep(text: str) -> dict[str, int | float]:
+    """``"J=START:STOP:N"`` -> ``{"joint", "start", "stop", "count"}``; the syntax is
+    checked here, the values by the ik-sweep job's model (:func:`run_sweep`)."""
     form = f"--sweep: expected J=START:STOP:N (e.g. 1=0.1:10:100), got {text!r}"
     head, sep, rest = text.replace(" ", "").partition("=")
     parts = rest.split(":")
@@ -124,21 +129,15 @@ def parse_sweep(text: str, m: int) -> tuple[int, float, float, int]:
         joint = int(head)
     except ValueError:
         raise CliError(f"--sweep: the wire J must be an integer, got {head!r}") from None
-    if not 1 <= joint <= m:
-        raise CliError(f"--sweep: wire {joint}: the robot has wires 1..{m}")
     try:
         start, stop = float(parts[0]), float(parts[1])
     except ValueError:
         raise CliError(form) from None
-    if not (np.isfinite(start) and np.isfinite(stop)):
-        raise CliError("--sweep: START and STOP must be finite numbers (cm)")
     try:
         count = int(parts[2])
     except ValueError:
         raise CliError(f"--sweep: N must be an integer, got {parts[2]!r}") from None
-    if not 2 <= count <= MAX_POINTS:
-        raise CliError(f"--sweep: N must be between 2 and {MAX_POINTS}")
-    return joint, start, stop, count
+    return {"joint": joint, "start": start, "stop": stop, "count": count}
 
 
 def _check_sweep_options(args: argparse.Namespace) -> None:
@@ -155,8 +154,6 @@ def _check_sweep_options(args: argparse.Namespace) -> None:
     ):
         if val is not None:
             raise CliError(f"{flag} does not apply to --sweep")
-    if args.timeout is not None and not args.timeout > 0:
-        raise CliError("--timeout must be positive")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -164,12 +161,12 @@ def run(args: argparse.Namespace) -> int:
 
     _check_sweep_options(args)
     spec = load_robot_spec(args.robot)
+    if args.sweep is not None:
+        return run_sweep(args, spec)
     values = {"pose": parse_floats(args.pose, "--pose"), "method": args.method or "tension"}
     params = validated(IkParams, args, values, robot=spec)  # the ik job's checks
     robot = Robot.from_spec(spec)
     pose = Pose.from_params(robot.dof, params.pose)
-    if args.sweep is not None:
-        return run_sweep(args, robot, pose)
     args.method = params.method
     result = inverse_kinematics(robot, pose, args.method, **_options(args, robot))
     if args.json:
@@ -247,18 +244,31 @@ def format_result(res: IKResult, robot: Robot) -> str:
     return "\n".join(lines)
 
 
-def run_sweep(args: argparse.Namespace, robot: Robot, pose) -> int:
-    joint, start, stop, count = parse_sweep(args.sweep, robot.m)
-    u_start = None if args.u_last is None else parse_floats(args.u_last, "--u-last", robot.m)
+def run_sweep(args: argparse.Namespace, spec) -> int:
+    """``--sweep``: the options are the ik-sweep job's params, checked by its model."""
+    from ..jobs.kinds.ik_sweep import IkSweepParams
+
+    values = {
+        "pose": parse_floats(args.pose, "--pose"),
+        **parse_sweep(args.sweep),
+        "u_start": None if args.u_last is None else parse_floats(args.u_last, "--u-last"),
+    }
+    args.options = {
+        **getattr(args, "options", {}),
+        **{f"sweep_{k}": f"--sweep {v}" for k, v in SWEEP_PARTS.items()},
+    }
+    option = {"u_start": "u_last", **{k: f"sweep_{k}" for k in SWEEP_PARTS}}
+    params = validated(IkSweepParams, args, values, robot=spec, option=option)
+    robot = Robot.from_spec(spec)
     result = ik_sweep(
         robot,
-        pose,
-        joint=joint,
-        start=start,
-        stop=stop,
-        count=count,
-        u_start=u_start,
-        timeout=args.timeout,
+        Pose.from_params(robot.dof, params.pose),
+        joint=params.joint,
+        start=params.start,
+        stop=params.stop,
+        count=params.count,
+        u_start=params.u_start,
+        timeout=params.timeout,
     )
     if args.plot:
         from ..kinematics.plots import plot_sweep

@@ -4,7 +4,9 @@ Argument parsing and printing only; the HTTP calls are :class:`certsolve.client.
 Jobs are written as for ``POST /v1/jobs``; ``submit`` also builds one from ``--kind``,
 ``--robot`` / ``--system`` and ``-p key=value`` options, validated locally with the
 service's own models before anything is sent.  The server is ``--server`` (default
-``$CERTSOLVE_SERVER``); a token in ``$CERTSOLVE_TOKEN`` is sent as ``Authorization: Bearer``.
+``$CERTSOLVE_SERVER``); the token is read from ``--token-file`` (default
+``$CERTSOLVE_TOKEN_FILE``), else taken from ``$CERTSOLVE_TOKEN``, and sent as
+``Authorization: Bearer``.
 """
 
 from __future__ import annotations
@@ -29,6 +31,11 @@ def register(sub) -> None:
             default=os.environ.get("CERTSOLVE_SERVER", DEFAULT_SERVER),
             help=f"service URL ($CERTSOLVE_SERVER or {DEFAULT_SERVER})",
         )
+        p.add_argument(
+            "--token-file",
+            default=os.environ.get("CERTSOLVE_TOKEN_FILE"),
+            help="file holding the API token ($CERTSOLVE_TOKEN_FILE; else $CERTSOLVE_TOKEN)",
+        )
         p.add_argument("--json", action="store_true", help="print JSON only")
 
     p = sub.add_parser(
@@ -37,7 +44,7 @@ def register(sub) -> None:
         "file is sent as one batch), or a job built from --kind and the options below.",
     )
     p.add_argument("job", nargs="?", help="job file (.json), batch (.jsonl) or '-'")
-    p.add_argument("--kind", help="solve, fk, ik, isotropic-map, workspace")
+    p.add_argument("--kind", help="solve, fk, ik, ik-sweep, isotropic-map, workspace, design")
     p.add_argument("--robot", help="robot file (JSON)")
     p.add_argument("--system", help="Minibex file (kind solve)")
     p.add_argument("--params", help="parameters as a JSON object")
@@ -74,11 +81,26 @@ def register(sub) -> None:
     p.set_defaults(func=run_cancel)
 
 
+def _token(args: argparse.Namespace) -> str | None:
+    """The API token: the first line of ``--token-file``, else ``$CERTSOLVE_TOKEN``."""
+    if args.token_file:
+        try:
+            lines = Path(args.token_file).read_text().split()
+        except OSError as exc:
+            raise CliError(
+                f"--token-file {args.token_file}: cannot read ({exc.strerror})"
+            ) from None
+        if not lines:
+            raise CliError(f"--token-file {args.token_file}: the file is empty")
+        return lines[0]
+    return os.environ.get("CERTSOLVE_TOKEN") or None
+
+
 def _client(args: argparse.Namespace):
     from ..client import ServiceClient
 
     try:
-        return ServiceClient(args.server, token=os.environ.get("CERTSOLVE_TOKEN") or None)
+        return ServiceClient(args.server, token=_token(args))
     except ValueError as exc:
         raise CliError(f"--{exc}") from None
 

@@ -37,7 +37,27 @@ def _register_serve(sub) -> None:
         "--default-timeout", type=float, default=None, help="time limit of a job (600 s)"
     )
     p.add_argument("--max-timeout", type=float, default=None, help="ceiling of time limits")
-    p.add_argument("--memory-mb", type=int, default=None, help="memory limit of a job (MiB)")
+    p.add_argument("--memory-mb", type=int, default=None, help="memory limit of a job (4096 MiB)")
+    p.add_argument(
+        "--tokens",
+        metavar="FILE",
+        default=None,
+        help='API tokens: a JSON object {client: {"token": ..., "admin": false}} '
+        "($CERTSOLVE_TOKENS holds the same JSON); every /v1/ request then needs "
+        "'Authorization: Bearer <token>' (default: no tokens, loopback only)",
+    )
+    p.add_argument(
+        "--insecure",
+        action="store_true",
+        help="allow a non-loopback --host without tokens (anyone who reaches the port can "
+        "submit, read and cancel every job)",
+    )
+    p.add_argument(
+        "--keep-days",
+        type=float,
+        default=None,
+        help="purge finished jobs older than this many days, hourly checks (default: keep all)",
+    )
     p.add_argument(
         "--log-level",
         default="info",
@@ -50,8 +70,14 @@ def _register_serve(sub) -> None:
 
 def _settings(args, **extra):
     from ..jobs import ServiceSettings
+    from ..jobs.access import AccessError, load_access
 
     try:
+        if getattr(args, "tokens", None):
+            extra["access"] = load_access(args.tokens)
+        if getattr(args, "keep_days", None) is not None:
+            extra["keep_days"] = args.keep_days
+            extra["housekeeping_interval"] = min(3600.0, args.keep_days * 86400.0 / 4)
         return ServiceSettings.from_env(
             data_dir=Path(args.data_dir) if getattr(args, "data_dir", None) else None,
             workers=args.workers,
@@ -62,8 +88,23 @@ def _settings(args, **extra):
             enable_test_kinds=True if getattr(args, "enable_test_kinds", False) else None,
             **extra,
         )
+    except AccessError as exc:
+        raise CliError(f"--tokens {exc}" if getattr(args, "tokens", None) else str(exc)) from None
     except (TypeError, ValueError) as exc:
         raise CliError(str(exc)) from None
+
+
+def _is_loopback(host: str) -> bool:
+    """Every address ``host`` names is a loopback address (127.0.0.0/8, ::1)."""
+    import ipaddress
+    import socket
+
+    try:
+        infos = socket.getaddrinfo(host, None)
+    except socket.gaierror:
+        return False
+    addrs = {str(info[4][0]).split("%")[0] for info in infos}
+    return bool(addrs) and all(ipaddress.ip_address(a).is_loopback for a in addrs)
 
 
 def _check_port(host: str, port: int) -> None:
@@ -98,7 +139,15 @@ def run_serve(args: argparse.Namespace) -> int:
         raise CliError("--workers must be >= 0")
     if not 0 <= args.port < 65536:
         raise CliError("--port must be in 0..65535")
+    if args.keep_days is not None and not args.keep_days > 0:
+        raise CliError("--keep-days must be > 0")
     settings = _settings(args)
+    if settings.access is None and not args.insecure and not _is_loopback(args.host):
+        raise CliError(
+            f"--host {args.host} is reachable from other machines and the service has no "
+            "tokens: anyone could submit, read and cancel every job. Give --tokens FILE "
+            "(or $CERTSOLVE_TOKENS), or --insecure to serve without them"
+        )
     _check_port(args.host, args.port)
     try:
         service = JobService(settings)
@@ -109,9 +158,11 @@ def run_serve(args: argparse.Namespace) -> int:
         level=getattr(logging, args.log_level.upper()),
         format="%(asctime)s %(levelname)s %(name)s: %(message)s",
     )
+    access = settings.access
+    who = "no tokens" if access is None else f"tokens of {len(access.clients)} client(s)"
     print(
         f"certsolve: serving http://{args.host}:{args.port} (web page at /, docs at /docs) with "
-        f"{settings.workers} worker(s), jobs in {settings.data_dir.resolve()}",
+        f"{settings.workers} worker(s), {who}, jobs in {settings.data_dir.resolve()}",
         file=sys.stderr,
         flush=True,
     )

@@ -31,7 +31,13 @@ from ..robot.params import ParameterDef
 from ..robot.schema import format_validation_error
 from .certified import parse_box
 
-__all__ = ["DesignSpec", "ParameterSpec", "DesignSpecError", "load_design_spec"]
+__all__ = [
+    "DesignOptions",
+    "DesignSpec",
+    "ParameterSpec",
+    "DesignSpecError",
+    "load_design_spec",
+]
 
 DEFAULT_EPS = 1.0 / 16
 MAX_PARAMETERS = 6
@@ -76,8 +82,10 @@ class ParameterSpec(_Strict):
         )
 
 
-class DesignSpec(_Strict):
-    robot: str | dict = Field(description="robot file path (relative to the spec) or object")
+class DesignOptions(_Strict):
+    """Everything of a design spec but its robot (the ``design`` job's params take these
+    fields and validators, with the robot beside them)."""
+
     parameters: list[ParameterSpec] = Field(min_length=2, max_length=MAX_PARAMETERS)
     workspace: list[float] = Field(description="xmin, xmax, ymin, ymax[, zmin, zmax] (cm)")
     min_force: float = Field(gt=0, description="required isotropic force F (N)")
@@ -113,6 +121,10 @@ class DesignSpec(_Strict):
 
     def definitions(self) -> list[ParameterDef]:
         return [p.definition() for p in self.parameters]
+
+
+class DesignSpec(DesignOptions):
+    robot: str | dict = Field(description="robot file path (relative to the spec) or object")
 
 
 def load_design_spec(source) -> DesignSpec:

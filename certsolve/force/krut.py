@@ -62,6 +62,8 @@ def krut_polytope(
             f"Krut's algorithm needs C(2^{m}, {n}) = {n_comb} linear systems "
             f"(limit {max_combinations}); use hyperplane shifting"
         )
+    if m < n:  # (found by the service's schemathesis run: the SVD below needs m >= n)
+        raise FlatPolytopeError(f"{m} wires span fewer than {n} directions: the polytope is flat")
     U, S, Vt = np.linalg.svd(H)
     if S[-1] <= 1e-12 * S[0]:
         raise FlatPolytopeError(f"the wrench matrix has rank < {n}: the polytope is flat")

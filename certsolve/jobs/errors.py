@@ -6,6 +6,8 @@ name their field (``params.u: expected 4 values``, ``wires[3].base: ...``) are m
 that field, so a robot error reads ``robot.wires.3.tau: tau_min must be <= tau_max``.
 pydantic's "Input should be ..." reads "must be ..." (``params.eps: must be greater than
 0``), which the command line prints after the option (``--eps: must be greater than 0``).
+A message that points into Minibex text (``line 4, column 9: ...``) also gives ``line``
+and ``column`` as numbers.
 """
 
 from __future__ import annotations
@@ -19,13 +21,14 @@ from pydantic import ValidationError
 
 from .kinds import KINDS
 
-__all__ = ["validation_details", "summary", "describe_validation_error"]
+__all__ = ["describe_validation_error", "field_of", "summary", "validation_details"]
 
 _KIND_TAGS = frozenset(KINDS)
 _SKIP = ("function-after", "function-before", "function-wrap", "function-plain")
 _FIELD_MSG = re.compile(r"^((?:[A-Za-z_]\w*(?:\[\d+\])*)(?:\.[A-Za-z_]\w*(?:\[\d+\])*)*): (.+)$")
 _PREFIXES = ("Value error, ", "Assertion failed, ")
 _SHOULD = re.compile(r"^(?:Input|String|List|Tuple|Dictionary|Value) should (be|have) ")
+_POSITION = re.compile(r"^line (\d+), column (\d+): ")
 
 
 def _json_safe(v: Any) -> Any:
@@ -62,13 +65,16 @@ def _clean_loc(loc) -> list:
     return out
 
 
-def _field(loc: list) -> str:
-    parts = loc[1:] if loc and loc[0] in ("body", "query", "path", "header") else loc
+def field_of(loc: Sequence[Any]) -> str:
+    """The dotted field of a ``loc``: without its ``body`` / ``query`` / ``path`` /
+    ``header`` part, unless that is all there is (the whole body is ``body``)."""
+    parts = loc[1:] if len(loc) > 1 and loc[0] in ("body", "query", "path", "header") else loc
     return ".".join(str(p) for p in parts)
 
 
 def validation_details(errors: Sequence[Mapping[str, Any]], prefix: tuple = ()) -> list[dict]:
-    """pydantic / FastAPI error dicts -> ``{"loc", "field", "msg", "type"}`` dicts."""
+    """pydantic / FastAPI error dicts -> ``{"loc", "field", "msg", "type"}`` dicts (with
+    ``line`` and ``column`` for positions in Minibex text)."""
     out = []
     for e in errors:
         loc = _clean_loc((*prefix, *e.get("loc", ())))
@@ -93,14 +99,15 @@ def validation_details(errors: Sequence[Mapping[str, Any]], prefix: tuple = ()) 
                     sub = sub[1:]
                 ploc = [*loc, *sub]
                 piece = m.group(2)
-            out.append(
-                {
-                    "loc": [_json_safe(p) for p in ploc],
-                    "field": _field(ploc),
-                    "msg": piece,
-                    "type": typ,
-                }
-            )
+            item: dict[str, Any] = {
+                "loc": [_json_safe(p) for p in ploc],
+                "field": field_of(ploc),
+                "msg": piece,
+                "type": typ,
+            }
+            if at := _POSITION.match(piece):
+                item["line"], item["column"] = int(at.group(1)), int(at.group(2))
+            out.append(item)
     return out
 
 

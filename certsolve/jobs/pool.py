@@ -125,7 +125,7 @@ class WorkerPool:
         os.set_blocking(w.fileno(), False)
         p = self._ctx.Process(
             target=worker_main,
-            args=(str(self.store.path), self.settings, os.getpid(), r),
+            args=(str(self.store.path), self.settings.for_workers, os.getpid(), r),
             name=f"certsolve-worker-{slot}",
             daemon=True,
         )

@@ -7,6 +7,12 @@ re-queues the jobs a previous run left ``running`` (or fails those out of attemp
 A batch (:class:`BatchRequest`) is either full job requests or one kind and input with a
 list of params; :meth:`JobService.submit_batch` expands and validates it (every problem
 reported at its index, ``jobs.1.system`` / ``params.3.u``) and queues all or nothing.
+
+Every method that reads or changes jobs takes the calling :class:`~.access.Client` (None
+when the service has no tokens): a client's jobs are its own -- another client's job is
+reported as missing (:class:`NoSuchJob`) and left out of listings -- and an admin sees
+them all.  Finished jobs older than ``keep_days`` are purged by a housekeeping thread
+(:mod:`.retention`), which also truncates the store's write-ahead log.
 """
 
 from __future__ import annotations
@@ -22,9 +28,11 @@ from typing import Any
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from ..robot.schema import RobotSpec
+from .access import Client
 from .errors import summary, validation_details
 from .kinds import KINDS, MAX_SYSTEM_CHARS, JobLimits, request_adapter
 from .pool import WorkerPool
+from .retention import Housekeeper
 from .settings import ServiceSettings
 from .status import JobStatus
 from .store import JobRow, JobStore, NewJob, new_job_id
@@ -36,9 +44,11 @@ __all__ = [
     "LimitError",
     "NoResult",
     "NoSuchJob",
+    "NotAllowed",
     "ServiceError",
     "job_record",
     "iso_time",
+    "owner_filter",
 ]
 
 log = logging.getLogger("certsolve.jobs")
@@ -67,6 +77,10 @@ class NoResult(Exception):
     """The job has no result (yet): queued, running, failed, or cancelled before it ran."""
 
 
+class NotAllowed(Exception):
+    """The calling client may not do this (an admin's operation)."""
+
+
 @dataclass
 class BatchError(ValueError):
     """A batch that cannot be queued; ``details`` are validation details (``loc`` relative
@@ -83,9 +97,14 @@ class BatchError(ValueError):
 _ONE_OF: list[Any] = [
     {
         "required": ["jobs"],
+        "properties": {"jobs": {"type": "array"}},
         "not": {"anyOf": [{"required": [k]} for k in ("kind", "robot", "system", "params")]},
     },
-    {"required": ["kind", "params"], "not": {"required": ["jobs"]}},
+    {
+        "required": ["kind", "params"],
+        "properties": {"kind": {"type": "string"}, "params": {"type": "array"}},
+        "not": {"required": ["jobs"]},
+    },
 ]
 
 
@@ -136,7 +155,13 @@ def job_record(row: JobRow, *, now: float | None = None) -> dict[str, Any]:
         "cancel_requested": row.cancel_requested_at is not None,
         "worker_pid": row.worker_pid if row.status is JobStatus.RUNNING else None,
         "error": row.error,
+        "owner": row.owner,
     }
+
+
+def owner_filter(client: Client | None) -> str | None:
+    """The owner whose jobs ``client`` sees (None: every job)."""
+    return None if client is None or client.admin else client.name
 
 
 class JobService:
@@ -153,6 +178,7 @@ class JobService:
             ) from None
         self.adapter = request_adapter(settings.enable_test_kinds)
         self.pool: WorkerPool | None = None
+        self.housekeeper: Housekeeper | None = None
         self._lock_fd: int | None = None
 
     # -- life cycle ---------------------------------------------------------------------------
@@ -181,11 +207,23 @@ class JobService:
         recovered = self.store.release("the service stopped while the job was running")
         if recovered:
             log.warning("recovered %d interrupted job(s): %s", len(recovered), recovered)
+        access = self.settings.access
+        self.store.set_owner_limits(
+            {}
+            if access is None
+            else {c.name: c.max_running or self.settings.quota_running for c in access.clients}
+        )
+        if self.housekeeper is None:
+            self.housekeeper = Housekeeper(self.store, self.settings)
+            self.housekeeper.start()
         if self.settings.workers > 0 and self.pool is None:
             self.pool = WorkerPool(self.settings, self.store)
             self.pool.start()
 
     def close(self) -> None:
+        if self.housekeeper is not None:
+            self.housekeeper.stop()
+            self.housekeeper = None
         if self.pool is not None:
             self.pool.stop()
             self.pool = None
@@ -202,9 +240,10 @@ class JobService:
         self.close()
 
     # -- requests -----------------------------------------------------------------------------
-    def validate(self, data: Any):
-        """A request dict -> the kind's model (raises pydantic ``ValidationError``)."""
-        return self.adapter.validate_python(data)
+    def validate(self, data: Any, memo: dict | None = None):
+        """A request dict -> the kind's model (raises pydantic ``ValidationError``);
+        ``memo`` keeps the answers of costly checks across the requests of one batch."""
+        return self.adapter.validate_python(data, context={"memo": memo})
 
     def limits_for(self, req) -> dict[str, Any]:
         """Effective limits of a validated request; :class:`LimitError` above a ceiling."""
@@ -233,19 +272,36 @@ class JobService:
             raise LimitError("limits.memory_mb", f"at least {s.min_memory_mb} MiB")
         return limits
 
-    def prepare(self, req, *, batch: str | None = None) -> NewJob:
+    def prepare(self, req, *, batch: str | None = None, owner: str | None = None) -> NewJob:
         return NewJob(
             kind=req.kind,
             request=req.model_dump_json(),
             limits=self.limits_for(req),
             max_attempts=self.settings.max_attempts,
             batch=batch,
+            owner=owner,
         )
 
-    def submit(self, reqs: list, *, batch: str | None = None, max_queued: bool = True):
-        """Queue validated requests (all or none); returns their ids."""
-        jobs = [self.prepare(r, batch=batch) for r in reqs]
-        ids = self.store.add(jobs, max_queued=self.settings.max_queued if max_queued else None)
+    def submit(
+        self,
+        reqs: list,
+        *,
+        batch: str | None = None,
+        max_queued: bool = True,
+        client: Client | None = None,
+    ) -> list[str]:
+        """Queue validated requests (all or none) owned by ``client``; returns their ids.
+        :class:`~.store.QueueFull` past the service's queue or the client's quota."""
+        owner = None if client is None else client.name
+        jobs = [self.prepare(r, batch=batch, owner=owner) for r in reqs]
+        quota = None
+        if client is not None:
+            quota = self.settings.quota_queued if client.max_queued is None else client.max_queued
+        ids = self.store.add(
+            jobs,
+            max_queued=self.settings.max_queued if max_queued else None,
+            owner_max_queued=quota,
+        )
         if self.pool is not None:
             self.pool.notify()
         return ids
@@ -267,6 +323,7 @@ class JobService:
         if len(items) > most:
             raise BatchError(f"{len(items)} jobs in one batch; at most {most}", too_large=True)
         reqs, details = [], []
+        memo: dict = {}  # one robot, many params: its costly checks run once
         for i, item in enumerate(items):
             prefix: tuple = ()
             if batch.jobs is not None:
@@ -280,7 +337,7 @@ class JobService:
                 if batch.limits is not None:
                     data["limits"] = batch.limits.model_dump()
             try:
-                req = self.validate(data)
+                req = self.validate(data, memo)
                 self.limits_for(req)
                 reqs.append(req)
             except ValidationError as exc:
@@ -305,30 +362,58 @@ class JobService:
             raise BatchError(summary(unique), unique)
         return reqs
 
-    def submit_batch(self, batch: BatchRequest) -> tuple[str, list[str]]:
+    def submit_batch(
+        self, batch: BatchRequest, *, client: Client | None = None
+    ) -> tuple[str, list[str]]:
         """Expand, validate and queue a batch (all or none): ``(batch id, job ids)``."""
         reqs = self.expand_batch(batch)
         batch_id = self.new_batch_id()
-        return batch_id, self.submit(reqs, batch=batch_id)
+        return batch_id, self.submit(reqs, batch=batch_id, client=client)
 
-    def cancel(self, job_id: str) -> JobRow | None:
-        return self.store.request_cancel(job_id)
-
-    def result_text(self, job_id: str) -> str:
-        """The stored result (JSON text); :class:`NoSuchJob`, or :class:`NoResult` saying why."""
-        found = self.store.result_text(job_id)
-        if found is None:
+    # -- reading and cancelling (a client's own jobs; an admin's: all) ------------------------
+    def job(self, job_id: str, client: Client | None = None, *, result: bool = True) -> JobRow:
+        """The job (with its result text); :class:`NoSuchJob` if ``client`` may not see it."""
+        row = self.store.get(job_id, result=result)
+        owner = owner_filter(client)
+        if row is None or (owner is not None and row.owner != owner):
             raise NoSuchJob(f"no job {job_id}")
-        status, text = found
-        if text is None:
-            row = self.store.get(job_id, result=False)
-            why = f": {row.error}" if row is not None and row.error else ""
-            raise NoResult(f"job {job_id} is {status} and has no result{why}")
-        return text
+        return row
 
-    def batch_status(self, batch_id: str) -> dict[str, Any]:
+    def jobs(self, client: Client | None = None, **filters: Any) -> tuple[list[JobRow], Any]:
+        """One page of the jobs ``client`` sees (filters and paging of
+        :meth:`.JobStore.list`)."""
+        return self.store.list(owner=owner_filter(client), **filters)
+
+    def cancel(self, job_id: str, client: Client | None = None) -> JobRow:
+        """Cancel a queued job at once, ask a running one to stop; :class:`NoSuchJob`."""
+        self.job(job_id, client, result=False)
+        row = self.store.request_cancel(job_id)
+        if row is None:
+            raise NoSuchJob(f"no job {job_id}")
+        return row
+
+    def result_text(self, job_id: str, client: Client | None = None) -> tuple[JobStatus, str]:
+        """The job's status and stored result (JSON text) -- the partial result of a job
+        stopped by a limit or a cancel too; :class:`NoSuchJob`, or :class:`NoResult` saying
+        why there is none."""
+        row = self.job(job_id, client, result=True)
+        if row.result is None:
+            why = f": {row.error}" if row.error else ""
+            raise NoResult(f"job {job_id} is {row.status} and has no result{why}")
+        return row.status, row.result
+
+    def purge(self, older_than_days: float, client: Client | None = None) -> dict[str, Any]:
+        """Delete the finished jobs older than ``older_than_days`` (admins only, or anyone
+        when the service has no tokens); :class:`NotAllowed` otherwise."""
+        if client is not None and not client.admin:
+            raise NotAllowed("purging jobs needs an admin token")
+        cutoff = time.time() - float(older_than_days) * 86400.0
+        deleted = self.store.purge(cutoff)
+        return {"deleted": deleted, "older_than_days": older_than_days, **self.store.file_sizes()}
+
+    def batch_status(self, batch_id: str, client: Client | None = None) -> dict[str, Any]:
         """How many jobs of a batch are in each status; :class:`NoSuchJob` if none."""
-        counts = self.store.counts(batch=batch_id)
+        counts = self.store.counts(batch=batch_id, owner=owner_filter(client))
         total = sum(counts.values())
         if total == 0:
             raise NoSuchJob(f"no batch {batch_id}")

@@ -1,10 +1,13 @@
-"""Service settings: where jobs live, how many workers, per-job defaults and ceilings."""
+"""Service settings: where jobs live, how many workers, per-job defaults and ceilings, who
+may use the service (:mod:`.access`), how quick calls are bounded, how long jobs are kept."""
 
 from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+
+from .access import AccessTable, load_access
 
 __all__ = ["ServiceSettings", "default_workers"]
 
@@ -44,13 +47,33 @@ class ServiceSettings:
     max_batch: int = 1000  # jobs per POST /v1/jobs/batch
     max_queued: int = 100_000  # queued jobs before new ones are refused (429)
     max_result_items: int = 20_000  # longer top-level result lists are truncated
-    sync_concurrency: int = 2  # simultaneous quick synchronous calls (/v1/ik, ...)
+    retry_after: int = 5  # seconds, in the Retry-After of a full queue (429)
+
+    # -- access control (None: no tokens, every request allowed; see .access) --------------
+    access: AccessTable | None = None
+    quota_queued: int = 10_000  # queued jobs per client (its own max_queued overrides)
+    quota_running: int | None = None  # running jobs per client (None: as many as workers)
+    quota_requests_per_minute: int = 1200  # requests per client and minute
+
+    # -- quick synchronous calls (/v1/ik, /v1/isotropic, /v1/fk/track; see .quick) ---------
+    quick_workers: int = 2  # processes answering light calls
+    quick_heavy_workers: int = 1  # processes answering heavy calls (a separate lane)
+    quick_timeout: float = 10.0  # seconds a light call may run before it is stopped
+    quick_heavy_timeout: float = 30.0  # seconds a heavy call may run
+    quick_memory_mb: int = 1536  # address-space limit of a quick-call process
+    quick_wait: float = 2.0  # seconds a call may wait for a free process before a 429
+    quick_queue: int = 8  # calls waiting per lane before new ones get a 429 at once
+
+    # -- retention ------------------------------------------------------------------------------
+    keep_days: float | None = None  # finished jobs older than this are purged (None: kept)
+    housekeeping_interval: float = 600.0  # seconds between purges / WAL checkpoints
 
     # -- timing ---------------------------------------------------------------------------------
     poll_interval: float = 0.25  # idle workers look for queued jobs this often (and on wake)
     progress_interval: float = 0.2  # running jobs report progress / read the cancel flag
-    cancel_grace: float = 1.5  # a cancelled job still running after this is killed
+    cancel_grace: float = 5.0  # a cancelled job still running after this is killed
     kill_grace: float = 5.0  # a job running past its time limit by this much is killed
+    memory_stop: float = 0.85  # a job stops (keeping its result) at this share of memory_mb
     supervise_interval: float = 0.2
 
     # -- testing --------------------------------------------------------------------------------
@@ -68,6 +91,12 @@ class ServiceSettings:
             raise ValueError("need 0 < default_max_boxes <= max_max_boxes")
         if not 0 < self.min_memory_mb <= self.default_memory_mb <= self.max_memory_mb:
             raise ValueError("need 0 < min_memory_mb <= default_memory_mb <= max_memory_mb")
+        if self.keep_days is not None and not self.keep_days > 0:
+            raise ValueError("keep_days must be > 0")
+        if self.quick_workers < 1 or self.quick_heavy_workers < 1:
+            raise ValueError("quick_workers and quick_heavy_workers must be >= 1")
+        if not 0 < self.memory_stop <= 1:
+            raise ValueError("memory_stop must be in (0, 1]")
 
     @property
     def db_path(self) -> Path:
@@ -81,16 +110,26 @@ class ServiceSettings:
         """A copy with some fields changed (``None`` values are ignored)."""
         return replace(self, **{k: v for k, v in changes.items() if v is not None})
 
+    @property
+    def for_workers(self) -> ServiceSettings:
+        """The settings worker processes get: without the token table."""
+        return replace(self, access=None)
+
     @classmethod
     def from_env(cls, environ=None, **overrides) -> ServiceSettings:
-        """Settings from ``CERTSOLVE_DATA_DIR``, ``CERTSOLVE_WORKERS``, ``CERTSOLVE_TEST_KINDS``
-        (for ``uvicorn certsolve.api.app:create_app --factory``), then ``overrides``."""
+        """Settings from ``CERTSOLVE_DATA_DIR``, ``CERTSOLVE_WORKERS``, ``CERTSOLVE_TOKENS``
+        (the token table as JSON), ``CERTSOLVE_KEEP_DAYS``, ``CERTSOLVE_TEST_KINDS`` (for
+        ``uvicorn certsolve.api.app:create_app --factory``), then ``overrides``."""
         env = os.environ if environ is None else environ
         values: dict = {}
         if env.get("CERTSOLVE_DATA_DIR"):
             values["data_dir"] = Path(env["CERTSOLVE_DATA_DIR"])
         if env.get("CERTSOLVE_WORKERS"):
             values["workers"] = int(env["CERTSOLVE_WORKERS"])
+        if env.get("CERTSOLVE_KEEP_DAYS"):
+            values["keep_days"] = float(env["CERTSOLVE_KEEP_DAYS"])
+        if "access" not in overrides or overrides["access"] is None:
+            values["access"] = load_access(None, env)
         if env.get("CERTSOLVE_TEST_KINDS", "").lower() in ("1", "true", "yes"):
             values["enable_test_kinds"] = True
         values.update({k: v for k, v in overrides.items() if v is not None})

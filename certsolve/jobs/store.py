@@ -12,6 +12,17 @@ SQLite's locking makes the state transitions atomic:
 * ``queued -> cancelled`` at once, ``running`` jobs get a cancel request that the worker
   reads with its progress heartbeat (:meth:`JobStore.heartbeat`).
 
+Each job has an ``owner`` (the client name of its token, :mod:`.access`; NULL when the
+service has no tokens).  Listings and counts can be limited to one owner; a client's
+queued jobs are counted at submission (its quota) and :meth:`JobStore.claim` skips the
+jobs of owners that already run their ``max_running`` (the ``owners`` table).  Finished
+jobs older than a cut-off are deleted by :meth:`JobStore.purge`, which then truncates the
+write-ahead log.
+
+Schema versions (``PRAGMA user_version``): 1 -- the jobs table; 2 -- ``jobs.owner`` and
+the ``owners`` table (a version-1 store is migrated when opened: existing jobs have no
+owner, so only admins see them once tokens are required).
+
 Nothing here imports numpy or the solver.
 """
 
@@ -42,7 +53,9 @@ __all__ = [
     "new_job_id",
 ]
 
-_SCHEMA = f"""
+SCHEMA_VERSION = 2
+
+_TABLES = """
 CREATE TABLE IF NOT EXISTS jobs (
     seq                 INTEGER PRIMARY KEY AUTOINCREMENT,
     id                  TEXT NOT NULL UNIQUE,
@@ -63,17 +76,36 @@ CREATE TABLE IF NOT EXISTS jobs (
     cancel_requested_at REAL,
     result              TEXT,
     error               TEXT,
-    fseq                INTEGER
+    fseq                INTEGER,
+    owner               TEXT
 );
+CREATE TABLE IF NOT EXISTS owners (
+    name                TEXT PRIMARY KEY,
+    max_running         INTEGER
+);
+"""
+_INDEXES = f"""
 CREATE INDEX IF NOT EXISTS jobs_status ON jobs(status, seq);
 CREATE INDEX IF NOT EXISTS jobs_batch ON jobs(batch, seq);
 CREATE INDEX IF NOT EXISTS jobs_fseq ON jobs(fseq);
 CREATE INDEX IF NOT EXISTS jobs_worker ON jobs(worker_pid) WHERE status = '{JobStatus.RUNNING}';
+CREATE INDEX IF NOT EXISTS jobs_owner ON jobs(owner, status, seq);
+CREATE INDEX IF NOT EXISTS jobs_finished ON jobs(finished_at) WHERE finished_at IS NOT NULL;
 """
 
 _SUMMARY_COLS = (
     "seq, id, kind, status, limits, batch, created_at, started_at, finished_at, attempts, "
-    "max_attempts, worker_pid, lease, progress, heartbeat_at, cancel_requested_at, error, fseq"
+    "max_attempts, worker_pid, lease, progress, heartbeat_at, cancel_requested_at, error, fseq, "
+    "owner"
+)
+# owners whose running jobs reach their max_running: their queued jobs wait
+_BUSY_OWNERS = (
+    "SELECT r.owner FROM jobs r JOIN owners o ON o.name = r.owner "
+    f"WHERE r.status = '{JobStatus.RUNNING}' GROUP BY r.owner HAVING count(*) >= o.max_running"
+)
+_NEXT_QUEUED = (
+    f"SELECT id FROM jobs WHERE status = '{JobStatus.QUEUED}' "
+    f"AND (owner IS NULL OR owner NOT IN ({_BUSY_OWNERS})) ORDER BY seq LIMIT 1"
 )
 # order of reaching a final status: write transactions are serialised, so a reader that has
 # seen fseq = n will see every later final job with fseq > n
@@ -81,7 +113,7 @@ _NEXT_FSEQ = "(SELECT coalesce(max(fseq), 0) + 1 FROM jobs)"
 
 
 class QueueFull(Exception):
-    """Too many queued jobs: the store refuses new ones."""
+    """Too many queued jobs (all of them, or of one owner): the store refuses new ones."""
 
 
 def new_job_id() -> str:
@@ -95,6 +127,7 @@ class NewJob:
     limits: dict
     max_attempts: int
     batch: str | None = None
+    owner: str | None = None
     id: str = ""
 
     def __post_init__(self):
@@ -122,6 +155,7 @@ class JobRow:
     cancel_requested_at: float | None
     error: str | None
     fseq: int | None = None
+    owner: str | None = None
     request: str | None = None  # JSON text (only when asked for)
     result: str | None = None  # JSON text (only when asked for)
 
@@ -149,13 +183,31 @@ class JobStore:
         self._all: list[sqlite3.Connection] = []
         self._lock = threading.Lock()
         con = self._conn()
+        # a new file gives freed pages back to the file system (after a purge)
+        con.execute("PRAGMA auto_vacuum = INCREMENTAL")
         mode = con.execute("PRAGMA journal_mode=WAL").fetchone()[0]
         if str(mode).lower() != "wal":  # pragma: no cover - e.g. a network file system
             raise RuntimeError(f"{self.path}: cannot use SQLite WAL mode (got {mode})")
-        for stmt in _SCHEMA.strip().split(";"):
-            if stmt.strip():
-                con.execute(stmt)
-        con.execute("PRAGMA user_version = 1")
+        with self._tx() as con:
+            for stmt in _TABLES.strip().split(";"):
+                if stmt.strip():
+                    con.execute(stmt)
+            self._migrate(con)
+            for stmt in _INDEXES.strip().split(";"):
+                if stmt.strip():
+                    con.execute(stmt)
+            con.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+
+    @staticmethod
+    def _migrate(con: sqlite3.Connection) -> None:
+        """Bring an older store up to :data:`SCHEMA_VERSION` (inside the opening
+        transaction, so concurrent openers see it done once)."""
+        cols = {r[1] for r in con.execute("PRAGMA table_info(jobs)")}
+        if "owner" not in cols:  # version 1: jobs had no owner
+            con.execute("ALTER TABLE jobs ADD COLUMN owner TEXT")
+
+    def schema_version(self) -> int:
+        return int(self._conn().execute("PRAGMA user_version").fetchone()[0])
 
     # -- connections ----------------------------------------------------------------------------
     def _conn(self) -> sqlite3.Connection:
@@ -198,8 +250,15 @@ class JobStore:
         return str(self._conn().execute("PRAGMA journal_mode").fetchone()[0]).lower()
 
     # -- submitting -----------------------------------------------------------------------------
-    def add(self, jobs: Iterable[NewJob], *, max_queued: int | None = None) -> builtins.list[str]:
-        """Queue jobs atomically (all or none); :class:`QueueFull` beyond ``max_queued``."""
+    def add(
+        self,
+        jobs: Iterable[NewJob],
+        *,
+        max_queued: int | None = None,
+        owner_max_queued: int | None = None,
+    ) -> builtins.list[str]:
+        """Queue jobs atomically (all or none).  :class:`QueueFull` beyond ``max_queued``
+        queued jobs in all, or ``owner_max_queued`` of the (one) owner of ``jobs``."""
         jobs = list(jobs)
         now = time.time()
         with self._tx() as con:
@@ -211,9 +270,21 @@ class JobStore:
                     raise QueueFull(
                         f"the queue holds {n} jobs; at most {max_queued} may wait, try later"
                     )
+            owners = {j.owner for j in jobs}
+            if owner_max_queued is not None and len(owners) == 1 and None not in owners:
+                (owner,) = owners
+                (n,) = con.execute(
+                    "SELECT count(*) FROM jobs WHERE owner = ? AND status = ?",
+                    (owner, JobStatus.QUEUED),
+                ).fetchone()
+                if n + len(jobs) > owner_max_queued:
+                    raise QueueFull(
+                        f"{owner} has {n} queued jobs; at most {owner_max_queued} may wait, "
+                        "try later"
+                    )
             con.executemany(
                 "INSERT INTO jobs (id, kind, status, request, limits, batch, created_at, "
-                "max_attempts) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+                "max_attempts, owner) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
                 [
                     (
                         j.id,
@@ -224,11 +295,21 @@ class JobStore:
                         j.batch,
                         now,
                         j.max_attempts,
+                        j.owner,
                     )
                     for j in jobs
                 ],
             )
         return [j.id for j in jobs]
+
+    def set_owner_limits(self, max_running: dict[str, int | None]) -> None:
+        """The running-job limit of each owner (None or absent: no limit of its own)."""
+        with self._tx() as con:
+            con.execute("DELETE FROM owners")
+            con.executemany(
+                "INSERT INTO owners (name, max_running) VALUES (?, ?)",
+                [(name, n) for name, n in max_running.items() if n is not None],
+            )
 
     # -- reading --------------------------------------------------------------------------------
     def get(self, job_id: str, *, result: bool = True, request: bool = False) -> JobRow | None:
@@ -251,14 +332,16 @@ class JobStore:
         status: JobStatus | None = None,
         kind: str | None = None,
         batch: str | None = None,
+        owner: str | None = None,
         limit: int = 50,
         cursor: int | None = None,
         oldest_first: bool = False,
     ) -> tuple[builtins.list[JobRow], int | None]:
-        """One page of jobs (newest first unless ``oldest_first``) and the next cursor."""
+        """One page of jobs (newest first unless ``oldest_first``) and the next cursor;
+        ``owner``: only that owner's jobs."""
         where: builtins.list[str] = []
         args: builtins.list[Any] = []
-        for col, val in (("status", status), ("kind", kind), ("batch", batch)):
+        for col, val in (("owner", owner), ("status", status), ("kind", kind), ("batch", batch)):
             if val is not None:
                 where.append(f"{col} = ?")
                 args.append(val)
@@ -275,12 +358,16 @@ class JobStore:
         rows = rows[:limit]
         return rows, (rows[-1].seq if more and rows else None)
 
-    def counts(self, *, batch: str | None = None) -> dict[JobStatus, int]:
+    def counts(self, *, batch: str | None = None, owner: str | None = None) -> dict[JobStatus, int]:
+        """Jobs per status (of one batch, of one owner)."""
         sql = "SELECT status, count(*) FROM jobs"
-        args: tuple = ()
-        if batch is not None:
-            sql += " WHERE batch = ?"
-            args = (batch,)
+        where, args = [], []
+        for col, val in (("batch", batch), ("owner", owner)):
+            if val is not None:
+                where.append(f"{col} = ?")
+                args.append(val)
+        if where:
+            sql += " WHERE " + " AND ".join(where)
         out = dict.fromkeys(STATUSES, 0)
         for status, n in self._conn().execute(sql + " GROUP BY status", args):
             out[JobStatus(status)] = n
@@ -312,18 +399,16 @@ class JobStore:
 
     # -- workers --------------------------------------------------------------------------------
     def claim(self, worker_pid: int) -> tuple[JobRow, str] | None:
-        """Take the oldest queued job: ``(job with its request, lease)`` or None."""
+        """Take the oldest queued job whose owner may run one more: ``(job with its
+        request, lease)`` or None."""
         con = self._conn()
         # a plain read first: idle workers poll without taking the write lock
-        queued = (JobStatus.QUEUED,)
-        if con.execute("SELECT 1 FROM jobs WHERE status = ? LIMIT 1", queued).fetchone() is None:
+        if con.execute(_NEXT_QUEUED).fetchone() is None:
             return None
         lease = secrets.token_hex(8)
         now = time.time()
         with self._tx() as con:
-            row = con.execute(
-                "SELECT id FROM jobs WHERE status = ? ORDER BY seq LIMIT 1", queued
-            ).fetchone()
+            row = con.execute(_NEXT_QUEUED).fetchone()
             if row is None:
                 return None
             con.execute(
@@ -455,3 +540,42 @@ class JobStore:
     def force_finish(self, job_id: str, lease: str, status: JobStatus, error: str) -> bool:
         """The supervisor ends a running job itself (then kills its worker)."""
         return self.finish(job_id, lease, status, error=error)
+
+    # -- retention ------------------------------------------------------------------------------
+    def purge(self, before: float, *, chunk: int = 500) -> int:
+        """Delete the finished jobs (done, failed, cancelled) that finished before the time
+        ``before`` (seconds since the epoch), ``chunk`` per transaction so that writers
+        wait little; then give the space back (:meth:`checkpoint`).  Returns how many."""
+        final = tuple(FINAL_STATUSES)
+        marks = ", ".join("?" * len(final))
+        total = 0
+        while True:
+            with self._tx() as con:
+                cur = con.execute(
+                    f"DELETE FROM jobs WHERE seq IN (SELECT seq FROM jobs WHERE finished_at < ? "
+                    f"AND status IN ({marks}) LIMIT ?)",
+                    (float(before), *final, int(chunk)),
+                )
+                n = cur.rowcount
+            total += n
+            if n < chunk:
+                break
+        if total:  # stepped to the end (sqlite3's execute frees one page per step)
+            self._conn().executescript("PRAGMA incremental_vacuum;")
+        self.checkpoint()
+        return total
+
+    def checkpoint(self) -> tuple[int, int, int]:
+        """Copy the write-ahead log into the database and truncate it (``PRAGMA
+        wal_checkpoint(TRUNCATE)``): ``(busy, log pages, pages checkpointed)``; busy is 1
+        when a reader kept it from finishing (it is tried again next time)."""
+        row = self._conn().execute("PRAGMA wal_checkpoint(TRUNCATE)").fetchone()
+        return int(row[0]), int(row[1]), int(row[2])
+
+    def file_sizes(self) -> dict[str, int]:
+        """Bytes of the database file and of its write-ahead log."""
+        wal = Path(str(self.path) + "-wal")
+        return {
+            "db": self.path.stat().st_size if self.path.exists() else 0,
+            "wal": wal.stat().st_size if wal.exists() else 0,
+        }

@@ -4,8 +4,16 @@ Workers are started (``spawn``) and supervised by :class:`~.pool.WorkerPool`.  W
 runs, the library's progress callback writes the progress to the store at most every
 ``progress_interval`` seconds and reads the job's cancel flag at the same time: a cancelled
 job's callback returns ``False`` and the search stops between two rounds.  Each job runs
-under ``RLIMIT_AS`` (its ``memory_mb``); a job that runs out of memory fails and the worker
-exits so that the supervisor starts a fresh one.
+under ``RLIMIT_AS`` (its ``memory_mb``).  The callback also watches the process's address
+space: past ``memory_stop`` of the limit it stops the search the same way, so that a job
+short of memory ends ``done`` with its partial result (``stopped_by: "memory"``) instead of
+failing; only an allocation that jumps over the margin still fails the job (and the worker
+exits so that the supervisor starts a fresh one).
+
+Whatever stopped the search (its time or box limit, memory, a cancel), the result is
+bounded before it is stored (:func:`.partial.stored_result`), with the memory limit lifted
+again: building it takes a fraction of the grace the supervisor gives a job (``kill_grace``
+past its time limit, ``cancel_grace`` after a cancel).
 
 A worker dies with its parent (``PR_SET_PDEATHSIG``, and a ``getppid`` check in case that
 is unavailable), so a killed service never leaves workers writing to the store.
@@ -22,12 +30,20 @@ import sys
 import time
 from typing import Any
 
-from .jsonutil import dumps, plain, truncate_lists
+from .jsonutil import dumps
+from .partial import stored_result
 from .settings import ServiceSettings
 from .status import JobStatus
 from .store import JobRow, JobStore
 
-__all__ = ["worker_main", "run_job", "JobMonitor"]
+__all__ = [
+    "JobMonitor",
+    "die_with_parent",
+    "restore_memory_limit",
+    "run_job",
+    "set_memory_limit",
+    "worker_main",
+]
 
 log = logging.getLogger("certsolve.jobs.worker")
 
@@ -36,7 +52,7 @@ EXIT_FRESH = 3  # the worker exits after a memory error; the supervisor starts a
 _PROGRESS_FIELDS = ("boxes", "pending", "solutions", "undecided", "elapsed")
 
 
-def _die_with_parent(parent_pid: int) -> None:
+def die_with_parent(parent_pid: int) -> None:
     try:
         import ctypes
 
@@ -48,7 +64,7 @@ def _die_with_parent(parent_pid: int) -> None:
         os._exit(0)
 
 
-def _set_memory_limit(mb: int | None):
+def set_memory_limit(mb: int | None):
     """Lower the soft address-space limit to ``mb`` MiB; return the previous limits."""
     try:
         import resource
@@ -66,7 +82,7 @@ def _set_memory_limit(mb: int | None):
         return None
 
 
-def _restore_memory_limit(old) -> None:
+def restore_memory_limit(old) -> None:
     if old is None:
         return
     try:
@@ -100,8 +116,37 @@ def progress_dict(p: Any, elapsed: float) -> dict:
     return out
 
 
+class AddressSpace:
+    """The address space of this process (what ``RLIMIT_AS`` limits), in bytes: the first
+    field of ``/proc/self/statm`` (pages), read through a descriptor kept open."""
+
+    def __init__(self):
+        self._page = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
+        try:
+            self._fd: int | None = os.open("/proc/self/statm", os.O_RDONLY)
+        except OSError:  # pragma: no cover - not Linux
+            self._fd = None
+
+    def __call__(self) -> int | None:
+        if self._fd is None:
+            return None
+        try:
+            return int(os.pread(self._fd, 64, 0).split()[0]) * self._page
+        except (OSError, ValueError, IndexError):  # pragma: no cover
+            return None
+
+    def close(self) -> None:
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
+
+
 class JobMonitor:
-    """The progress callback of one running job (see the module docstring)."""
+    """The progress callback of one running job (see the module docstring).
+
+    ``stopped_by`` says why the callback stopped the search when the job itself set the
+    limit: ``max_boxes`` (kinds whose library call has no box limit) or ``memory`` (the
+    address space passed ``memory_stop_bytes``)."""
 
     def __init__(
         self,
@@ -112,6 +157,7 @@ class JobMonitor:
         interval: float,
         parent_pid: int | None,
         max_boxes: int | None = None,
+        memory_stop_bytes: int | None = None,
     ):
         self.store = store
         self.job = job
@@ -119,6 +165,8 @@ class JobMonitor:
         self.interval = interval
         self.parent_pid = parent_pid
         self.max_boxes = max_boxes  # enforced here for kinds whose call has no such limit
+        self.memory_stop_bytes = memory_stop_bytes
+        self.address_space = AddressSpace()
         self.t0 = time.monotonic()
         self.next_tick = self.t0
         self.last: dict | None = None
@@ -134,6 +182,11 @@ class JobMonitor:
         if self.max_boxes is not None and self.last.get("boxes", 0) >= self.max_boxes:
             self.stopped_by = "max_boxes"
             return False
+        if self.memory_stop_bytes is not None:
+            used = self.address_space()
+            if used is not None and used >= self.memory_stop_bytes:
+                self.stopped_by = "memory"
+                return False
         if now < self.next_tick:
             return True
         self.next_tick = now + self.interval
@@ -172,8 +225,15 @@ def run_job(
 
     limits = job.limits
     exit_after = False
+    memory_mb = limits.get("memory_mb")
+    stop_at = None if memory_mb is None else int(settings.memory_stop * memory_mb * 2**20)
     monitor = JobMonitor(
-        store, job, lease, interval=settings.progress_interval, parent_pid=parent_pid
+        store,
+        job,
+        lease,
+        interval=settings.progress_interval,
+        parent_pid=parent_pid,
+        memory_stop_bytes=stop_at,
     )
     status, text, error = JobStatus.FAILED, None, None
     old_limit = None
@@ -187,13 +247,15 @@ def run_job(
             max_boxes=int(limits["max_boxes"]),
             progress=monitor,
         )
-        old_limit = _set_memory_limit(limits.get("memory_mb"))
+        old_limit = set_memory_limit(memory_mb)
         try:
             raw = kind.run(req, ctx)
         finally:
-            _restore_memory_limit(old_limit)
+            restore_memory_limit(old_limit)
             old_limit = None
-        result = truncate_lists(plain(raw), settings.max_result_items)
+        result = stored_result(raw, settings.max_result_items)
+        if monitor.stopped_by and isinstance(result, dict):
+            result["stopped_by"] = monitor.stopped_by  # the library only saw a callback's no
         text = dumps(result)
         if monitor.cancelled:
             status, error = JobStatus.CANCELLED, "cancelled while running (partial result)"
@@ -202,8 +264,8 @@ def run_job(
     except KindUnavailable as exc:
         error = str(exc)
     except MemoryError:
-        _restore_memory_limit(old_limit)
-        error = f"memory limit exceeded ({limits.get('memory_mb')} MiB)"
+        restore_memory_limit(old_limit)
+        error = f"memory limit exceeded ({memory_mb} MiB)"
         exit_after = True
     except ValidationError as exc:
         from .errors import describe_validation_error
@@ -214,6 +276,7 @@ def run_job(
     except Exception as exc:
         log.exception("job %s (%s) failed", job.id, job.kind)
         error = f"internal error: {type(exc).__name__}: {exc}"[:1000]
+    monitor.address_space.close()
     if monitor.lost:
         return exit_after
     if monitor.cancelled and status is not JobStatus.CANCELLED:
@@ -242,7 +305,7 @@ def worker_main(db_path: str, settings: ServiceSettings, parent_pid: int, wake) 
 
     ``wake`` is the read end of a pipe on which the service writes when jobs are queued.
     """
-    _die_with_parent(parent_pid)
+    die_with_parent(parent_pid)
     os.set_blocking(wake.fileno(), False)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
     logging.basicConfig(

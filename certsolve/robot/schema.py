@@ -10,15 +10,30 @@ allowed tension (N), ``u`` the actuator stroke (cm).
 ``dof`` is 6 (spatial rigid platform, 3-D vectors), 3 (planar rigid platform, 2-D vectors,
 no gravity in the plane) or 2 (planar point: every wire is attached to the same point, as
 the robots of Krut et al. 2004; elastic fields optional).
+
+Every bound the validation enforces on a single number is a ``Field`` constraint (finite,
+coordinates within ±1e6 cm, tensions within ±1e9 N), and the published JSON Schema is one
+variant per ``dof`` (:func:`robot_json_schema`) stating the vector lengths and the dof-2 /
+planar rules too.  What JSON Schema cannot state is checked by validators: ``lo <= hi`` of
+the ``tau``, ``u`` and domain intervals, and ``tau_max < k``.
 """
 
 from __future__ import annotations
 
+import copy
 import json
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    TypeAdapter,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 __all__ = [
     "WireSpec",
@@ -28,66 +43,59 @@ __all__ = [
     "RobotFileError",
     "format_validation_error",
     "load_robot_spec",
+    "array_length",
+    "robot_dof_schema",
     "robot_json_schema",
     "MAX_WIRES",
 ]
 
 MAX_WIRES = 32
 _MAX_COORD = 1e6  # cm: anything larger is a unit mistake
+_MAX_TENSION = 1e9  # N
+_MAX_CONSTANT = 1e12  # k, K, V, L0
+
+Coordinate = Annotated[float, Field(ge=-_MAX_COORD, le=_MAX_COORD)]
+Tension = Annotated[float, Field(gt=-_MAX_TENSION, lt=_MAX_TENSION)]
+Vector = Annotated[list[Coordinate], Field(min_length=2, max_length=3)]
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", populate_by_name=True)
-
-
-def _finite_vector(v: list[float], what: str) -> list[float]:
-    for x in v:
-        if not (abs(x) <= _MAX_COORD):
-            raise ValueError(f"{what} coordinates must be finite and within ±{_MAX_COORD:g} cm")
-    return v
+    model_config = ConfigDict(extra="forbid", populate_by_name=True, allow_inf_nan=False)
 
 
 class WireSpec(_Strict):
-    base: list[float] = Field(description="anchor A_i in the reference frame (cm)")
-    platform: list[float] | None = Field(
+    base: Vector = Field(description="anchor A_i in the reference frame (cm)")
+    platform: Vector | None = Field(
         default=None, description="attachment B_i in the platform frame (cm); 0 if omitted"
     )
-    k: float | None = Field(default=None, gt=0, description="wire material constant (N), eq. 1")
-    K: float | None = Field(default=None, gt=0, description="pulley amplification, eq. 2")
-    V: float | None = Field(default=None, ge=0, description="fixed length from A to F (cm)")
-    L0: float | None = Field(default=None, gt=0, description="unloaded wire length (cm)")
-    tau: tuple[float, float] = Field(description="[tau_min, tau_max] (N)")
-    u: tuple[float, float] | None = Field(default=None, description="actuator stroke (cm)")
-
-    @field_validator("base")
-    @classmethod
-    def _base(cls, v):
-        return _finite_vector(v, "base")
-
-    @field_validator("platform")
-    @classmethod
-    def _platform(cls, v):
-        return v if v is None else _finite_vector(v, "platform")
+    k: float | None = Field(
+        default=None, gt=0, le=_MAX_CONSTANT, description="wire material constant (N), eq. 1"
+    )
+    K: float | None = Field(
+        default=None, gt=0, le=_MAX_CONSTANT, description="pulley amplification, eq. 2"
+    )
+    V: float | None = Field(
+        default=None, ge=0, le=_MAX_CONSTANT, description="fixed length from A to F (cm)"
+    )
+    L0: float | None = Field(
+        default=None, gt=0, le=_MAX_CONSTANT, description="unloaded wire length (cm)"
+    )
+    tau: tuple[Tension, Tension] = Field(description="[tau_min, tau_max] (N)")
+    u: tuple[Coordinate, Coordinate] | None = Field(
+        default=None, description="actuator stroke [u_min, u_max] (cm)"
+    )
 
     @field_validator("tau")
     @classmethod
     def _tau(cls, v):
-        lo, hi = v
-        if not (abs(lo) < 1e9 and abs(hi) < 1e9):
-            raise ValueError("tensions must be finite")
-        if lo > hi:
+        if v[0] > v[1]:
             raise ValueError("tau_min must be <= tau_max")
         return v
 
     @field_validator("u")
     @classmethod
     def _u(cls, v):
-        if v is None:
-            return v
-        lo, hi = v
-        if not (abs(lo) < _MAX_COORD and abs(hi) < _MAX_COORD):
-            raise ValueError("stroke bounds must be finite")
-        if lo > hi:
+        if v is not None and v[0] > v[1]:
             raise ValueError("u_min must be <= u_max")
         return v
 
@@ -104,22 +112,22 @@ class WireSpec(_Strict):
 
 class PlatformSpec(_Strict):
     mass: float = Field(default=0.0, ge=0, le=1e6, description="platform mass (kg)")
-    center_of_mass: list[float] | None = Field(
+    center_of_mass: Vector | None = Field(
         default=None, description="centre of mass in the platform frame (cm); origin if omitted"
     )
 
 
 class DomainSpec(_Strict):
-    points: list[tuple[float, float]] = Field(
-        description="bounds of the world coordinates of every platform point, per axis (cm)"
+    points: list[tuple[Coordinate, Coordinate]] = Field(
+        min_length=2,
+        max_length=3,
+        description="bounds of the world coordinates of every platform point, per axis (cm)",
     )
 
     @field_validator("points")
     @classmethod
     def _points(cls, v):
         for lo, hi in v:
-            if not (abs(lo) <= _MAX_COORD and abs(hi) <= _MAX_COORD):
-                raise ValueError(f"domain bounds must be finite and within ±{_MAX_COORD:g} cm")
             if lo > hi:
                 raise ValueError("each domain interval must have lo <= hi")
         return v
@@ -128,10 +136,20 @@ class DomainSpec(_Strict):
 class RobotSpec(_Strict):
     name: str = Field(default="robot", max_length=200)
     dof: Literal[2, 3, 6]
-    gravity: list[float] | None = Field(default=None, description="gravity vector (m/s²)")
+    gravity: list[Annotated[float, Field(gt=-1e4, lt=1e4)]] | None = Field(
+        default=None, min_length=2, max_length=3, description="gravity vector (m/s²)"
+    )
     platform: PlatformSpec = Field(default_factory=PlatformSpec)
     wires: list[WireSpec] = Field(min_length=1, max_length=MAX_WIRES)
     domain: DomainSpec | None = None
+
+    @classmethod
+    def __get_pydantic_json_schema__(cls, core_schema, handler):
+        ref = handler(core_schema)  # the schema is one variant per dof
+        target = handler.resolve_ref_schema(ref)
+        target.clear()
+        target.update(robot_json_schema())
+        return ref
 
     @property
     def dim(self) -> int:
@@ -157,8 +175,6 @@ class RobotSpec(_Strict):
         if self.gravity is not None:
             if len(self.gravity) != d:
                 errors.append(f"gravity: expected {d} components, got {len(self.gravity)}")
-            elif any(not abs(g) < 1e4 for g in self.gravity):
-                errors.append("gravity: components must be finite")
             elif self.dof != 6 and any(g != 0 for g in self.gravity):
                 errors.append("gravity: planar robots (dof 2, 3) have no gravity in the plane")
         if self.domain is not None and len(self.domain.points) != d:
@@ -222,6 +238,78 @@ def load_robot_spec(source) -> RobotSpec:
         raise RobotFileError(format_validation_error(exc)) from None
 
 
+def array_length(prop: dict, n: int) -> dict:
+    """A copy of ``prop`` (an array schema, or an ``anyOf`` with one) with exactly ``n``
+    items."""
+    prop = copy.deepcopy(prop)
+    for branch in prop.get("anyOf", [prop]):
+        if branch.get("type") == "array":
+            branch["minItems"] = branch["maxItems"] = n
+    return prop
+
+
+def _zeros(prop: dict, n: int) -> dict:
+    """``prop`` allowing only ``null`` or ``n`` zeros (a point platform, planar gravity)."""
+    zeros = {"type": "array", "items": {"const": 0}, "minItems": n, "maxItems": n}
+    return {k: v for k, v in prop.items() if k != "anyOf"} | {"anyOf": [zeros, {"type": "null"}]}
+
+
+def _field_schema(model: type[BaseModel], name: str) -> dict:
+    """The JSON Schema of one field of ``model`` (its type and constraints)."""
+    info = model.model_fields[name]
+    return TypeAdapter(Annotated[info.annotation, info]).json_schema()  # type: ignore[arg-type]
+
+
+def robot_dof_schema(
+    dof: int, *, elastic: bool = False, wires: int | None = None, min_wires: int = 1
+) -> dict:
+    """The JSON Schema of a robot of one ``dof`` (self-contained, no ``$ref``): vectors of
+    its dimension, no attachment coordinates for dof 2, no gravity in the plane.  With
+    ``elastic``, every wire has ``k, K, V, L0, u``; with ``wires``, exactly that many;
+    at least ``min_wires``."""
+    d = 3 if dof == 6 else 2
+    wire = WireSpec.model_json_schema()
+    props = wire["properties"]
+    props["base"] = array_length(props["base"], d)
+    props["platform"] = (
+        _zeros(props["platform"], d) if dof == 2 else array_length(props["platform"], d)
+    )
+    if elastic:
+        wire["required"] = sorted({*wire.get("required", []), "k", "K", "V", "L0", "u"})
+        for name in ("k", "K", "V", "L0", "u"):
+            props[name] = next(b for b in props[name]["anyOf"] if b.get("type") != "null")
+    platform = PlatformSpec.model_json_schema()
+    com = platform["properties"]["center_of_mass"]
+    platform["properties"]["center_of_mass"] = array_length(com, d)
+    domain = DomainSpec.model_json_schema()
+    domain["properties"]["points"] = array_length(domain["properties"]["points"], d)
+    gravity = _field_schema(RobotSpec, "gravity")
+    wire_list = _field_schema(RobotSpec, "wires") | {"items": wire}
+    wire_list.pop("$defs", None)
+    wire_list["minItems"] = max(wire_list.get("minItems", 1), min_wires)
+    if wires is not None:
+        wire_list["minItems"] = wire_list["maxItems"] = wires
+    return {
+        "title": f"RobotSpec (dof {dof})",
+        "type": "object",
+        "additionalProperties": False,
+        "required": ["dof", "wires"],
+        "properties": {
+            "name": _field_schema(RobotSpec, "name"),
+            "dof": {"const": dof, "type": "integer", "description": "degrees of freedom"},
+            "gravity": array_length(gravity, d) if dof == 6 else _zeros(gravity, d),
+            "platform": platform,
+            "wires": wire_list,
+            "domain": {"anyOf": [domain, {"type": "null"}], "default": None},
+        },
+    }
+
+
 def robot_json_schema() -> dict:
-    """The JSON Schema of robot files (published by ``certsolve schema robot``)."""
-    return RobotSpec.model_json_schema()
+    """The JSON Schema of robot files (published by ``certsolve schema robot``): one
+    variant per ``dof`` (:func:`robot_dof_schema`)."""
+    return {
+        "title": "RobotSpec",
+        "description": "a robot file: wires, platform, domain (certsolve.robot.schema)",
+        "oneOf": [robot_dof_schema(dof) for dof in (2, 3, 6)],
+    }

@@ -13,9 +13,14 @@ kind (module)       library call                                    input
 solve               ``certsolve.solver.solve``                      ``system`` (Minibex text)
 fk                  ``certsolve.kinematics.forward_kinematics``     ``robot``
 ik                  ``certsolve.kinematics.inverse_kinematics``     ``robot``
+ik-sweep            ``certsolve.kinematics.ik_sweep.ik_sweep``      ``robot``
 isotropic-map       ``certsolve.force.isotropic_map``               ``robot``
 workspace           ``certsolve.force.certified_workspace``         ``robot``
+design              ``certsolve.force.design.design``               ``robot``
 ==================  ==============================================  =========================
+
+The quick calls (``QUICK_CALLS``: ``ik``, ``isotropic``, ``fk/track``) live in the module
+of their kind, with their cost estimate (:class:`.base.QuickCall`).
 
 The library modules are imported lazily inside the runners: a build without one of them
 still serves the others, and such jobs fail with "kind X is not available in this build".
@@ -38,12 +43,15 @@ if TYPE_CHECKING:
         Kind,
         KindUnavailable,
         Params,
+        QuickCall,
         Request,
         RunContext,
         library_function,
     )
+    from .design import DesignJob, DesignParameter, DesignParams
     from .fk import FkJob, FkParams, TrackCall, TrackParams, call_track
     from .ik import IkCall, IkJob, IkParams, call_ik
+    from .ik_sweep import IkSweepJob, IkSweepParams
     from .isotropic_map import (
         MAX_GRID_POINTS,
         MAX_GRID_SIDE,
@@ -53,13 +61,14 @@ if TYPE_CHECKING:
         PoseParams,
         call_isotropic,
     )
-    from .registry import KINDS, job_request_type, public_kinds, request_adapter
+    from .registry import KINDS, QUICK_CALLS, job_request_type, public_kinds, request_adapter
     from .sleep import SleepJob, SleepParams
     from .solve import MAX_SYSTEM_CHARS, MAX_VARIABLES, SolveJob, SolveParams
     from .workspace import WorkspaceJob, WorkspaceParams
 
 _WHERE = {
     "KINDS": ".registry",
+    "QUICK_CALLS": ".registry",
     "job_request_type": ".registry",
     "public_kinds": ".registry",
     "request_adapter": ".registry",
@@ -68,9 +77,15 @@ _WHERE = {
     "Kind": ".base",
     "KindUnavailable": ".base",
     "Params": ".base",
+    "QuickCall": ".base",
     "Request": ".base",
     "RunContext": ".base",
     "library_function": ".base",
+    "DesignJob": ".design",
+    "DesignParameter": ".design",
+    "DesignParams": ".design",
+    "IkSweepJob": ".ik_sweep",
+    "IkSweepParams": ".ik_sweep",
     "FkJob": ".fk",
     "FkParams": ".fk",
     "TrackCall": ".fk",
@@ -100,11 +115,16 @@ _WHERE = {
 __getattr__, __dir__ = lazy_exports(__name__, _WHERE)
 
 __all__ = [
+    "DesignJob",
+    "DesignParameter",
+    "DesignParams",
     "FkJob",
     "FkParams",
     "IkCall",
     "IkJob",
     "IkParams",
+    "IkSweepJob",
+    "IkSweepParams",
     "IsotropicCall",
     "IsotropicMapJob",
     "IsotropicMapParams",
@@ -119,6 +139,8 @@ __all__ = [
     "MAX_VARIABLES",
     "Params",
     "PoseParams",
+    "QUICK_CALLS",
+    "QuickCall",
     "Request",
     "RunContext",
     "SleepJob",

@@ -4,13 +4,18 @@ against the robot, the run context, and the lookup of the library function.
 Requests are pydantic models with ``extra="forbid"`` and no NaN / Infinity; every bound
 the validation enforces on a single value (finite, range, length) is written as a
 ``Field`` constraint, so the published JSON Schema states it.  What needs the robot (``u``
-has one value per wire, a pose has the robot's length ...) is checked in one place:
+has one value per wire, a pose has the robot's length, no wire has zero length at an IK
+pose, the FK equations can be written for the platform ...) is checked in one place:
 :meth:`Params.check_robot`, called by :class:`Request` for every job and quick call that
-carries a robot -- and by the command line, which builds the same parameter models.
+carries a robot -- and by the command line, which builds the same parameter models.  Its
+errors name a params field (``u: ...``) or a robot field (``robot.wires: ...``).  A check
+that costs milliseconds may keep its answers in ``memo``, a dict the caller passes as the
+validation context ``{"memo": {}}`` (a batch of jobs on one robot checks it once).
 """
 
 from __future__ import annotations
 
+import copy
 import importlib
 import inspect
 import logging
@@ -18,13 +23,15 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, model_validator
 
-from ...robot.schema import RobotSpec
+from ...robot.schema import RobotSpec, array_length, robot_dof_schema
 
 __all__ = [
+    "ANGLES",
     "MAX_FORCE",
     "MAX_COORD",
+    "POSE_LENGTH",
     "Angle",
     "Coord",
     "Job",
@@ -34,16 +41,21 @@ __all__ = [
     "Model",
     "Orientation",
     "Params",
+    "QuickCall",
     "Request",
+    "Required",
     "RunContext",
     "Wrench",
     "call_supported",
+    "angles_schema",
+    "check_angles",
     "check_count",
     "check_pose",
+    "check_wire_lengths",
     "check_wires",
     "library_function",
     "orientation_arg",
-    "plain_result",
+    "require_elastic",
     "robot_model",
     "wrench_dim",
 ]
@@ -52,6 +64,8 @@ log = logging.getLogger("certsolve.jobs")
 
 MAX_COORD = 1e6  # cm, the robot schema's bound
 MAX_FORCE = 1e9  # N
+POSE_LENGTH = {2: 2, 3: 3, 6: 6}  # pose parameters by dof: x,y / x,y,theta / x,y,z,yaw,pitch,roll
+ANGLES = {2: 0, 3: 1, 6: 3}  # orientation angles by dof
 
 Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD)]
 Angle = Annotated[float, Field(ge=-1e4, le=1e4)]  # degrees
@@ -75,28 +89,102 @@ class Model(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
-class Params(Model):
-    """The ``params`` of a kind or quick call."""
+@dataclass(frozen=True)
+class Required:
+    """A params shape (:meth:`Params.dof_shapes`): this schema, and the field required."""
 
-    def check_robot(self, robot: RobotSpec) -> None:
-        """Checks that need the robot; raise ``ValueError("field: message")``."""
+    schema: dict
+
+
+class Params(Model):
+    """The ``params`` of a kind or quick call.
+
+    For the published JSON Schema, a kind that carries a robot states the shapes that
+    depend on the robot's dof (:meth:`dof_shapes`) and what it needs of the robot
+    (:meth:`robot_schema`); its request schema is then one variant per dof
+    (:meth:`Request.__get_pydantic_json_schema__`).
+    """
+
+    @classmethod
+    def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
+        """The fields whose shape depends on the robot's ``dof``: an exact number of items,
+        ``None`` (the field must be absent) or a replacement JSON Schema; ``None`` for a
+        dof this kind does not take."""
+        return {}
+
+    @classmethod
+    def robot_schema(cls, dof: int) -> dict:
+        """The JSON Schema of the robots this kind takes of one ``dof``."""
+        return robot_dof_schema(dof)
+
+    @classmethod
+    def schema_variants(cls, dof: int) -> list[tuple[dict, dict[str, Any]]]:
+        """``(robot schema, params shapes)`` of each variant of the request schema for
+        one ``dof`` (default: :meth:`robot_schema` and :meth:`dof_shapes`, one variant;
+        a kind whose rules differ by some params value has one variant per value)."""
+        shapes = cls.dof_shapes(dof)
+        return [] if shapes is None else [(cls.robot_schema(dof), shapes)]
+
+    def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
+        """Checks that need the robot; raise ``ValueError("field: message")`` for a field
+        of the params, ``ValueError("robot.field: message")`` for one of the robot."""
 
 
 class Request(Model):
     """A job or quick call; when it has a ``robot``, its ``params`` are checked against it.
 
     The one validator of parameters against the robot (``params.u: expected 4 values ...``).
+    Its JSON Schema is one variant per dof the kind takes, each with the robot schema of
+    that dof and the params shapes for it (:meth:`Params.dof_shapes`).
     """
 
+    @classmethod
+    def __get_pydantic_json_schema__(cls, core_schema, handler):
+        ref = handler(core_schema)
+        params = cls.model_fields.get("params")
+        kind = params.annotation if params is not None else None
+        if "robot" not in cls.model_fields or not (
+            isinstance(kind, type) and issubclass(kind, Params)
+        ):
+            return ref
+        target = handler.resolve_ref_schema(ref)
+        base = copy.deepcopy(target)
+        params_schema = handler.resolve_ref_schema(base["properties"]["params"])
+        variants = []
+        for dof in (2, 3, 6):
+            for robot, shapes in kind.schema_variants(dof):
+                p = copy.deepcopy(params_schema)
+                for name, shape in shapes.items():
+                    if shape is None:
+                        p["properties"].pop(name, None)
+                        p["required"] = [r for r in p.get("required", []) if r != name]
+                    elif isinstance(shape, int):
+                        p["properties"][name] = array_length(p["properties"][name], shape)
+                    elif isinstance(shape, Required):
+                        p["properties"][name] = shape.schema
+                        p["required"] = sorted({*p.get("required", []), name})
+                    else:
+                        p["properties"][name] = shape
+                v = copy.deepcopy(base)
+                v["title"] = f"{base.get('title', cls.__name__)} (dof {dof})"
+                v["properties"]["robot"] = robot
+                v["properties"]["params"] = p
+                variants.append(v)
+        target.clear()
+        target.update({"title": base.get("title", cls.__name__), "oneOf": variants})
+        return ref
+
     @model_validator(mode="after")
-    def _fits_robot(self):
+    def _fits_robot(self, info: ValidationInfo):
         robot = getattr(self, "robot", None)
         params = getattr(self, "params", None)
         if isinstance(robot, RobotSpec) and isinstance(params, Params):
+            memo = info.context.get("memo") if isinstance(info.context, dict) else None
             try:
-                params.check_robot(robot)
+                params.check_robot(robot, memo)
             except ValueError as exc:
-                raise ValueError(f"params.{exc}") from None
+                msg = str(exc)
+                raise ValueError(msg if msg.startswith("robot.") else f"params.{msg}") from None
         return self
 
 
@@ -129,6 +217,33 @@ def check_pose(robot: RobotSpec, values: Sequence[float], name: str) -> None:
         raise ValueError(f"{name}: {exc}") from None
 
 
+def check_wire_lengths(robot: RobotSpec, pose: Sequence[float], name: str) -> None:
+    """No wire has zero length at ``pose`` (an attachment on its anchor: the wire has no
+    direction, the IK equations are undefined)."""
+    from ...robot.geometry import Pose, wire_geometry
+
+    p = Pose.from_params(robot.dof, pose)
+    model = robot_model(robot)
+    rho = wire_geometry(model, p.position[None], p.rotation[None])[0][0]
+    scale = 1.0 + float(abs(model.A).max(initial=0.0))
+    for i, r in enumerate(rho.tolist()):
+        if not r > 1e-12 * scale:
+            raise ValueError(
+                f"{name}: wire {i + 1} has zero length at this pose (its attachment "
+                "coincides with its anchor)"
+            )
+
+
+def require_elastic(robot: RobotSpec, what: str, hint: str = "") -> None:
+    """Every wire has the elastic model ``what`` needs (``robot.wires[i].k: ...``)."""
+    from ...robot.schema import RobotFileError
+
+    try:
+        robot_model(robot).require_elastic(what)
+    except RobotFileError as exc:
+        raise ValueError(f"robot.{exc}: the robot has no elastic wire model{hint}") from None
+
+
 def check_count(values: Sequence | None, count: int, name: str, what: str) -> None:
     """``values`` (when given) has ``count`` items; ``what`` says what they are."""
     if values is not None and len(values) != count:
@@ -138,6 +253,40 @@ def check_count(values: Sequence | None, count: int, name: str, what: str) -> No
 def wrench_dim(robot: RobotSpec) -> int:
     """Components of a wrench: 6 (dof 6), 3 (dof 3), 2 (dof 2)."""
     return robot.dof
+
+
+def check_angles(robot: RobotSpec, value: Any, name: str, *, ranges: bool) -> None:
+    """An orientation fits the robot: nothing for dof 2, ``theta`` (or ``[theta]``) for
+    dof 3, ``[yaw, pitch, roll]`` for dof 6; ``[lo, hi]`` ranges only where ``ranges``."""
+    n = ANGLES[robot.dof]
+    if value is None:
+        return
+    if n == 0:
+        raise ValueError(f"{name}: a point platform (dof 2) has no orientation")
+    items = [value] if not isinstance(value, list) else value
+    if n == 1 and ranges and len(items) == 2 and all(not isinstance(a, tuple) for a in items):
+        items = [tuple(items)]  # [lo, hi]: one range of theta
+    if len(items) != n:
+        raise ValueError(f"{name}: expected {n} angle(s) in degrees, got {len(items)}")
+    if not ranges and any(isinstance(a, tuple) for a in items):
+        raise ValueError(f"{name}: fixed angles here, not [lo, hi] ranges")
+
+
+def angles_schema(dof: int, *, ranges: bool) -> dict | None:
+    """The JSON Schema of the orientation :func:`check_angles` accepts (None: absent)."""
+    n = ANGLES[dof]
+    if n == 0:
+        return None
+    angle = {"type": "number", "minimum": -1e4, "maximum": 1e4}
+    item: dict = angle
+    if ranges:
+        pair = {"type": "array", "prefixItems": [angle, angle], "minItems": 2, "maxItems": 2}
+        item = {"anyOf": [angle, pair]}
+    listed = {"type": "array", "items": item, "minItems": n, "maxItems": n}
+    options = [listed, {"type": "null"}] + ([angle] if n == 1 else [])
+    if n == 1 and ranges:
+        options.append(pair)
+    return {"anyOf": options, "default": None, "description": "degrees"}
 
 
 # -- running --------------------------------------------------------------------------------------
@@ -164,10 +313,6 @@ def library_function(kind: str, module: str, name: str) -> Callable:
         if not isinstance(exc, (ImportError, AttributeError)):
             log.warning("importing %s failed: %s: %s", module, type(exc).__name__, exc)
         raise KindUnavailable(f"kind {kind} is not available in this build") from None
-
-
-def plain_result(result: Any) -> Any:
-    return result.to_dict() if hasattr(result, "to_dict") else result
 
 
 # passed when the library takes them, else enforced by the worker (progress callback, kill)
@@ -207,7 +352,10 @@ def robot_model(spec: RobotSpec):
 # -- the registry entry ---------------------------------------------------------------------------
 @dataclass(frozen=True, kw_only=True)
 class Kind:
-    """A job kind: its request model, params model, runner and library function."""
+    """A job kind: its request model, params model, runner and library function.
+
+    ``run(request, context)`` returns the library's result object (the worker bounds and
+    stores it, :mod:`..partial`)."""
 
     name: str
     model: type[Job]
@@ -229,3 +377,20 @@ class Kind:
     @property
     def has_max_boxes(self) -> bool:
         return "max_boxes" in self.params.model_fields
+
+
+@dataclass(frozen=True, kw_only=True)
+class QuickCall:
+    """A quick synchronous call (``POST /v1/<name>``): its request model, the function
+    answering it (request -> plain result), and ``cost(request)``, an estimate of its
+    seconds on one core from the request's size alone (wires, dof, method), by which
+    :mod:`..quick` puts it in the light or the heavy lane, or refuses it (submit ``job``
+    instead)."""
+
+    name: str
+    model: type[Request]
+    run: Callable[[Any], Any]
+    cost: Callable[[Any], float]
+    library: tuple[str, str]  # module, function (loaded when a quick-call process starts)
+    job: str  # the job that computes the same (for the refusal message)
+    cost_field: str = "robot.wires"  # what the cost grows with (where a refusal points)

@@ -1,6 +1,13 @@
 """Kind ``fk``: every equilibrium pose for actuator values ``u``
 (``certsolve.kinematics.forward_kinematics``); and the quick call ``POST /v1/fk/track``
-(one certified tracking step near a known pose, ``certsolve.kinematics.track``)."""
+(one certified tracking step near a known pose, ``certsolve.kinematics.track``).
+
+At submission the robot must admit the FK equations: a rigid platform (dof 3 or 6), the
+elastic model on every wire, and attachment points from which the formulation's affine
+frame can be built (3 or 4 distinct, affinely independent points).  The judge is the
+library's own formulation builder (:func:`~certsolve.kinematics.fk_systems.build_formulation`,
+a few milliseconds), so what is accepted can be run.
+"""
 
 from __future__ import annotations
 
@@ -8,23 +15,48 @@ from typing import Any, Literal
 
 from pydantic import Field
 
-from ...robot.schema import MAX_WIRES, RobotSpec
+from ...robot.schema import MAX_WIRES, RobotSpec, robot_dof_schema
 from .base import (
     MAX_FORCE,
+    POSE_LENGTH,
     Coord,
     Job,
     Kind,
+    KindUnavailable,
     Params,
+    QuickCall,
     Request,
     RunContext,
     check_pose,
     check_wires,
     library_function,
-    plain_result,
+    require_elastic,
     robot_model,
 )
 
-__all__ = ["KIND", "FkJob", "FkParams", "TrackCall", "TrackParams", "call_track", "run_fk"]
+__all__ = [
+    "KIND",
+    "QUICK",
+    "FkJob",
+    "FkParams",
+    "TrackCall",
+    "TrackParams",
+    "call_track",
+    "check_fk_geometry",
+    "fk_robot_schema",
+    "run_fk",
+    "track_cost",
+]
+
+
+# = certsolve.kinematics.fk_systems.FORMULATIONS (tested), by the dof they are written for
+FORMULATIONS = ("auto", "frame", "reduced", "pose")
+PLANAR_FORMULATIONS = ("planar-10",)
+SPATIAL_FORMULATIONS = ("general-19", "T-16", "almost-planar-13", "points")
+Formulation = Literal[
+    "auto", "frame", "reduced", "pose", "planar-10", "general-19", "T-16", "almost-planar-13",
+    "points",
+]  # fmt: skip
 
 
 class FkParams(Params):
@@ -35,12 +67,74 @@ class FkParams(Params):
     timeout: float | None = Field(default=None, gt=0, description="time limit (s)")
     max_boxes: int | None = Field(default=None, ge=1)
     tau_max: float | None = Field(default=None, ge=0, le=MAX_FORCE, description="tension cap")
-    formulation: str = Field(default="auto", max_length=32, pattern=r"^[A-Za-z0-9_-]+$")
+    formulation: Formulation = Field(
+        default="auto", description="the FK equations (docs: README, forward kinematics)"
+    )
     seed_planar: bool = False
     seeded_only: bool = False
 
-    def check_robot(self, robot: RobotSpec) -> None:
+    @classmethod
+    def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
+        if dof == 2:
+            return None
+        names = FORMULATIONS + (PLANAR_FORMULATIONS if dof == 3 else SPATIAL_FORMULATIONS)
+        return {"formulation": {"enum": list(names), "default": "auto", "type": "string"}}
+
+    @classmethod
+    def robot_schema(cls, dof: int) -> dict:
+        return fk_robot_schema(dof)
+
+    def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_wires(robot, self.u, "u")
+        check_fk_geometry(robot, self.formulation, memo)
+
+
+def fk_robot_schema(dof: int) -> dict:
+    """Robots FK can take: the elastic model, and at least the 3 (planar) or 4 (spatial)
+    attachment points of the formulation's frame (that they are distinct and span it is
+    checked by :func:`check_fk_geometry`)."""
+    return robot_dof_schema(dof, elastic=True, min_wires=3 if dof == 3 else 4)
+
+
+def check_fk_geometry(robot: RobotSpec, formulation: str, memo: dict | None = None) -> None:
+    """The FK equations of ``formulation`` can be written for ``robot`` (module docstring);
+    else ``ValueError`` naming ``robot.dof``, ``robot.wires[i].k`` ..., ``robot.wires``
+    (the attachment points) or ``formulation`` (a formulation this robot cannot use)."""
+    key = ("fk", robot.model_dump_json(), formulation)
+    if memo is not None and key in memo:
+        if memo[key]:
+            raise ValueError(memo[key])
+        return
+    problem = _fk_geometry_problem(robot, formulation)
+    if memo is not None:
+        memo[key] = problem
+    if problem:
+        raise ValueError(problem)
+
+
+def _fk_geometry_problem(robot: RobotSpec, formulation: str) -> str | None:
+    if robot.dof == 2:
+        return "robot.dof: a point platform (dof 2) has no pose to find; FK needs dof 3 or 6"
+    try:
+        require_elastic(robot, "forward kinematics")
+    except ValueError as exc:
+        return str(exc)
+    try:
+        build = library_function("fk", "certsolve.kinematics.fk_systems", "build_formulation")
+    except KindUnavailable:
+        return None  # the job will say the kind is missing
+    model = robot_model(robot)
+    try:
+        build(model, formulation)
+    except ValueError as exc:
+        if formulation in ("auto", "frame"):
+            return f"robot.wires: {exc}"
+        try:
+            build(model, "auto")
+        except ValueError as auto:
+            return f"robot.wires: {auto}"
+        return f"formulation: {exc}"
+    return None
 
 
 class FkJob(Job):
@@ -64,7 +158,7 @@ def run_fk(job: FkJob, ctx: RunContext) -> Any:
         seeded_only=p.seeded_only,
         progress=ctx.progress,
     )
-    return plain_result(result)
+    return result
 
 
 KIND = Kind(
@@ -83,9 +177,18 @@ class TrackParams(Params):
     near_pose: list[Coord] = Field(min_length=2, max_length=6, description="see IkParams.pose")
     half_width: float = Field(default=0.1, gt=0, le=1e4)
 
-    def check_robot(self, robot: RobotSpec) -> None:
+    @classmethod
+    def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
+        return None if dof == 2 else {"near_pose": POSE_LENGTH[dof]}
+
+    @classmethod
+    def robot_schema(cls, dof: int) -> dict:
+        return fk_robot_schema(dof)
+
+    def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_wires(robot, self.u, "u")
         check_pose(robot, self.near_pose, "near_pose")
+        check_fk_geometry(robot, "auto", memo)
 
 
 class TrackCall(Request):
@@ -102,4 +205,20 @@ def call_track(req: TrackCall) -> Any:
     robot = robot_model(req.robot)
     p = req.params
     near = Pose.from_params(robot.dof, p.near_pose)
-    return plain_result(fn(robot, list(p.u), near, half_width=p.half_width))
+    return fn(robot, list(p.u), near, half_width=p.half_width)
+
+
+def track_cost(req: TrackCall) -> float:
+    """Seconds, roughly: compiling the tracking system grows with the wires; one Newton
+    and Krawczyk step is milliseconds."""
+    return 0.2 + 0.02 * len(req.robot.wires)
+
+
+QUICK = QuickCall(
+    name="fk/track",
+    model=TrackCall,
+    run=call_track,
+    cost=track_cost,
+    library=("certsolve.kinematics", "track"),
+    job='a job of kind "fk"',
+)

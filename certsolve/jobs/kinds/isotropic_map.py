@@ -4,26 +4,31 @@
 
 from __future__ import annotations
 
+from math import comb
 from typing import Any, Literal
 
 from pydantic import Field, model_validator
 
 from ...robot.schema import RobotSpec
 from .base import (
+    POSE_LENGTH,
     Coord,
     Job,
     Kind,
     Orientation,
     Params,
+    QuickCall,
     Request,
     RunContext,
     Wrench,
+    angles_schema,
     call_supported,
+    check_angles,
     check_count,
     check_pose,
+    check_wire_lengths,
     library_function,
     orientation_arg,
-    plain_result,
     robot_model,
     wrench_dim,
 )
@@ -36,11 +41,14 @@ __all__ = [
     "IsotropicMapJob",
     "IsotropicMapParams",
     "PoseParams",
+    "QUICK",
     "call_isotropic",
+    "isotropic_cost",
     "run_isotropic_map",
 ]
 
 MAX_GRID_POINTS = 250_000  # nx * ny of an isotropic map
+KRUT_MAX_SYSTEMS = 1_000_000  # = certsolve.force.krut.krut_polytope's max_combinations
 MAX_GRID_SIDE = 2000
 
 
@@ -65,10 +73,18 @@ class IsotropicMapParams(Params):
             raise ValueError(f"nx * ny = {self.nx * self.ny} points; at most {MAX_GRID_POINTS}")
         return self
 
-    def check_robot(self, robot: RobotSpec) -> None:
+    @classmethod
+    def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
+        shapes: dict[str, Any] = {"external": dof, "orientation": angles_schema(dof, ranges=False)}
+        if dof != 6:
+            shapes["z"] = None
+        return shapes
+
+    def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         if self.z is not None and robot.dof != 6:
             raise ValueError(f"z: a dof-{robot.dof} robot is planar (no z)")
         check_external(robot, self.external)
+        check_angles(robot, self.orientation, "orientation", ranges=False)
 
 
 class IsotropicMapJob(Job):
@@ -87,9 +103,7 @@ def run_isotropic_map(job: IsotropicMapJob, ctx: RunContext) -> Any:
     ys = np.linspace(ymin, ymax, p.ny)
     robot = robot_model(job.robot)
     rotation = orientation_arg(p.orientation)
-    return plain_result(
-        call_supported(imap, robot, xs, ys, z=p.z, rotation=rotation, external=p.external)
-    )
+    return call_supported(imap, robot, xs, ys, z=p.z, rotation=rotation, external=p.external)
 
 
 KIND = Kind(
@@ -108,8 +122,13 @@ class PoseParams(Params):
     algorithm: Literal["shifting", "krut"] = "shifting"
     external: Wrench | None = None
 
-    def check_robot(self, robot: RobotSpec) -> None:
+    @classmethod
+    def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
+        return {"pose": POSE_LENGTH[dof], "external": dof}
+
+    def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_pose(robot, self.pose, "pose")
+        check_wire_lengths(robot, self.pose, "pose")  # a wire with no direction: no H
         check_external(robot, self.external)
 
 
@@ -127,4 +146,34 @@ def call_isotropic(req: IsotropicCall) -> Any:
     robot = robot_model(req.robot)
     p = req.params
     pose = Pose.from_params(robot.dof, p.pose)
-    return plain_result(call_supported(fn, robot, pose, algorithm=p.algorithm, external=p.external))
+    return call_supported(fn, robot, pose, algorithm=p.algorithm, external=p.external)
+
+
+def isotropic_cost(req: IsotropicCall) -> float:
+    """Seconds, roughly (fitted on the project's 2-core machine, random robots).
+
+    Hyperplane shifting finds ``F = 2 C(m, w - 1)`` facet planes and removes duplicates in
+    ``O(F^2)`` (7e-6 s per pair: 5.7 s for 11 wires, dof 6); the force section of dof 3
+    and 6 enumerates the ``2^m`` vertices of the tension box (about ``m 2^m`` 1e-6 s: 18 s
+    for 20 wires, dof 3); Krut's algorithm solves ``C(2^m, w)`` linear systems (4e-5 s
+    each: 21 s for 10 wires, dof 2) and refuses more than a million at once.
+    """
+    m, w = len(req.robot.wires), req.robot.dof
+    planes = 2 * comb(m, w - 1)
+    cost = 0.05 + 7e-6 * planes * planes
+    if w != 2:
+        cost += 1e-6 * m * 2.0**m
+    if req.params.algorithm == "krut":
+        systems = comb(2**m, w)
+        cost += 4e-5 * systems if systems <= KRUT_MAX_SYSTEMS else 0.0  # else refused at once
+    return cost
+
+
+QUICK = QuickCall(
+    name="isotropic",
+    model=IsotropicCall,
+    run=call_isotropic,
+    cost=isotropic_cost,
+    library=("certsolve.force", "isotropic_force"),
+    job='a job of kind "isotropic-map" (a grid of one point) for the force value',
+)

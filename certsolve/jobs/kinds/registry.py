@@ -1,5 +1,6 @@
 """The registry of job kinds: ``KINDS`` (name -> :class:`.base.Kind`) and the request
-type, a union of the kinds' job models discriminated by ``kind``."""
+type, a union of the kinds' job models discriminated by ``kind``; and of the quick calls,
+``QUICK_CALLS`` (name -> :class:`.base.QuickCall`)."""
 
 from __future__ import annotations
 
@@ -7,14 +8,18 @@ from typing import Annotated, Any, Union
 
 from pydantic import Field, TypeAdapter
 
-from . import fk, ik, isotropic_map, sleep, solve, workspace
-from .base import Kind
+from . import design, fk, ik, ik_sweep, isotropic_map, sleep, solve, workspace
+from .base import Kind, QuickCall
 
-__all__ = ["KINDS", "job_request_type", "public_kinds", "request_adapter"]
+__all__ = ["KINDS", "QUICK_CALLS", "job_request_type", "public_kinds", "request_adapter"]
 
 KINDS: dict[str, Kind] = {
-    module.KIND.name: module.KIND for module in (solve, fk, ik, isotropic_map, workspace, sleep)
+    module.KIND.name: module.KIND
+    for module in (solve, fk, ik, ik_sweep, isotropic_map, workspace, design, sleep)
 }
+QUICK_CALLS: dict[str, QuickCall] = {
+    module.QUICK.name: module.QUICK for module in (ik, isotropic_map, fk, sleep)
+}  # "sleep" has no route: tests of the quick-call processes
 
 
 def public_kinds(include_hidden: bool = False) -> list[str]:

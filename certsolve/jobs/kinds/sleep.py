@@ -1,5 +1,9 @@
 """The hidden test kind ``sleep`` (``enable_test_kinds`` only): sleeps, reports progress,
-and on request fails, allocates memory, ignores its limits or crashes the worker."""
+and on request fails, allocates memory (at once, or more at every progress report, as a
+search whose memory grows), ignores its limits or crashes the worker.  The hidden quick
+call ``sleep`` (no route; :class:`~certsolve.jobs.quick.QuickCalls` tests) sleeps and
+allocates with a cost estimate of its own, so that a test can make a call outlast its
+estimate."""
 
 from __future__ import annotations
 
@@ -10,9 +14,9 @@ from typing import Any, Literal
 
 from pydantic import Field
 
-from .base import Job, Kind, Params, RunContext
+from .base import Job, Kind, Params, QuickCall, Request, RunContext
 
-__all__ = ["KIND", "SleepJob", "SleepParams", "run_sleep"]
+__all__ = ["KIND", "QUICK", "SleepCall", "SleepJob", "SleepParams", "run_sleep"]
 
 
 class SleepParams(Params):
@@ -20,6 +24,7 @@ class SleepParams(Params):
     crash: bool = Field(default=False, description="exit the worker abruptly halfway")
     fail: str | None = Field(default=None, max_length=200, description="raise this error")
     allocate_mb: int = Field(default=0, ge=0, le=1_000_000, description="allocate memory first")
+    grow_mb: int = Field(default=0, ge=0, le=1000, description="allocate more every tick")
     cooperative: bool = Field(default=True, description="report progress, honour limits")
 
 
@@ -45,6 +50,7 @@ def run_sleep(job: SleepJob, ctx: RunContext) -> Any:
     t0 = time.monotonic()
     ticks = 0
     stopped = None
+    grown = []
     while (elapsed := time.monotonic() - t0) < p.seconds:
         if p.crash and elapsed >= p.seconds / 2:
             os._exit(17)
@@ -55,12 +61,14 @@ def run_sleep(job: SleepJob, ctx: RunContext) -> Any:
             stopped = "timeout"
             break
         ticks += 1
+        if p.grow_mb:
+            grown.append(bytearray(p.grow_mb * 2**20))
         progress = _SleepProgress(boxes=ticks, pending=0, solutions=0, undecided=0, elapsed=elapsed)
         if ctx.progress(progress) is False:
             stopped = "cancelled"
             break
         time.sleep(min(0.02, max(0.0, p.seconds - elapsed)))
-    del ballast
+    del ballast, grown
     return {"slept": time.monotonic() - t0, "ticks": ticks, "stopped_by": stopped}
 
 
@@ -72,4 +80,37 @@ KIND = Kind(
     library=("time", "sleep"),
     summary="test kind: sleep, report progress, optionally crash",
     hidden=True,
+)
+
+
+# -- the hidden quick call --------------------------------------------------------------------
+class SleepCallParams(Params):
+    seconds: float = Field(default=0.0, ge=0, le=3600)
+    allocate_mb: int = Field(default=0, ge=0, le=1_000_000)
+    estimate: float = Field(default=0.0, ge=0, description="what the cost estimate says (s)")
+    fail: str | None = Field(default=None, max_length=200, description="raise ValueError")
+
+
+class SleepCall(Request):
+    params: SleepCallParams = Field(default_factory=SleepCallParams)
+
+
+def call_sleep(req: SleepCall) -> Any:
+    p = req.params
+    ballast = bytearray(p.allocate_mb * 2**20) if p.allocate_mb else None
+    if p.fail:
+        raise ValueError(p.fail)
+    time.sleep(p.seconds)
+    del ballast
+    return {"slept": p.seconds, "pid": os.getpid()}
+
+
+QUICK = QuickCall(
+    name="sleep",
+    model=SleepCall,
+    run=call_sleep,
+    cost=lambda req: req.params.estimate,
+    library=("time", "sleep"),
+    job="a sleep job",
+    cost_field="params.seconds",
 )

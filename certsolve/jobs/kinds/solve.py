@@ -6,7 +6,7 @@ from typing import Any, Literal
 
 from pydantic import Field, field_validator
 
-from .base import Job, Kind, Params, RunContext, library_function, plain_result
+from .base import Job, Kind, Params, RunContext, library_function
 
 __all__ = ["KIND", "MAX_SYSTEM_CHARS", "MAX_VARIABLES", "SolveJob", "SolveParams", "run_solve"]
 
@@ -70,7 +70,7 @@ def run_solve(job: SolveJob, ctx: RunContext) -> Any:
         max_undecided=p.max_undecided,
         max_pending=p.max_pending,
     )
-    return plain_result(result)
+    return result
 
 
 KIND = Kind(

@@ -17,11 +17,12 @@ from .base import (
     Params,
     RunContext,
     Wrench,
+    angles_schema,
     call_supported,
+    check_angles,
     check_count,
     library_function,
     orientation_arg,
-    plain_result,
     robot_model,
 )
 from .isotropic_map import check_external
@@ -49,9 +50,18 @@ class WorkspaceParams(Params):
                 raise ValueError(f"box[{i}]: need lo <= hi")
         return v
 
-    def check_robot(self, robot: RobotSpec) -> None:
+    @classmethod
+    def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
+        return {
+            "box": 3 if dof == 6 else 2,
+            "external": dof,
+            "orientation": angles_schema(dof, ranges=True),
+        }
+
+    def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_count(self.box, robot.dim, "box", "intervals, [lo, hi] per axis")
         check_external(robot, self.external)
+        check_angles(robot, self.orientation, "orientation", ranges=True)
 
 
 class WorkspaceJob(Job):
@@ -76,7 +86,7 @@ def run_workspace(job: WorkspaceJob, ctx: RunContext) -> Any:
         eps_angle=p.eps_angle,
         external=p.external,
     )
-    return plain_result(result)
+    return result
 
 
 KIND = Kind(
