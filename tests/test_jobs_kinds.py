@@ -150,5 +150,5 @@ def test_results_are_truncated(service):
     )
     row = run_one(service, {"kind": "solve", "system": text, "params": {"max_boxes": 5}})
     res = json.loads(row.result)
-    assert row.status == "done" and res["status"] == "incomplete"
+    assert row.status == "done" and res["status"] == "max_boxes"
     assert len(res["pending"]) == 3 and res["truncated"]["pending"] > 3

@@ -207,7 +207,7 @@ def test_cancel_running_solve(server):
     assert j["status"] == "cancelled"
     # stopped by the progress callback (not killed): the partial result is there
     res = j["result"]
-    assert res["stats"]["stopped_by"] == "cancelled" and res["status"] == "incomplete"
+    assert res["stats"]["stopped_by"] == "cancelled" and res["status"] == "cancelled"
     assert res["pending"] and len(res["solutions"]) == j["progress"]["solutions"]
     r = server.http.get(f"/v1/jobs/{job_id}/result")
     assert r.status_code == 200

@@ -13,12 +13,13 @@
 * :mod:`.plots`      -- heat maps and pavings (matplotlib)
 * :mod:`.wedge`      -- facet candidates: generalised cross products
 
-Layering: this package imports :mod:`certsolve.interval` and :mod:`certsolve.robot` only.
+Layering: this package imports :mod:`certsolve.interval`, :mod:`certsolve.robot`, and the
+search driver of :mod:`certsolve.solver` (for the certified paving).
 
 Entry points: :func:`isotropic_force`, :func:`isotropic_map`, :func:`certified_workspace`.
 """
 
-from .certified import CertifiedWorkspace, WorkspaceProgress, certified_workspace
+from .certified import CertifiedWorkspace, PavingStep, certified_workspace
 from .ellipse import CentredEllipsoid, largest_centred_ellipsoid
 from .isotropic import IsotropicForceResult, isotropic_force, isotropic_values
 from .krut import krut_polytope
@@ -33,7 +34,7 @@ __all__ = [
     "ForcePolytope",
     "IsotropicForceResult",
     "IsotropicMap",
-    "WorkspaceProgress",
+    "PavingStep",
     "certified_workspace",
     "external_wrench",
     "force_section",

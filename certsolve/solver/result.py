@@ -9,10 +9,13 @@ A :class:`SolveResult` answers "where are the solutions of the system in the dom
   than ``eps`` without a proof (singular or tangent solutions, reason ``"eps"``), a proven
   solution whose box straddles the domain boundary (``"boundary"``), or one whose extra
   constraints could not be decided (``"constraint"``).
-* ``pending``: boxes not explored because a limit (time, boxes) stopped the search.
+* ``pending``: boxes not explored because a limit (time, boxes, solutions) or the caller
+  stopped the search.
 
-``status == "complete"`` means nothing is pending: every solution of the system in the
-domain lies in a solution box or an undecided box.  Nothing is ever silently dropped.
+``status`` is a :class:`~.search.SearchStatus`: ``"complete"`` means nothing is pending:
+every solution of the system in the domain lies in a solution box or an undecided box;
+otherwise it names what stopped the search (``"timeout"``, ``"max_boxes"``,
+``"max_solutions"``, ``"cancelled"``).  Nothing is ever silently dropped.
 """
 
 from __future__ import annotations
@@ -20,6 +23,8 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
+
+from .search import SearchStats, SearchStatus
 
 __all__ = ["Solution", "Undecided", "Stats", "SolveResult"]
 
@@ -72,14 +77,37 @@ class Undecided:
 @dataclass
 class Stats:
     boxes: int = 0  # boxes contracted
-    rounds: int = 0  # batched rounds
+    rounds: int = 0  # batches processed
     bisections: int = 0
     certified: int = 0  # Krawczyk proofs (before removing duplicates)
     duplicates: int = 0
     max_pending: int = 0
     time: float = 0.0  # wall seconds
+    cpu: float = 0.0  # CPU seconds, this process and every worker task
+    executor: str = "serial"  # "serial" | "processes" | "dask"
     workers: int = 1
-    stopped_by: str | None = None  # "timeout" | "max_boxes" | "max_solutions" | "cancelled"
+    tasks: int = 0  # worker tasks run
+    resubmitted: int = 0  # task slices handed out again after a lost worker
+    stopped_by: str | None = None  # the status when not complete (older name)
+
+    @classmethod
+    def of(cls, search: SearchStats, step: Stats, status: SearchStatus) -> Stats:
+        """The driver's counters and the solver step's, in one record."""
+        return cls(
+            boxes=search.boxes,
+            rounds=search.batches,
+            bisections=step.bisections,
+            certified=step.certified,
+            duplicates=step.duplicates,
+            max_pending=search.max_pending,
+            time=search.time,
+            cpu=search.cpu,
+            executor=search.executor,
+            workers=search.workers,
+            tasks=search.tasks,
+            resubmitted=search.resubmitted,
+            stopped_by=None if status == SearchStatus.COMPLETE else str(status),
+        )
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -88,7 +116,7 @@ class Stats:
 @dataclass
 class SolveResult:
     variables: list[str]
-    status: str  # "complete" | "incomplete"
+    status: SearchStatus
     solutions: list[Solution] = field(default_factory=list)
     undecided: list[Undecided] = field(default_factory=list)
     pending_lo: np.ndarray | None = None
@@ -104,7 +132,7 @@ class SolveResult:
 
     def to_dict(self) -> dict:
         return {
-            "status": self.status,
+            "status": str(self.status),
             "variables": list(self.variables),
             "solutions": [s.to_dict() for s in self.solutions],
             "undecided": [u.to_dict() for u in self.undecided],
