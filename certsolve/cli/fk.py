@@ -11,7 +11,16 @@ from ..kinematics.fk_systems import FORMULATIONS
 from ..kinematics.tracking import Tracker
 from ..robot.geometry import parse_pose
 from ..robot.model import Robot
-from .common import CliError, parse_floats, print_json, progress_reporter
+from .common import (
+    CliError,
+    add_executor_options,
+    check_limits,
+    describe_run,
+    executor_from_args,
+    parse_floats,
+    print_json,
+    progress_reporter,
+)
 
 
 def register(sub) -> None:
@@ -37,12 +46,16 @@ def register(sub) -> None:
     p.add_argument("--eps", type=float, default=1e-8, help="width below which boxes stop")
     p.add_argument("--timeout", type=float, default=None, help="time limit (s)")
     p.add_argument("--max-boxes", type=int, default=None, help="limit on processed boxes")
-    p.add_argument("--workers", type=int, default=1, help="worker processes")
+    p.add_argument(
+        "--max-solutions", type=int, default=None, help="stop after this many certified poses"
+    )
+    add_executor_options(p)
     p.add_argument("--verify", action="store_true", help="re-prove solutions with mpmath")
     p.add_argument(
         "--seed-planar",
         action="store_true",
-        help="almost-planar robots: search around the planar solutions first",
+        help="almost-planar robots: search around the planar solutions first (with "
+        "--workers/--scheduler and --verify like the plain search)",
     )
     p.add_argument(
         "--seeded-only",
@@ -71,9 +84,26 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("--seeded-only needs --seed-planar")
     if not args.eps > 0:
         raise CliError("--eps must be positive")
-    if args.workers < 1:
-        raise CliError("--workers must be at least 1")
+    check_limits(args)
     if args.near is not None:
+        ignored = [
+            flag
+            for flag, value in (
+                ("--seed-planar", args.seed_planar),
+                ("--verify", args.verify),
+                ("--timeout", args.timeout is not None),
+                ("--max-boxes", args.max_boxes is not None),
+                ("--max-solutions", args.max_solutions is not None),
+                ("--workers", args.workers is not None),
+                ("--scheduler", args.scheduler is not None),
+            )
+            if value
+        ]
+        if ignored:
+            raise CliError(
+                f"{', '.join(ignored)}: options of the all-solutions search, not of a "
+                "tracking step (--near)"
+            )
         near = parse_pose(robot.dof, args.near)
         res = Tracker(robot, args.formulation).step(u, near, args.half_width)
         if args.json:
@@ -81,6 +111,7 @@ def run(args: argparse.Namespace) -> int:
         else:
             print(format_track(robot, res))
         return 0
+    executor = executor_from_args(args)
     progress, stop = progress_reporter(not args.json)
     try:
         res = forward_kinematics(
@@ -90,10 +121,11 @@ def run(args: argparse.Namespace) -> int:
             eps=args.eps,
             timeout=args.timeout,
             max_boxes=args.max_boxes,
+            max_solutions=args.max_solutions,
             seed_planar=args.seed_planar,
             seeded_only=args.seeded_only,
             progress=progress,
-            workers=args.workers,
+            executor=executor,
             verify=args.verify,
         )
     finally:
@@ -125,8 +157,7 @@ def format_result(robot, res) -> str:
     lines = [
         f"{robot.name}: {res.formulation}, u = {np.array2string(res.u, precision=4)}",
         f"{res.status}: {len(res.solutions)} certified pose(s), {len(res.undecided)} undecided, "
-        f"{len(res.pending)} pending; {st.boxes} boxes, {st.time:.2f} s"
-        + (f", stopped by {st.stopped_by}" if st.stopped_by else ""),
+        f"{len(res.pending)} pending; {st.boxes} boxes, {st.time:.2f} s, {describe_run(st)}",
     ]
     if res.seeding:
         sd = res.seeding

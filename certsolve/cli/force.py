@@ -17,7 +17,15 @@ import sys
 import numpy as np
 
 from ..robot import Robot, parse_pose
-from .common import CliError, parse_floats, print_json
+from .common import (
+    CliError,
+    add_executor_options,
+    check_limits,
+    describe_run,
+    executor_from_args,
+    parse_floats,
+    print_json,
+)
 
 
 def register(sub) -> None:
@@ -89,6 +97,7 @@ def register(sub) -> None:
     )
     w.add_argument("--timeout", type=float, default=None, help="time limit in seconds")
     w.add_argument("--max-boxes", type=int, default=None, help="limit on processed boxes")
+    add_executor_options(w)
     w.add_argument("--plot", metavar="PNG", default=None, help="picture of the paving (PNG)")
     w.add_argument("--no-boxes", action="store_true", help="omit the box lists from --json")
     w.add_argument("--json", action="store_true", help="print one JSON object")
@@ -275,10 +284,8 @@ def run_workspace(args: argparse.Namespace) -> int:
         raise CliError("--eps must be a positive number (cm)")
     if not (np.isfinite(args.eps_angle) and args.eps_angle > 0):
         raise CliError("--eps-angle must be a positive number (degrees)")
-    if args.timeout is not None and not args.timeout > 0:
-        raise CliError("--timeout must be positive (seconds)")
-    if args.max_boxes is not None and args.max_boxes < 1:
-        raise CliError("--max-boxes must be at least 1")
+    check_limits(args)
+    executor = executor_from_args(args)
     d = robot.dim
     box = parse_floats(args.box, "--box", 2 * d)
     b = np.array(box).reshape(d, 2)
@@ -299,6 +306,7 @@ def run_workspace(args: argparse.Namespace) -> int:
             eps_angle=args.eps_angle,
             external=external,
             max_boxes=args.max_boxes,
+            executor=executor,
         )
     finally:
         stop()
@@ -324,7 +332,7 @@ def format_workspace(ws, plot) -> str:
         f"{total:.6g}), {len(ws.inside)} boxes",
         f"  outside {len(ws.outside)} boxes, boundary {len(ws.boundary)} boxes, "
         f"pending {len(ws.pending)}",
-        f"  {ws.boxes} boxes processed in {ws.time:.3f} s",
+        f"  {ws.boxes} boxes processed in {ws.time:.3f} s, {describe_run(ws.stats)}",
     ]
     if plot:
         lines.append(f"  wrote {plot}")
@@ -337,8 +345,8 @@ def _progress(enabled: bool):
 
     def update(p):
         sys.stderr.write(
-            f"\rpaving: {p.boxes} boxes, {p.pending} pending, {p.inside} inside, "
-            f"{100 * p.inside_share:.1f} % proven, {p.elapsed:.1f} s   "
+            f"\rpaving: {p.boxes} boxes, {p.pending} pending, {p.solutions} inside, "
+            f"{100 * p.extra['inside_share']:.1f} % proven, {p.elapsed:.1f} s   "
         )
         sys.stderr.flush()
 

@@ -6,7 +6,15 @@ import argparse
 
 from ..expr.minibex import load_minibex
 from ..solver import Solver
-from .common import print_json, progress_reporter
+from .common import (
+    CliError,
+    add_executor_options,
+    check_limits,
+    describe_run,
+    executor_from_args,
+    print_json,
+    progress_reporter,
+)
 
 
 def register(sub) -> None:
@@ -20,7 +28,10 @@ def register(sub) -> None:
     p.add_argument("--eps", type=float, default=1e-8, help="width below which boxes stop")
     p.add_argument("--timeout", type=float, default=None, help="time limit in seconds")
     p.add_argument("--max-boxes", type=int, default=None, help="limit on processed boxes")
-    p.add_argument("--workers", type=int, default=1, help="worker processes")
+    p.add_argument(
+        "--max-solutions", type=int, default=None, help="stop after this many certified solutions"
+    )
+    add_executor_options(p)
     p.add_argument("--verify", action="store_true", help="re-prove solutions with mpmath")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
@@ -28,9 +39,9 @@ def register(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if not args.eps > 0:
-        raise ValueError("--eps must be positive")
-    if args.workers < 1:
-        raise ValueError("--workers must be at least 1")
+        raise CliError("--eps must be positive")
+    check_limits(args)
+    executor = executor_from_args(args)
     system = load_minibex(args.file)
     solver = Solver(system, eps=args.eps)
     progress, stop = progress_reporter(not args.json)
@@ -38,7 +49,8 @@ def run(args: argparse.Namespace) -> int:
         result = solver.solve(
             timeout=args.timeout,
             max_boxes=args.max_boxes,
-            workers=args.workers,
+            max_solutions=args.max_solutions,
+            executor=executor,
             verify=args.verify,
             progress=progress,
         )
@@ -56,8 +68,7 @@ def format_result(name: str, result) -> str:
     lines = [
         f"{name}: {result.status}, {len(result.solutions)} solution(s), "
         f"{len(result.undecided)} undecided, {len(result.pending)} pending",
-        f"  {st.boxes} boxes, {st.time:.3f} s, {st.workers} worker(s)"
-        + (f", stopped by {st.stopped_by}" if st.stopped_by else ""),
+        f"  {st.boxes} boxes, {st.time:.3f} s, {describe_run(st)}",
     ]
     names = result.variables
     width = max(len(v) for v in names)

@@ -43,7 +43,7 @@ class _DaskPool(TaskPool):
         distributed = import_distributed()
         self.client = client
         self._owned = owned
-        self._as_completed = distributed.as_completed()
+        self._as_completed = distributed.as_completed(loop=client.loop)
         self._lost_types = _lost_errors()
         try:
             client.wait_for_workers(1, timeout=worker_timeout)

@@ -7,14 +7,19 @@
 
 The two executors with workers share one loop (:class:`TaskExecutor`):
 
-1. a **serial warm-up** of ``warmup`` seconds in this process: a search that ends within it
-   never pays for workers (starting processes costs 1-2 s), then the buffer is grown until
-   every slot gets work;
-2. **tasks**: a slice of the buffer (at most ``task_boxes`` boxes), what the step already
+1. a **serial warm-up** of ``warmup`` seconds in this process: a search that ends within
+   half of it never starts workers (starting processes costs 0.5-2 s), one that ends within
+   it never sends them a task; the workers start during the second half; then the buffer is
+   grown until it holds ``grow`` full batches for every slot (a batch of 5 boxes costs
+   nearly what one of 500 does: the numpy calls are the same), so a search too small to
+   fill the workers' batches stays serial;
+2. **tasks**: a slice of the buffer (an even share, at least a batch, at most
+   ``slice_size`` boxes, default two batches), what the step already
    knows (e.g. certified solutions, so that workers prune them instead of proving them
-   again) and limits (``task_seconds`` of work, the remaining share of ``max_boxes`` and
-   ``max_solutions``).  A task runs the batch loop on its slice (:func:`~.search.run_task`)
-   and returns its records and its unfinished boxes, which go back into the buffer;
+   again) and limits (``task_seconds`` of work, at most ``task_max_boxes`` boxes, the
+   remaining share of ``max_boxes`` and ``max_solutions``).  A task runs the batch loop on
+   its slice (:func:`~.search.run_task`) and returns its records and its unfinished
+   boxes, which go back into the buffer;
 3. the driver **waits on futures** (never polls), merges each result, reports progress,
    hands out more work, and checks the limits.  A task whose worker was lost gives its
    boxes back to the buffer; they are handed out again (up to ``max_attempts`` times).
@@ -112,37 +117,53 @@ class TaskExecutor(ABC):
         *,
         warmup: float = 2.0,
         task_seconds: float = 1.0,
-        task_boxes: int = 1024,
+        slice_size: int | None = None,
+        task_max_boxes: int | None = None,
+        grow: float = 1.0,
         max_attempts: int = 4,
     ):
         if not warmup >= 0:
             raise ValueError("warmup must be >= 0 (seconds)")
         if not task_seconds > 0:
             raise ValueError("task_seconds must be positive")
-        if int(task_boxes) < 1:
-            raise ValueError("task_boxes must be >= 1")
+        if slice_size is not None and int(slice_size) < 1:
+            raise ValueError("slice_size must be >= 1")
+        if task_max_boxes is not None and int(task_max_boxes) < 1:
+            raise ValueError("task_max_boxes must be >= 1")
         self.warmup = float(warmup)
         self.task_seconds = float(task_seconds)
-        self.task_boxes = int(task_boxes)
+        self.slice_size = slice_size
+        self.task_max_boxes = task_max_boxes
+        if not grow >= 0:
+            raise ValueError("grow must be >= 0 (batches per slot)")
+        self.grow = float(grow)
         self.max_attempts = int(max_attempts)
 
     @abstractmethod
     def open(self, step: Step) -> TaskPool: ...
 
     def run(self, search: Search) -> None:
-        search.run_serial(until=self.warmup)
-        if search.stopped() or not len(search.state.stack):
+        def done() -> bool:
+            return search.stopped() or not len(search.state.stack)
+
+        search.run_serial(until=self.warmup / 2)
+        if done():
             return  # done (or stopped) before the workers were needed
-        pool = self.open(search.step)
+        pool = self.open(search.step)  # workers start while the warm-up goes on
         try:
+            search.run_serial(until=self.warmup)
+            if done():
+                return
             search.stats.workers = pool.workers
-            search.run_serial(grow_to=2 * pool.slots)
+            search.run_serial(grow_to=math.ceil(self.grow * pool.slots * search.step.batch_size))
             self._loop(search, pool)
         finally:
             pool.close()
 
     def _loop(self, search: Search, pool: TaskPool) -> None:
         step, state = search.step, search.state
+        batch = step.batch_size
+        most = 2 * batch if self.slice_size is None else self.slice_size
         running: dict[Any, tuple[np.ndarray, np.ndarray, int]] = {}
         retry: deque[tuple[np.ndarray, np.ndarray, int]] = deque()  # slices of lost tasks
         while True:
@@ -154,11 +175,12 @@ class TaskExecutor(ABC):
                     if retry:
                         lo, hi, attempt = retry.popleft()
                     else:
-                        free = pool.slots - len(running)
-                        share = math.ceil(len(state.stack) / free)
-                        lo, hi = search.take(min(self.task_boxes, max(1, share)))
+                        # an even share, but a full batch if there is one: a small batch
+                        # costs nearly what a full one does (numpy calls per batch)
+                        share = math.ceil(len(state.stack) / (pool.slots - len(running)))
+                        lo, hi = search.take(min(most, max(share, batch)))
                         attempt = 1
-                    limits = search.task_limits(pool.slots, self.task_seconds)
+                    limits = search.task_limits(pool.slots, self.task_seconds, self.task_max_boxes)
                     running[pool.submit(lo, hi, known, limits)] = (lo, hi, attempt)
             if not running:
                 break
@@ -187,6 +209,11 @@ class TaskExecutor(ABC):
 
 
 # -- local processes ------------------------------------------------------------------------
+def _load(step_bytes: bytes) -> None:
+    """Start-up task: the imports the step needs, while the driver's warm-up goes on."""
+    pickle.loads(step_bytes)
+
+
 def _run_pickled(step_bytes: bytes, lo, hi, known, limits: Limits) -> TaskResult:
     """A task in a worker process: the step travels pickled with every task (a few
     hundred kB, unpickled in milliseconds), so workers keep no state between tasks."""
@@ -207,13 +234,31 @@ class _ProcessPool(TaskPool):
         self._ready: deque = deque()
         self._restarts = 0
         self._max_restarts = max_restarts
+        self._start()
+
+    def _start(self) -> None:
+        self._pool = ProcessPoolExecutor(self.workers, mp_context=get_context("spawn"))
+        for _ in range(self.workers):
+            self._pool.submit(_load, self._step)
 
     def submit(self, lo, hi, known, limits):
         if self._pool is None:
-            self._pool = ProcessPoolExecutor(self.workers, mp_context=get_context("spawn"))
-        fut = self._pool.submit(_run_pickled, self._step, lo, hi, known, limits)
+            self._start()
+        try:
+            fut = self._pool.submit(_run_pickled, self._step, lo, hi, known, limits)
+        except BrokenProcessPool:  # a worker died while no task was running
+            self._restart()
+            if self._restarts > self._max_restarts:
+                raise
+            fut = self._pool.submit(_run_pickled, self._step, lo, hi, known, limits)
         self._running[fut] = self._generation
         return fut
+
+    def _restart(self) -> None:
+        self._pool.shutdown(wait=False, cancel_futures=True)
+        self._generation += 1
+        self._restarts += 1
+        self._start()
 
     def next_done(self):
         if not self._ready:
@@ -224,11 +269,8 @@ class _ProcessPool(TaskPool):
         try:
             return fut, fut.result(), None
         except BrokenProcessPool as exc:
-            if generation == self._generation and self._pool is not None:
-                self._pool.shutdown(wait=False, cancel_futures=True)
-                self._pool = None
-                self._generation += 1
-                self._restarts += 1
+            if generation == self._generation:
+                self._restart()
             return fut, None, exc
         except Exception as exc:  # noqa: BLE001 - handed to the driver
             return fut, None, exc

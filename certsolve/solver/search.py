@@ -293,13 +293,15 @@ class Search:
         self.stats.max_pending = max(self.stats.max_pending, self.pending)
         self._task_cpu += result.cpu
 
-    def task_limits(self, slots: int, seconds: float) -> Limits:
-        """Limits for one task when ``slots`` tasks share the remaining budget."""
+    def task_limits(self, slots: int, seconds: float, boxes: int | None = None) -> Limits:
+        """Limits for one task of at most ``seconds`` and ``boxes`` when ``slots`` tasks
+        share the remaining budget."""
         lim = self.limits
         t = self.remaining_time()
-        boxes = sols = None
+        sols = None
         if lim.max_boxes is not None:
-            boxes = max(1, math.ceil((lim.max_boxes - self.boxes()) / slots))
+            share = max(1, math.ceil((lim.max_boxes - self.boxes()) / slots))
+            boxes = share if boxes is None else min(boxes, share)
         if lim.max_solutions is not None:
             sols = max(1, lim.max_solutions - self.solutions())
         return Limits(
