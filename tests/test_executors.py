@@ -33,7 +33,12 @@ def client():
     distributed = pytest.importorskip("distributed")
     import dask
 
-    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+    config = {
+        "distributed.scheduler.allowed-failures": 0,
+        # Dask's MALLOC_TRIM_THRESHOLD_=65536 doubles the time of numpy-heavy batches
+        "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+    }
+    with dask.config.set(config):
         cluster = distributed.LocalCluster(
             n_workers=2,
             threads_per_worker=1,

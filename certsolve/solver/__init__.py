@@ -16,8 +16,10 @@
 * :mod:`.verify`          -- independent re-proof of certificates with ``mpmath.iv``
 * :mod:`.result`          -- :class:`SolveResult` and friends (plain, JSON-ready data)
 
-Layers inside: search <- executors <- dask_executor; search <- branch_and_prune.  The driver
-knows nothing about systems; the solver step knows nothing about executors.
+Inside: search <- executors <- dask_executor (imported only when a Dask client or address is
+given), and search, executors <- branch_and_prune.  The driver knows nothing about systems:
+the solve step, the workspace paving (:mod:`certsolve.force.certified`) and the IK search
+(:mod:`certsolve.kinematics.ik_search`) plug into it the same way.
 """
 
 from .branch_and_prune import SearchState, Solver, solve
