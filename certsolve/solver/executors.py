@@ -154,8 +154,10 @@ class TaskExecutor(ABC):
             search.run_serial(until=self.warmup)
             if done():
                 return
-            search.stats.workers = pool.workers
             search.run_serial(grow_to=math.ceil(self.grow * pool.slots * search.step.batch_size))
+            if done():
+                return
+            search.stats.workers = pool.workers
             self._loop(search, pool)
         finally:
             pool.close()
