@@ -309,12 +309,16 @@ def search_controls(
     batch_size: int = 64,
 ) -> SearchOutcome:
     """Algorithm 1 over the control box ``[ulo, uhi]`` (see the module docstring)."""
+    with np.errstate(all="ignore"):
+        return _search(robot, enc, ulo, uhi, max_boxes, timeout, eps, box_radius, batch_size)
+
+
+def _search(robot, enc, ulo, uhi, max_boxes, timeout, eps, box_radius, batch_size):
     t0 = time.perf_counter()
     ulo = np.asarray(ulo, dtype=float)
     uhi = np.asarray(uhi, dtype=float)
     # tension domain: image of the control box, within the tension limits (outward)
-    with np.errstate(all="ignore"):
-        tlo, thi = tension_range(robot, enc, ulo, uhi)
+    tlo, thi = tension_range(robot, enc, ulo, uhi)
     tlo = np.maximum(tlo, robot.tau_min)
     thi = np.minimum(thi, robot.tau_max)
     if np.any(~(tlo <= thi)) or np.any(ulo > uhi):  # proven: nothing to search
