@@ -39,7 +39,7 @@ def test_time_limit_and_bounded_output(tmp_path):
     )  # fmt: skip
     assert code == 0
     d = json.loads(out)
-    assert d["status"] == "incomplete" and d["stats"]["stopped_by"] == "timeout"
+    assert d["status"] == "timeout" and d["stats"]["stopped_by"] == "timeout"
     assert len(d["pending"]) <= 50 and len(d["pending_boxes"]) == len(d["pending"])
     assert sum(d["pending_boxes"]) == d["pending_total"]
     assert len(d["undecided"]) <= 20

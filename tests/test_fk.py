@@ -21,6 +21,7 @@ from certsolve.kinematics import (
 )
 from certsolve.kinematics.seeding import _subtract
 from certsolve.robot import Pose, Robot, platform_points
+from certsolve.solver import ProcessExecutor
 
 ROBOTS = "examples/robots"
 
@@ -243,7 +244,15 @@ def test_seeded_search_equals_the_plain_search():
     assert len(plain.solutions) == len(seeded.solutions)
     assert seeded.seeding["rest_of_domain_searched"]
     only = forward_kinematics(robot, u, seed_planar=True, seeded_only=True, timeout=600)
-    assert only.status == "incomplete" and not only.seeding["rest_of_domain_searched"]
+    assert only.status == "cancelled" and not only.seeding["rest_of_domain_searched"]
+    assert only.pending  # the rest of the domain, not searched
+    # the seeded search on worker processes, with --verify: the same poses, re-proven
+    par = forward_kinematics(
+        robot, u, seed_planar=True, timeout=600, verify=True, executor=ProcessExecutor(2, warmup=0)
+    )
+    assert par.status == "complete" and par.stats.executor == "processes"
+    assert len(par.solutions) == len(plain.solutions)
+    assert all(s.verified for s in par.solutions)
 
 
 # -- tracking ---------------------------------------------------------------------------------

@@ -140,7 +140,7 @@ def test_progress_can_stop_and_timeout():
         return False
 
     ws = certified_workspace(robot, 100.0, [-100, 100, -100, 100], 0.5, progress=progress, batch=64)
-    assert ws.status == "stopped" and len(ws.pending) > 0 and len(seen) == 1
+    assert ws.status == "cancelled" and len(ws.pending) > 0 and len(seen) == 1
     assert seen[0] == (1, len(ws.pending))  # the root box, split in two
     check_paving(robot, ws, np.random.default_rng(5), n=2)
     ws = certified_workspace(robot, 100.0, [-100, 100, -100, 100], 1e-3, timeout=0.2)

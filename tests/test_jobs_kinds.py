@@ -162,7 +162,7 @@ def test_results_are_truncated(service):
     )
     row = run_one(service, {"kind": "solve", "system": text, "params": {"max_boxes": 5}})
     res = json.loads(row.result)
-    assert row.status == "done" and res["status"] == "incomplete"
+    assert row.status == "done" and res["status"] == "max_boxes"
     assert len(res["pending"]) == 3 and res["truncated"]["pending"] > 3
 
 
@@ -188,7 +188,7 @@ def test_stopped_search_keeps_a_bounded_result(service):
         service, {"kind": "solve", "system": LINE, "params": {"eps": 1e-12, "timeout": 1}}
     )
     res = json.loads(row.result)
-    assert row.status == "done" and res["status"] == "incomplete"
+    assert row.status == "done" and res["status"] == "timeout"
     assert res["stats"]["stopped_by"] == "timeout"
     listed, total = listed_and_counted(res)
     assert listed <= service.settings.max_result_items < total
@@ -259,3 +259,13 @@ def test_housekeeping_purges_old_finished_jobs(tmp_path):
         assert Housekeeper(svc.store, settings).run_once() == 1
         assert svc.store.get(old) is None and svc.store.get(new).status == "queued"
         assert svc.store.file_sizes()["wal"] == 0
+
+
+def test_progress_dict_reads_the_driver_extra():
+    """The workspace paving reports inside / inside_share in the driver's ``extra``."""
+    from certsolve.solver.search import Progress
+
+    p = Progress(boxes=9, pending=3, solutions=2, undecided=0, elapsed=0.5)
+    p.extra.update({"inside": 2, "inside_share": 0.25})
+    d = progress_dict(p, 0.0)
+    assert d["boxes"] == 9 and d["inside"] == 2 and d["inside_share"] == 0.25

@@ -214,10 +214,10 @@ def test_double_root_is_never_certified():
     assert np.all(hull_lo <= [0.0, 1.0]) and np.all([0.0, 1.0] <= hull_hi)
 
 
-def test_limits_report_pending_boxes_and_incomplete_status():
+def test_limits_report_pending_boxes_and_the_limit_as_status():
     system, sols = product_system(True)
     res = solve(system, max_boxes=5)
-    assert res.status == "incomplete" and res.stats.stopped_by == "max_boxes"
+    assert res.status == "max_boxes" and res.stats.stopped_by == "max_boxes"
     assert len(res.pending) > 0
     # nothing is lost: every known solution is in a certified, undecided or pending box
     boxes = [(s.lo, s.hi) for s in res.solutions] + [(u.lo, u.hi) for u in res.undecided]
@@ -235,21 +235,21 @@ def test_progress_callback_can_cancel():
         return len(seen) < 3
 
     res = solve(system, progress=progress)
-    assert res.stats.stopped_by == "cancelled" and res.status == "incomplete"
+    assert res.stats.stopped_by == "cancelled" and res.status == "cancelled"
     assert len(seen) == 3
 
 
-@pytest.mark.parametrize("serial_seconds", [0.0, 30.0])
-def test_parallel_workers_find_the_same_solutions(serial_seconds):
+@pytest.mark.parametrize("warmup", [0.0, 30.0])
+def test_parallel_workers_find_the_same_solutions(warmup):
     """With no serial warm-up every box goes through the workers; with the default one
     this small system is done before they are needed (and says so)."""
-    from certsolve.solver import Solver
-    from certsolve.solver.parallel import solve_parallel
+    from certsolve.solver import ProcessExecutor
 
     system, sols = product_system(True)
     serial = solve(system)
-    par = solve_parallel(Solver(system), workers=2, serial_seconds=serial_seconds)
-    assert par.stats.workers == (2 if serial_seconds == 0.0 else 1)
+    par = solve(system, executor=ProcessExecutor(2, warmup=warmup, grow=0))
+    assert par.stats.workers == (2 if warmup == 0.0 else 1)
+    assert (par.stats.tasks > 0) == (warmup == 0.0)
     assert par.status == serial.status == "complete"
     assert len(par.solutions) == len(serial.solutions) == len(sols)
     for s in serial.solutions:

@@ -1,14 +1,15 @@
 """Bounded answers: undecided and pending boxes listed as hulls with counts, never lost."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from certsolve.expr.minibex import parse_minibex
-from certsolve.solver import SearchState, Solver, solve
+from certsolve.expr.minibex import load_minibex, parse_minibex
+from certsolve.solver import Limits, Solver, run_search, solve
 from certsolve.solver.summary import chunk_hulls, merge_touching, summarize
 
 
@@ -95,7 +96,7 @@ def test_the_cap_makes_a_result_incomplete_and_says_so():
     """tan(x) = 1 on the real line: infinitely many solutions and undecided boxes far out."""
     system = parse_minibex("Variables x; Constraints tan(x) = 1; end")
     r = solve(system, eps=1e-8, max_boxes=20000, max_undecided=5)
-    assert r.status == "incomplete"
+    assert r.status == "max_boxes"
     assert len(r.undecided) <= 5
     d = r.to_dict()
     assert d["undecided_total"] == sum(u["boxes"] for u in d["undecided"]) + d["undecided_dropped"]
@@ -109,11 +110,11 @@ def test_pending_hulls_cover_the_stack():
         "Variables x in [-1e6, 1e6]; y in [-1e6, 1e6]; Constraints x - y = 0; 2*x - 2*y = 0; end"
     )
     solver = Solver(system, eps=1e-12, max_pending=7, max_undecided=5)
-    state = SearchState.start(system.domain, 2)
-    solver.run(state, max_boxes=20000)
-    raw_lo, raw_hi = state.stack.snapshot()
-    r = solver.result(state)
-    assert r.status == "incomplete" and r.pending_total == raw_lo.shape[0] > 7
+    dom = system.domain
+    run = run_search(solver, dom[:, 0][None], dom[:, 1][None], limits=Limits(max_boxes=20000))
+    raw_lo, raw_hi = run.state.stack.snapshot()
+    r = solver.result(run)
+    assert r.status == "max_boxes" and r.pending_total == raw_lo.shape[0] > 7
     assert r.pending_lo.shape == (7, 2) and r.pending_boxes.sum() == r.pending_total
     inside = np.all(
         (r.pending_lo[None] <= raw_lo[:, None]) & (raw_hi[:, None] <= r.pending_hi[None]), axis=2
@@ -132,3 +133,13 @@ def test_complete_results_list_everything():
     assert r.undecided_total == sum(u.boxes for u in r.undecided) >= 1
     with pytest.raises(ValueError, match="max_pending"):
         Solver(parse_minibex("Variables x; Constraints x = 1; end"), max_pending=0)
+
+
+def test_a_complete_search_with_unlisted_undecided_boxes_is_truncated():
+    """Nothing pending, but the double root's undecided boxes are only counted."""
+    system = load_minibex(Path(__file__).parent.parent / "examples/systems/double-root.mbx")
+    full = solve(system)
+    assert full.status == "complete" and full.undecided_total > 0
+    cut = solve(system, max_undecided=0)
+    assert cut.status == "truncated" and cut.pending_total == 0
+    assert cut.undecided == [] and cut.undecided_dropped == full.undecided_total

@@ -1,5 +1,6 @@
 """Helpers shared by the sub-commands: user errors, option validation, number lists, JSON
-output, progress lines, and time limits on a whole command.
+output, progress lines, time limits on a whole command, and where a search runs (``--workers`` /
+``--scheduler``).
 
 Options that the job service also takes are validated by the service's own pydantic models
 (:func:`validated`), so ``certsolve fk --tau-max -5`` is refused exactly as
@@ -11,7 +12,9 @@ each option's ``dest`` is the model's field name (:func:`option_names`).
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
+import os
 import sys
 import time
 from collections.abc import Callable, Mapping
@@ -20,6 +23,9 @@ from typing import Any, TypeVar
 __all__ = [
     "CliError",
     "Deadline",
+    "add_executor_options",
+    "describe_run",
+    "executor_from_args",
     "user_errors",
     "option_names",
     "validated",
@@ -30,6 +36,8 @@ __all__ = [
 ]
 
 M = TypeVar("M")
+
+SCHEDULER_ENV = "CERTSOLVE_SCHEDULER"
 
 
 class CliError(Exception):
@@ -137,6 +145,75 @@ def parse_floats(text: str, what: str, count: int | None = None) -> list[float]:
     if count is not None and len(vals) != count:
         raise CliError(f"{what}: expected {count} numbers, got {len(vals)}")
     return vals
+
+
+def add_executor_options(parser: argparse.ArgumentParser) -> None:
+    """``--workers`` and ``--scheduler`` (read by :func:`executor_from_args`)."""
+    parser.add_argument(
+        "--workers",
+        default=None,
+        metavar="N|auto",
+        help="local worker processes: an integer >= 1, or auto = the available cores "
+        "(default: auto; the first 2 s run in this process, so small problems never start "
+        "workers)",
+    )
+    parser.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="tcp://HOST:PORT",
+        help=f"run on the Dask cluster of this scheduler (default: ${SCHEDULER_ENV} if set; "
+        "needs pip install 'certsolve[distributed]')",
+    )
+
+
+def executor_from_args(args: argparse.Namespace) -> str | int:
+    """The executor spec for the library: ``"auto"``, a number of processes, or a Dask
+    scheduler address.  An explicit ``--workers`` wins over ``$CERTSOLVE_SCHEDULER``."""
+    if args.scheduler is not None and args.workers is not None:
+        raise CliError(
+            "--workers and --scheduler: give one (with --scheduler the cluster's workers run "
+            "the search)"
+        )
+    address = args.scheduler
+    if address is None and args.workers is None:
+        address = os.environ.get(SCHEDULER_ENV) or None
+    if address is not None:
+        where = "--scheduler" if args.scheduler is not None else f"${SCHEDULER_ENV}"
+        address = address.strip()
+        if not address or any(c.isspace() for c in address):
+            raise CliError(f"{where}: expected a scheduler address tcp://HOST:PORT")
+        if "://" not in address:
+            address = "tcp://" + address
+        if importlib.util.find_spec("distributed") is None:
+            raise CliError(
+                f"{where}: running on a Dask cluster needs the optional dependency "
+                "'distributed': pip install 'certsolve[distributed]'"
+            )
+        return address
+    text = "auto" if args.workers is None else args.workers.strip()
+    if text == "auto":
+        return "auto"
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise CliError(f"--workers: expected an integer >= 1 or 'auto', got {args.workers!r}")
+    return n
+
+
+def describe_run(stats) -> str:
+    """``serial`` / ``2 processes, 14 tasks`` / ``dask, 2 workers, 14 tasks``."""
+    if stats.executor == "serial":
+        return "serial"
+    if not stats.tasks:
+        return f"{stats.executor}: ended in the serial warm-up, no task run"
+    if stats.executor == "processes":
+        where = f"{stats.workers} processes"
+    else:
+        where = f"{stats.executor}, {stats.workers} workers"
+    lost = f", {stats.resubmitted} resubmitted" if stats.resubmitted else ""
+    return f"{where}, {stats.tasks} tasks{lost}"
 
 
 def print_json(obj: Any) -> None:
@@ -256,7 +333,11 @@ class Deadline:
 
         return check
 
-    def mark(self, stats) -> None:
-        """A search stopped by this deadline was stopped by time, not cancelled."""
-        if self.hit and stats.stopped_by == "cancelled":
-            stats.stopped_by = "timeout"
+    def mark(self, result) -> None:
+        """A search stopped by this deadline was stopped by time, not cancelled: say so in
+        ``result`` (its ``status`` and ``stats.stopped_by``)."""
+        from ..solver.search import SearchStatus
+
+        if self.hit and result.status == SearchStatus.CANCELLED:
+            result.status = SearchStatus.TIMEOUT
+            result.stats.stopped_by = str(SearchStatus.TIMEOUT)

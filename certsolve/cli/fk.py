@@ -4,7 +4,17 @@ from __future__ import annotations
 
 import argparse
 
-from .common import CliError, Deadline, parse_floats, print_json, progress_reporter, validated
+from .common import (
+    CliError,
+    Deadline,
+    add_executor_options,
+    describe_run,
+    executor_from_args,
+    parse_floats,
+    print_json,
+    progress_reporter,
+    validated,
+)
 
 
 def register(sub) -> None:
@@ -36,12 +46,16 @@ def register(sub) -> None:
         help="time limit (s) of the whole command, writing the answer included",
     )
     p.add_argument("--max-boxes", type=int, default=None, help="limit on processed boxes")
-    p.add_argument("--workers", type=int, default=1, help="worker processes")
+    p.add_argument(
+        "--max-solutions", type=int, default=None, help="stop after this many certified poses"
+    )
+    add_executor_options(p)
     p.add_argument("--verify", action="store_true", help="re-prove solutions with mpmath")
     p.add_argument(
         "--seed-planar",
         action="store_true",
-        help="almost-planar robots: search around the planar solutions first",
+        help="almost-planar robots: search around the planar solutions first (with "
+        "--workers/--scheduler and --verify like the plain search)",
     )
     p.add_argument(
         "--seeded-only",
@@ -75,12 +89,28 @@ def run(args: argparse.Namespace) -> int:
     params = validated(FkParams, args, {"u": u}, robot=spec)  # as the fk job checks them
     if args.seeded_only and not args.seed_planar:
         raise CliError("--seeded-only needs --seed-planar")
-    if args.workers < 1:
-        raise CliError("--workers must be at least 1")
     robot = with_tau_max(Robot.from_spec(spec), params.tau_max)
     if args.near is not None:
         from ..kinematics.tracking import Tracker
 
+        ignored = [
+            flag
+            for flag, value in (
+                ("--seed-planar", args.seed_planar),
+                ("--verify", args.verify),
+                ("--timeout", args.timeout is not None),
+                ("--max-boxes", args.max_boxes is not None),
+                ("--max-solutions", args.max_solutions is not None),
+                ("--workers", args.workers is not None),
+                ("--scheduler", args.scheduler is not None),
+            )
+            if value
+        ]
+        if ignored:
+            raise CliError(
+                f"{', '.join(ignored)}: options of the all-solutions search, not of a "
+                "tracking step (--near)"
+            )
         near = parse_floats(args.near, "--near")
         track = validated(
             TrackParams, args, {"u": u, "near_pose": near}, robot=spec, option={"near_pose": "near"}
@@ -92,7 +122,8 @@ def run(args: argparse.Namespace) -> int:
         else:
             print(format_track(robot, res))
         return 0
-    deadline = Deadline(args.timeout, args.started)
+    executor = executor_from_args(args)
+    deadline = Deadline(params.timeout, args.started)
     show, stop = progress_reporter(not args.json)
     try:
         res = forward_kinematics(
@@ -102,15 +133,16 @@ def run(args: argparse.Namespace) -> int:
             eps=params.eps,
             timeout=deadline.solver_timeout(),
             max_boxes=params.max_boxes,
+            max_solutions=params.max_solutions,
             seed_planar=params.seed_planar,
             seeded_only=params.seeded_only,
             progress=deadline.progress(show),
-            workers=args.workers,
+            executor=executor,
             verify=args.verify,
         )
     finally:
         stop()
-    deadline.mark(res.stats)
+    deadline.mark(res)
     if args.json:
         print_json(res.to_dict())
     else:
@@ -140,8 +172,7 @@ def format_result(robot, res) -> str:
     lines = [
         f"{robot.name}: {res.formulation}, u = {np.array2string(res.u, precision=4)}",
         f"{res.status}: {len(res.solutions)} certified pose(s), {len(res.undecided)} undecided, "
-        f"{len(res.pending)} pending; {st.boxes} boxes, {st.time:.2f} s"
-        + (f", stopped by {st.stopped_by}" if st.stopped_by else ""),
+        f"{len(res.pending)} pending; {st.boxes} boxes, {st.time:.2f} s, {describe_run(st)}",
     ]
     if res.seeding:
         sd = res.seeding

@@ -17,7 +17,17 @@ import re
 import numpy as np
 
 from ..robot import Pose, Robot
-from .common import CliError, parse_floats, print_json, print_result, progress_reporter, validated
+from .common import (
+    CliError,
+    add_executor_options,
+    describe_run,
+    executor_from_args,
+    parse_floats,
+    print_json,
+    print_result,
+    progress_reporter,
+    validated,
+)
 
 
 def register(sub) -> None:
@@ -93,6 +103,7 @@ def register(sub) -> None:
     )
     w.add_argument("--timeout", type=float, default=None, help="time limit in seconds")
     w.add_argument("--max-boxes", type=int, default=None, help="limit on processed boxes")
+    add_executor_options(w)
     w.add_argument("--plot", metavar="PNG", default=None, help="picture of the paving (PNG)")
     w.add_argument("--no-boxes", action="store_true", help="omit the box lists from --json")
     w.add_argument("--json", action="store_true", help="print one JSON object")
@@ -298,6 +309,7 @@ def run_workspace(args: argparse.Namespace) -> int:
     }
     # the workspace job's own checks (min_force, eps, box, timeout ...)
     params = validated(WorkspaceParams, args, values, robot=robot.spec)
+    executor = executor_from_args(args)
     progress, stop = progress_reporter(not args.json, line=_paving_line)
     try:
         ws = certified_workspace(
@@ -311,6 +323,7 @@ def run_workspace(args: argparse.Namespace) -> int:
             eps_angle=params.eps_angle,
             external=params.external,
             max_boxes=params.max_boxes,
+            executor=executor,
         )
     finally:
         stop()
@@ -336,7 +349,7 @@ def format_workspace(ws, plot) -> str:
         f"{total:.6g}), {len(ws.inside)} boxes",
         f"  outside {len(ws.outside)} boxes, boundary {len(ws.boundary)} boxes, "
         f"pending {len(ws.pending)}",
-        f"  {ws.boxes} boxes processed in {ws.time:.3f} s",
+        f"  {ws.boxes} boxes processed in {ws.time:.3f} s, {describe_run(ws.stats)}",
     ]
     if plot:
         lines.append(f"  wrote {plot}")
@@ -345,6 +358,6 @@ def format_workspace(ws, plot) -> str:
 
 def _paving_line(p) -> str:
     return (
-        f"paving: {p.boxes} boxes, {p.pending} pending, {p.inside} inside, "
-        f"{100 * p.inside_share:.1f} % proven, {p.elapsed:.1f} s"
+        f"paving: {p.boxes} boxes, {p.pending} pending, {p.solutions} inside, "
+        f"{100 * p.extra['inside_share']:.1f} % proven, {p.elapsed:.1f} s"
     )

@@ -5,7 +5,15 @@ from __future__ import annotations
 import argparse
 
 from ..solver.summary import MAX_LISTED
-from .common import CliError, Deadline, print_json, progress_reporter, validated
+from .common import (
+    Deadline,
+    add_executor_options,
+    describe_run,
+    executor_from_args,
+    print_json,
+    progress_reporter,
+    validated,
+)
 
 
 def register(sub) -> None:
@@ -35,7 +43,10 @@ def register(sub) -> None:
         default=MAX_LISTED,
         help="hulls listing the boxes left by a limit (default %(default)s)",
     )
-    p.add_argument("--workers", type=int, default=1, help="worker processes")
+    p.add_argument(
+        "--max-solutions", type=int, default=None, help="stop after this many certified solutions"
+    )
+    add_executor_options(p)
     p.add_argument("--verify", action="store_true", help="re-prove solutions with mpmath")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
@@ -47,8 +58,7 @@ def run(args: argparse.Namespace) -> int:
     from ..solver import Solver
 
     params = validated(SolveParams, args)  # the solve job's own checks (eps, timeout, ...)
-    if args.workers < 1:
-        raise CliError("--workers must be at least 1")
+    executor = executor_from_args(args)
     deadline = Deadline(params.timeout, args.started)
     system = load_minibex(args.file)
     solver = Solver(
@@ -62,13 +72,14 @@ def run(args: argparse.Namespace) -> int:
         result = solver.solve(
             timeout=deadline.solver_timeout(),
             max_boxes=params.max_boxes,
-            workers=args.workers,
+            max_solutions=params.max_solutions,
+            executor=executor,
             verify=params.verify,
             progress=deadline.progress(show),
         )
     finally:
         stop()
-    deadline.mark(result.stats)
+    deadline.mark(result)
     if args.json:
         print_json(result.to_dict())
     else:
@@ -88,7 +99,7 @@ def format_result(name: str, result) -> str:
         pend += f" box(es) in {len(result.pending)} hull(s)"
     lines = [
         f"{name}: {result.status}, {len(result.solutions)} solution(s), {und}, {pend}",
-        f"  {st.boxes} boxes, {st.time:.3f} s, {st.workers} worker(s)"
+        f"  {st.boxes} boxes, {st.time:.3f} s, {describe_run(st)}"
         + (f", stopped by {st.stopped_by}" if st.stopped_by else ""),
     ]
     names = result.variables

@@ -14,12 +14,13 @@
 * :mod:`.plots`      -- heat maps, pavings and force pictures (matplotlib)
 * :mod:`.wedge`      -- facet candidates: generalised cross products
 
-Layering: this package imports :mod:`certsolve.interval` and :mod:`certsolve.robot` only.
+Layering: this package imports :mod:`certsolve.interval`, :mod:`certsolve.robot`, and the
+search driver of :mod:`certsolve.solver` (for the certified paving).
 
 Entry points: :func:`isotropic_force`, :func:`isotropic_map`, :func:`certified_workspace`.
 """
 
-from .certified import CertifiedWorkspace, WorkspaceProgress, certified_workspace
+from .certified import CertifiedWorkspace, PavingStep, certified_workspace
 from .ellipse import CentredEllipsoid, largest_centred_ellipsoid
 from .isotropic import IsotropicForceResult, isotropic_force, isotropic_values
 from .krut import krut_polytope
@@ -36,7 +37,7 @@ __all__ = [
     "ForcePolytope",
     "IsotropicForceResult",
     "IsotropicMap",
-    "WorkspaceProgress",
+    "PavingStep",
     "certified_workspace",
     "external_wrench",
     "force_picture",

@@ -11,11 +11,14 @@ or ranges of angles), every box of the paving is
 * **boundary**: undecided and narrower than ``eps`` (cm) in every position axis and
   ``eps_angle`` (degrees) in every angle axis;
 * **pending**: not processed because the computation stopped early (timeout, progress
-  callback returning ``False``, ``max_boxes``).
+  callback returning ``False``, ``max_boxes``; the status says which).
 
 Undecided boxes are bisected along their widest axis (relative to ``eps``/``eps_angle``);
-boxes are processed in batches of ``batch`` with one set of numpy calls per batch.  Every
-decision rests on outward-rounded interval arithmetic: no plain float enters a proof.
+boxes are processed in batches of ``batch`` with one set of numpy calls per batch
+(:class:`PavingStep`, a step of the search driver :mod:`certsolve.solver.search`, so the
+paving runs on local processes or a Dask cluster too).  A box's fate depends on that box
+alone, so the paving is the same whatever the order or the executor.  Every decision
+rests on outward-rounded interval arithmetic: no plain float enters a proof.
 
 Measures (area for planar robots, volume for dof 6; with angle ranges the measure is the
 product of position and angle widths, so shares stay meaningful) are sums of box volumes.
@@ -23,30 +26,20 @@ product of position and angle widths, so shares stay meaningful) are sums of box
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ..robot import Robot
+from ..solver.buffer import BoxStack
+from ..solver.executors import resolve_executor
+from ..solver.search import Limits, Progress, SearchStats, SearchStatus, Tally, run_search
 from .enclosure import slack_enclosures
 from .loads import force_rows
 
-__all__ = ["CertifiedWorkspace", "WorkspaceProgress", "certified_workspace", "parse_box"]
-
-
-@dataclass
-class WorkspaceProgress:
-    """Passed to the ``progress`` callback after every batch."""
-
-    boxes: int  # boxes processed so far
-    pending: int  # boxes waiting
-    inside: int
-    outside: int
-    boundary: int
-    elapsed: float
-    inside_share: float  # share of the initial box already proven inside
+__all__ = ["CertifiedWorkspace", "PavingStep", "certified_workspace", "parse_box"]
 
 
 @dataclass
@@ -63,10 +56,11 @@ class CertifiedWorkspace:
     outside: np.ndarray
     boundary: np.ndarray
     pending: np.ndarray
-    status: str  # complete | timeout | stopped | max_boxes
+    status: SearchStatus  # complete, or what stopped the paving (then boxes are pending)
     boxes: int
     time: float
     notes: list[str] = field(default_factory=list)
+    stats: SearchStats = field(default_factory=SearchStats)
 
     # -- measures -------------------------------------------------------------------------
     @staticmethod
@@ -111,10 +105,11 @@ class CertifiedWorkspace:
             "angles": {n: list(map(float, a)) for n, a in zip(self.angle_names, self.angles)},
             "eps": self.eps,
             "eps_angle": self.eps_angle,
-            "status": self.status,
+            "status": str(self.status),
             "complete": self.complete,
             "boxes": self.boxes,
             "time": self.time,
+            "stats": self.stats.to_dict(),
             "counts": {
                 "inside": int(len(self.inside)),
                 "outside": int(len(self.outside)),
@@ -162,10 +157,11 @@ class CertifiedWorkspace:
             outside=boxes("outside"),
             boundary=boxes("boundary"),
             pending=boxes("pending"),
-            status=data["status"],
+            status=SearchStatus(data["status"]),
             boxes=int(data["boxes"]),
             time=float(data["time"]),
             notes=list(data.get("notes", [])),
+            stats=SearchStats(**data["stats"]) if "stats" in data else SearchStats(),
         )
 
 
@@ -221,27 +217,121 @@ def _parse_orientation(robot: Robot, orientation) -> tuple[np.ndarray, list[str]
     return np.array(out), names
 
 
+@dataclass
+class PavingState:
+    """The paving's state in a search: the buffer and the decided boxes."""
+
+    stack: BoxStack
+    inside: list = field(default_factory=list)  # (k, nd, 2) arrays
+    outside: list = field(default_factory=list)
+    boundary: list = field(default_factory=list)
+    counts: dict = field(default_factory=lambda: {"inside": 0, "outside": 0, "boundary": 0})
+    inside_measure: float = 0.0
+
+
+class PavingStep:
+    """The paving as a step of the search driver: prove a batch of boxes inside or
+    outside, keep the narrow undecided ones as boundary, bisect the rest (see the module
+    docstring).  Picklable: it holds the robot and the numbers of the request."""
+
+    def __init__(self, robot: Robot, min_force, external, d, use_rot, scale, total, batch):
+        self.robot = robot
+        self.min_force = float(min_force)
+        self.external = external
+        self.d = d
+        self.use_rot = use_rot
+        self.scale = scale
+        self.total = total
+        self.batch_size = int(batch)
+
+    def start(self, known=None) -> PavingState:
+        return PavingState(BoxStack(self.scale.size))
+
+    def process(self, lo: np.ndarray, hi: np.ndarray, state: PavingState) -> None:
+        d = self.d
+        glo, ghi, full_rank, wires_ok = slack_enclosures(
+            self.robot,
+            lo[:, :d].T,
+            hi[:, :d].T,
+            self.min_force,
+            self.external,
+            alo=lo[:, d:].T if self.use_rot else None,
+            ahi=hi[:, d:].T if self.use_rot else None,
+        )
+        ins = np.all(glo >= 0.0, axis=0) & full_rank & wires_ok
+        out = np.any(ghi < 0.0, axis=0) & wires_ok & ~ins
+        rel = (hi - lo) / self.scale
+        small = np.all(rel <= 1.0, axis=1)
+        bnd = ~ins & ~out & small
+        split = ~ins & ~out & ~small
+        for key, mask in (("inside", ins), ("outside", out), ("boundary", bnd)):
+            if mask.any():
+                getattr(state, key).append(np.stack([lo[mask], hi[mask]], axis=2))
+                state.counts[key] += int(mask.sum())
+        if ins.any():
+            wd = hi[ins] - lo[ins]
+            state.inside_measure += float(np.sum(np.prod(np.where(wd > 0, wd, 1.0), axis=1)))
+        if split.any():
+            slo, shi = lo[split], hi[split]
+            axis = np.argmax(rel[split], axis=1)
+            rows = np.arange(len(slo))
+            mid = 0.5 * slo[rows, axis] + 0.5 * shi[rows, axis]
+            left_hi = shi.copy()
+            left_hi[rows, axis] = mid
+            right_lo = slo.copy()
+            right_lo[rows, axis] = mid
+            state.stack.push(np.concatenate([slo, right_lo]), np.concatenate([left_hi, shi]))
+
+    def tally(self, state: PavingState) -> Tally:
+        share = state.inside_measure / self.total if self.total > 0 else 0.0
+        return Tally(
+            solutions=state.counts["inside"],
+            undecided=state.counts["boundary"],
+            extra={**state.counts, "inside_share": share},
+        )
+
+    def known(self, state: PavingState) -> None:
+        return None  # boxes are decided independently of each other
+
+    def found(self, state: PavingState):
+        return state.inside, state.outside, state.boundary, state.inside_measure
+
+    def merge(self, state: PavingState, found) -> None:
+        inside, outside, boundary, measure = found
+        for key, parts in (("inside", inside), ("outside", outside), ("boundary", boundary)):
+            getattr(state, key).extend(parts)
+            state.counts[key] += sum(len(p) for p in parts)
+        state.inside_measure += measure
+
+
 def certified_workspace(
     robot: Robot,
     min_force: float,
     box,
     eps: float,
-    progress: Callable[[WorkspaceProgress], bool | None] | None = None,
+    progress: Callable[[Progress], bool | None] | None = None,
     timeout: float | None = None,
     orientation=None,
     eps_angle: float = 1.0,
     external=None,
     max_boxes: int | None = None,
     batch: int = 1024,
+    *,
+    executor: Any = None,
+    cancel: Any = None,
+    max_solutions: int | None = None,
 ) -> CertifiedWorkspace:
     """Pave ``box`` (positions, cm) into boxes proven inside/outside ``{f_min ≥ min_force}``.
 
     ``orientation``: dof 3: ``θ`` or ``(θlo, θhi)``; dof 6: ``(yaw, pitch, roll)``, each a
     number or a ``(lo, hi)`` range (degrees); default: identity.  ``progress`` is called
-    after every batch with a :class:`WorkspaceProgress`; returning ``False`` stops the
-    computation (status ``"stopped"``, the rest is ``pending``).
+    after every batch (or worker task) with a :class:`~certsolve.solver.Progress` whose
+    ``solutions`` count inside boxes, ``undecided`` boundary boxes, and ``extra`` holds
+    ``inside``, ``outside``, ``boundary`` and ``inside_share``; returning ``False`` (or
+    ``cancel.is_set()``) stops the paving (status ``"cancelled"``, the rest is
+    ``pending``).  ``max_solutions`` stops it after that many inside boxes.  ``executor``
+    as :meth:`certsolve.solver.Solver.solve`: the paving is the same on every executor.
     """
-    t0 = time.perf_counter()
     if not (np.isfinite(min_force) and min_force > 0):
         raise ValueError("min_force must be a positive number (N)")
     if not (np.isfinite(eps) and eps > 0):
@@ -268,75 +358,24 @@ def certified_workspace(
     full = np.concatenate([pbox, angles]) if angles.size else pbox
     nd = full.shape[0]
     scale = np.concatenate([np.full(d, float(eps)), np.full(len(angles), float(eps_angle))])
-    pend_lo = full[None, :, 0].copy()
-    pend_hi = full[None, :, 1].copy()
-    acc = {"inside": [], "outside": [], "boundary": []}
-    counts = {"inside": 0, "outside": 0, "boundary": 0}
-    inside_measure = 0.0
     total = CertifiedWorkspace._measure(full[None])
-    processed = 0
-    status = "complete"
-    while len(pend_lo):
-        if timeout is not None and time.perf_counter() - t0 > timeout:
-            status = "timeout"
-            break
-        if max_boxes is not None and processed >= max_boxes:
-            status = "max_boxes"
-            break
-        lo, hi = pend_lo[:batch], pend_hi[:batch]
-        pend_lo, pend_hi = pend_lo[batch:], pend_hi[batch:]
-        n = len(lo)
-        processed += n
-        glo, ghi, full_rank, wires_ok = slack_enclosures(
-            robot,
-            lo[:, :d].T,
-            hi[:, :d].T,
-            min_force,
-            external,
-            alo=lo[:, d:].T if use_rot else None,
-            ahi=hi[:, d:].T if use_rot else None,
-        )
-        ins = np.all(glo >= 0.0, axis=0) & full_rank & wires_ok
-        out = np.any(ghi < 0.0, axis=0) & wires_ok & ~ins
-        rel = (hi - lo) / scale
-        small = np.all(rel <= 1.0, axis=1)
-        bnd = ~ins & ~out & small
-        split = ~ins & ~out & ~small
-        for key, mask in (("inside", ins), ("outside", out), ("boundary", bnd)):
-            if mask.any():
-                acc[key].append(np.stack([lo[mask], hi[mask]], axis=2))
-                counts[key] += int(mask.sum())
-        if ins.any():
-            wd = hi[ins] - lo[ins]
-            inside_measure += float(np.sum(np.prod(np.where(wd > 0, wd, 1.0), axis=1)))
-        if split.any():
-            slo, shi = lo[split], hi[split]
-            axis = np.argmax(rel[split], axis=1)
-            rows = np.arange(len(slo))
-            mid = 0.5 * slo[rows, axis] + 0.5 * shi[rows, axis]
-            left_hi = shi.copy()
-            left_hi[rows, axis] = mid
-            right_lo = slo.copy()
-            right_lo[rows, axis] = mid
-            pend_lo = np.concatenate([pend_lo, slo, right_lo])
-            pend_hi = np.concatenate([pend_hi, left_hi, shi])
-        if progress is not None:
-            info = WorkspaceProgress(
-                boxes=processed,
-                pending=len(pend_lo),
-                inside=counts["inside"],
-                outside=counts["outside"],
-                boundary=counts["boundary"],
-                elapsed=time.perf_counter() - t0,
-                inside_share=inside_measure / total if total > 0 else 0.0,
-            )
-            if progress(info) is False:
-                status = "stopped" if len(pend_lo) else "complete"
-                break
+    step = PavingStep(robot, min_force, external, d, use_rot, scale, total, batch)
+    run = run_search(
+        step,
+        full[None, :, 0].copy(),
+        full[None, :, 1].copy(),
+        limits=Limits(timeout=timeout, max_boxes=max_boxes, max_solutions=max_solutions),
+        executor=resolve_executor(executor),
+        progress=progress,
+        cancel=cancel,
+    )
+    state = run.state
 
     def cat(key):
-        return np.concatenate(acc[key]) if acc[key] else np.zeros((0, nd, 2))
+        parts = getattr(state, key)
+        return np.concatenate(parts) if parts else np.zeros((0, nd, 2))
 
+    plo, phi = state.stack.snapshot()
     notes = []
     if robot.dof != 2 and not use_rot:
         notes.append("orientation: identity (fixed)")
@@ -352,9 +391,10 @@ def certified_workspace(
         inside=cat("inside"),
         outside=cat("outside"),
         boundary=cat("boundary"),
-        pending=np.stack([pend_lo, pend_hi], axis=2) if len(pend_lo) else np.zeros((0, nd, 2)),
-        status=status,
-        boxes=processed,
-        time=time.perf_counter() - t0,
+        pending=np.stack([plo, phi], axis=2) if len(plo) else np.zeros((0, nd, 2)),
+        status=run.status,
+        boxes=run.stats.boxes,
+        time=run.stats.time,
         notes=notes + [f"force rows: {force_rows(robot)}"],
+        stats=run.stats,
     )

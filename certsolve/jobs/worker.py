@@ -96,15 +96,21 @@ def restore_memory_limit(old) -> None:
 def progress_dict(p: Any, elapsed: float) -> dict:
     """The numeric progress fields of a library progress object (or dict).
 
-    ``boxes``, ``pending``, ``solutions``, ``undecided``, ``elapsed`` when present, and the
-    other numeric fields of a dataclass (e.g. the workspace's ``inside`` / ``outside``).
+    ``boxes``, ``pending``, ``solutions``, ``undecided``, ``elapsed`` when present, the
+    other numeric fields of a dataclass, and the items of its ``extra`` dict (the search
+    driver's progress: e.g. the workspace's ``inside`` / ``outside`` / ``inside_share``).
     """
     names = list(_PROGRESS_FIELDS)
+    extra = {} if isinstance(p, dict) else dict(getattr(p, "extra", None) or {})
     if dataclasses.is_dataclass(p):
         names += [f.name for f in dataclasses.fields(p) if f.name not in names][:12]
+    names += [k for k in list(extra)[:12] if k not in names]
     out: dict[str, Any] = {}
     for name in names:
-        v = p.get(name) if isinstance(p, dict) else getattr(p, name, None)
+        if name in extra:
+            v = extra[name]
+        else:
+            v = p.get(name) if isinstance(p, dict) else getattr(p, name, None)
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             try:
                 v = v.item()  # numpy scalars

@@ -747,14 +747,14 @@ def ik_algorithm1(
         "search_time": out.time,
         "parametric_wires": [j + 1 for j in out.params],
     }
-    if out.stopped_by:
-        details["stopped_by"] = out.stopped_by
+    if out.verdict == "unknown":
+        details["stopped_by"] = str(out.status)
     messages: list[str] = []
     where = "the strokes" if u_last is None else f"the {window:g} cm window around u_last"
     u = tau = margin = res = None
     cert = _no_cert()
     violations: list[Violation] = []
-    if out.status == "certified":
+    if out.verdict == "certified":
         u = out.u
         tau, _ = tension_mr(robot, enc, u)
         margin = margin_of(tau, robot.tau_min, robot.tau_max)
@@ -764,7 +764,7 @@ def ik_algorithm1(
         cert = _certificate(u, F, S, out.box_lo[S], out.box_hi[S], out.enc_lo[S], out.enc_hi[S])
         violations = limit_violations(robot, tau, u)
         status = "limits-violated" if violations else "ok"
-    elif out.status == "infeasible":
+    elif out.verdict == "infeasible":
         status = "infeasible"
         messages.append(
             f"proved: no control vector in {where} holds the platform at this pose with "
@@ -786,7 +786,7 @@ def ik_algorithm1(
                 "there (returned: the centre of the first one, not certified)"
             )
         else:
-            messages.append(f"search stopped ({out.stopped_by}) before a certified solution")
+            messages.append(f"search stopped ({out.status}) before a certified solution")
     return IKResult(
         robot.name, robot.dof, "alg1", pose, status, status == "ok", u, tau, rho, margin, res,
         violations, cert, messages, details, time.perf_counter() - t0,

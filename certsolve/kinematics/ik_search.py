@@ -29,6 +29,9 @@ enclosed outward), a batch of boxes per numpy call:
    domain), until a solution is certified, the buffer is empty (proof that no solution exists
    in ``U``), or a limit is hit.
 
+The loop is the search driver's (:mod:`certsolve.solver.search`, :class:`ControlSearch` is
+the step) with ``max_solutions = 1``; boxes narrower than ``eps`` are all reported undecided.
+
 With more than ``w`` equations (``m < w``: the almost-planar robot) nothing square remains
 to certify: the search can still *prove* that no control vector in ``U`` balances the pose
 (every box contracted to empty), or it narrows down to undecided boxes.
@@ -44,6 +47,8 @@ import scipy.linalg
 
 from ..interval import arith
 from ..robot.model import Robot
+from ..solver.buffer import BoxStack
+from ..solver.search import Limits, SearchStatus, Tally, run_search
 from .ik_enclose import (
     SAFE,
     PoseEnclosure,
@@ -52,7 +57,13 @@ from .ik_enclose import (
     tension_range,
 )
 
-__all__ = ["SearchOutcome", "search_controls", "preconditioner", "control_point"]
+__all__ = [
+    "ControlSearch",
+    "SearchOutcome",
+    "control_point",
+    "preconditioner",
+    "search_controls",
+]
 
 _U = 2.0**-53
 _TINY = 2.0**-1000
@@ -151,9 +162,12 @@ def contract(pc: Preconditioner, lo, hi, sweeps: int = 8):
     return lo, hi, empty
 
 
-@dataclass
+@dataclass(kw_only=True)
 class SearchOutcome:
-    status: str  # "certified" | "infeasible" | "undecided" | "incomplete"
+    """Algorithm 1's answer.  ``status`` is the search's (:class:`SearchStatus`: it ends
+    with ``max_solutions`` once a point is certified); :attr:`verdict` reads it."""
+
+    status: SearchStatus
     u: np.ndarray | None = None  # (m,) the certified point (parametric wires exact)
     params: list[int] = field(default_factory=list)  # 0-based indices of fixed wires
     box_lo: np.ndarray | None = None  # unicity box (parametric wires degenerate)
@@ -164,7 +178,17 @@ class SearchOutcome:
     boxes: int = 0
     rounds: int = 0
     time: float = 0.0
-    stopped_by: str | None = None
+
+    @property
+    def verdict(self) -> str:
+        """``certified``; ``infeasible`` (proven: no solution in the box); ``undecided``
+        (searched completely, only boxes narrower than eps remain); or ``unknown`` (a
+        limit stopped the search first)."""
+        if self.u is not None:
+            return "certified"
+        if self.status != SearchStatus.COMPLETE:
+            return "unknown"
+        return "undecided" if self.undecided else "infeasible"
 
 
 def _certify(robot, enc, pc, sq, lo, hi, ulo, uhi, box_radius):
@@ -209,6 +233,69 @@ def _certify(robot, enc, pc, sq, lo, hi, ulo, uhi, box_radius):
     return u[k], X_lo, X_hi, E_lo[k], E_hi[k]
 
 
+@dataclass
+class ControlState:
+    stack: BoxStack
+    undecided: list = field(default_factory=list)
+    found: tuple | None = None  # (u, X_lo, X_hi, E_lo, E_hi) of the certified point
+
+
+class ControlSearch:
+    """Algorithm 1 as a step of the search driver: contract, certify, bisect tension boxes."""
+
+    def __init__(self, robot, enc, pc, sq, ulo, uhi, eps, box_radius, dom_w, batch_size):
+        self.robot, self.enc, self.pc, self.sq = robot, enc, pc, sq
+        self.ulo, self.uhi = ulo, uhi
+        self.eps, self.box_radius, self.dom_w = eps, box_radius, dom_w
+        self.batch_size = int(batch_size)
+
+    def start(self, known=None) -> ControlState:
+        return ControlState(BoxStack(self.ulo.size))
+
+    def tally(self, state: ControlState) -> Tally:
+        return Tally(solutions=int(state.found is not None), undecided=len(state.undecided))
+
+    def known(self, state: ControlState) -> None:
+        return None
+
+    def found(self, state: ControlState):
+        return state.found, state.undecided
+
+    def merge(self, state: ControlState, found) -> None:
+        point, undecided = found
+        if state.found is None:
+            state.found = point
+        state.undecided.extend(undecided)
+
+    def process(self, lo: np.ndarray, hi: np.ndarray, state: ControlState) -> None:
+        lo, hi, empty = contract(self.pc, lo, hi)
+        lo, hi = lo[~empty], hi[~empty]
+        if lo.shape[0] == 0:
+            return
+        if self.sq is not None:
+            found = _certify(
+                self.robot, self.enc, self.pc, self.sq, lo, hi, self.ulo, self.uhi, self.box_radius
+            )
+            if found is not None:
+                state.found = found  # the search stops here (max_solutions = 1)
+                return
+        width = hi - lo
+        small = np.all(width <= self.eps * (1.0 + np.abs(lo)), axis=1)
+        for k in np.flatnonzero(small):
+            state.undecided.append((lo[k].copy(), hi[k].copy()))
+        big = ~small
+        if np.any(big):
+            lo, hi = lo[big], hi[big]
+            j = np.argmax((hi - lo) / self.dom_w, axis=1)
+            rows = np.arange(lo.shape[0])
+            mid = 0.5 * lo[rows, j] + 0.5 * hi[rows, j]
+            alo, ahi = lo.copy(), hi.copy()
+            ahi[rows, j] = mid
+            blo, bhi = lo.copy(), hi.copy()
+            blo[rows, j] = mid
+            state.stack.push(np.concatenate([blo, alo]), np.concatenate([bhi, ahi]))
+
+
 def search_controls(
     robot: Robot,
     enc: PoseEnclosure,
@@ -230,17 +317,13 @@ def _search(robot, enc, ulo, uhi, max_boxes, timeout, eps, box_radius, batch_siz
     t0 = time.perf_counter()
     ulo = np.asarray(ulo, dtype=float)
     uhi = np.asarray(uhi, dtype=float)
-    out = SearchOutcome("incomplete")
     # tension domain: image of the control box, within the tension limits (outward)
     tlo, thi = tension_range(robot, enc, ulo, uhi)
     tlo = np.maximum(tlo, robot.tau_min)
     thi = np.minimum(thi, robot.tau_max)
-    if np.any(~(tlo <= thi)) or np.any(ulo > uhi):
-        out.status = "infeasible"
-        out.time = time.perf_counter() - t0
-        return out
+    if np.any(~(tlo <= thi)) or np.any(ulo > uhi):  # proven: nothing to search
+        return SearchOutcome(status=SearchStatus.COMPLETE, time=time.perf_counter() - t0)
     pc = preconditioner(enc)
-    out.params = [int(i) for i in pc.params]
     sq = None
     if pc.rank == enc.Ht.shape[1] and pc.basis.size == pc.rank:
         try:
@@ -248,52 +331,22 @@ def _search(robot, enc, ulo, uhi, max_boxes, timeout, eps, box_radius, batch_siz
         except np.linalg.LinAlgError:
             sq = None
     dom_w = np.maximum(thi - tlo, 1e-300)
-    stack_lo = [tlo[None]]
-    stack_hi = [thi[None]]
-    while stack_lo:
-        if out.boxes >= max_boxes:
-            out.stopped_by = "max_boxes"
-            break
-        if timeout is not None and time.perf_counter() - t0 > timeout:
-            out.stopped_by = "timeout"
-            break
-        lo = np.concatenate(stack_lo)
-        hi = np.concatenate(stack_hi)
-        lo, rest_lo = lo[-batch_size:], lo[:-batch_size]
-        hi, rest_hi = hi[-batch_size:], hi[:-batch_size]
-        stack_lo = [rest_lo] if rest_lo.shape[0] else []
-        stack_hi = [rest_hi] if rest_hi.shape[0] else []
-        out.boxes += lo.shape[0]
-        out.rounds += 1
-        lo, hi, empty = contract(pc, lo, hi)
-        lo, hi = lo[~empty], hi[~empty]
-        if lo.shape[0] == 0:
-            continue
-        found = None if sq is None else _certify(robot, enc, pc, sq, lo, hi, ulo, uhi, box_radius)
-        if found is not None:
-            out.status = "certified"
-            out.u, out.box_lo, out.box_hi, out.enc_lo, out.enc_hi = found
-            break
-        width = hi - lo
-        small = np.all(width <= eps * (1.0 + np.abs(lo)), axis=1)
-        for k in np.flatnonzero(small):
-            if len(out.undecided) < 20:
-                out.undecided.append((lo[k].copy(), hi[k].copy()))
-            else:
-                out.stopped_by = "undecided-limit"
-        big = ~small
-        if np.any(big):
-            lo, hi = lo[big], hi[big]
-            j = np.argmax((hi - lo) / dom_w, axis=1)
-            rows = np.arange(lo.shape[0])
-            mid = 0.5 * lo[rows, j] + 0.5 * hi[rows, j]
-            alo, ahi = lo.copy(), hi.copy()
-            ahi[rows, j] = mid
-            blo, bhi = lo.copy(), hi.copy()
-            blo[rows, j] = mid
-            stack_lo.append(np.concatenate([blo, alo]))
-            stack_hi.append(np.concatenate([bhi, ahi]))
-    else:  # the buffer is empty: every box was discarded or reported undecided
-        out.status = "undecided" if out.undecided else "infeasible"
-    out.time = time.perf_counter() - t0
+    step = ControlSearch(robot, enc, pc, sq, ulo, uhi, eps, box_radius, dom_w, batch_size)
+    run = run_search(
+        step,
+        tlo[None],
+        thi[None],
+        limits=Limits(timeout=timeout, max_boxes=max_boxes, max_solutions=1),
+    )
+    state = run.state
+    out = SearchOutcome(
+        status=run.status,
+        params=[int(i) for i in pc.params],
+        undecided=state.undecided,
+        boxes=run.stats.boxes,
+        rounds=run.stats.batches,
+        time=time.perf_counter() - t0,
+    )
+    if state.found is not None:
+        out.u, out.box_lo, out.box_hi, out.enc_lo, out.enc_hi = state.found
     return out

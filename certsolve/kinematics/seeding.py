@@ -10,22 +10,24 @@ at most 5.3 cm between corresponding points.  :func:`seeded_forward_kinematics`:
    point within ``radius`` cm of its planar position, in the plane and across it);
 3. searches those boxes first;
 4. unless ``seeded_only``, searches the rest of the domain -- the exact box difference
-   of the domain minus the seed boxes -- in the same search, so the final answer is
-   complete, duplicates are recognised, and the report says which solutions came from
-   the seeds.
+   of the domain minus the seed boxes -- continuing the same search (known solutions,
+   counters), so the final answer is complete, duplicates are recognised, and the report
+   says which solutions came from the seeds.  Otherwise the rest is reported *pending*.
 """
 
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 
 from ..robot.geometry import rotation_2d
 from ..robot.model import Robot
-from ..solver import SearchState
+from ..solver import Limits, SearchStatus, resolve_executor, run_search
 from ..solver.certify import box_difference
-from .fk import FKResult, FKSolver
+from ..solver.search import SearchRun
+from .fk_solver import FKResult, FKSolver
 
 __all__ = ["planar_counterpart", "seeded_forward_kinematics"]
 
@@ -77,21 +79,34 @@ def seeded_forward_kinematics(
     eps: float = 1e-8,
     timeout: float | None = None,
     max_boxes: int | None = None,
+    max_solutions: int | None = None,
     seeded_only: bool = False,
     radius: float = 6.0,
     progress=None,
+    executor: Any = None,
+    verify: bool = False,
+    cancel: Any = None,
 ) -> FKResult:
+    """Planar-seeded forward kinematics (see the module docstring).
+
+    Both searches (seed boxes, then the rest of the domain) run on ``executor`` with the
+    limits, ``progress`` and ``cancel``, as :meth:`.FKSolver.solve`; ``max_boxes`` applies
+    to each.  If the seeded search stops early, or with ``seeded_only``, the rest of the
+    domain is reported *pending* (status: the limit that stopped it, or ``cancelled``).
+    """
     t0 = time.perf_counter()
     u = np.asarray(u, dtype=float)
     planar = planar_counterpart(robot)
     fk2 = FKSolver(planar, "planar-10", eps=eps)
-    res2 = fk2.solve(u, timeout=timeout)
+    res2 = fk2.solve(u, timeout=timeout, cancel=cancel)
     t_planar = time.perf_counter() - t0
 
     fk = FKSolver(robot, formulation, eps=eps)
     if fk.form.kind not in ("points", "frame") or fk.form.n_points != 3:
         raise ValueError("planar seeding needs a 3-point formulation (almost-planar-13)")
     u, ok = fk._prepare(u)
+    if not ok:  # nothing to search: the plain solver says so
+        return fk.solve(u)
     dom = fk.csys.system.domain
     k, d = 3, 3
     z_plane = float(robot.A[0, 2])
@@ -108,41 +123,70 @@ def seeded_forward_kinematics(
         if np.all(lo <= hi):
             seeds_lo.append(lo)
             seeds_hi.append(hi)
+    n = fk.csys.n
+    rest = _subtract(dom[:, 0], dom[:, 1], seeds_lo, seeds_hi)
+    rest_lo = np.array([a for a, _ in rest]).reshape(-1, n)
+    rest_hi = np.array([b for _, b in rest]).reshape(-1, n)
 
-    state = SearchState.start(dom, fk.csys.n)
-    state.stack.pop(1)
-    for lo, hi in zip(seeds_lo, seeds_hi, strict=True):
-        state.stack.push(lo[None], hi[None])
-    remaining = None if timeout is None else max(timeout - (time.perf_counter() - t0), 0.0)
-    fk.solver.run(state, timeout=remaining, max_boxes=max_boxes, progress=progress)
-    phase1_status = "complete" if len(state.stack) == 0 else "incomplete"
-    n_seeded = state.solutions.count("ok")
+    ex = resolve_executor(executor)
+
+    def limits() -> Limits:
+        left = None if timeout is None else max(timeout - (time.perf_counter() - t0), 0.0)
+        return Limits(timeout=left, max_boxes=max_boxes, max_solutions=max_solutions)
+
+    run = run_search(
+        fk.solver,
+        np.array(seeds_lo).reshape(-1, n),
+        np.array(seeds_hi).reshape(-1, n),
+        limits=limits(),
+        executor=ex,
+        progress=progress,
+        cancel=cancel,
+    )
+    phase1_status = run.status
+    n_seeded = run.state.solutions.count("ok")
     t_seeded = time.perf_counter() - t0
-    searched_rest = False
-    if not seeded_only and phase1_status == "complete":
-        for plo, phi in _subtract(dom[:, 0], dom[:, 1], seeds_lo, seeds_hi):
-            state.stack.push(plo[None], phi[None])
-        remaining = None if timeout is None else max(timeout - (time.perf_counter() - t0), 0.0)
-        fk.solver.run(state, timeout=remaining, max_boxes=max_boxes, progress=progress)
-        searched_rest = True
-    res = fk.solver.result(state)
-    status = res.status if searched_rest else "incomplete"
-    if not searched_rest and seeded_only:
-        res.status = "incomplete"
+    searched_rest = not seeded_only and run.status == SearchStatus.COMPLETE
+    if searched_rest:
+        run = run_search(
+            fk.solver,
+            rest_lo,
+            rest_hi,
+            limits=limits(),
+            executor=ex,
+            progress=progress,
+            cancel=cancel,
+            previous=run,
+        )
+    else:  # not searched: pending
+        run.state.stack.push(rest_lo, rest_hi)
+        status = SearchStatus.CANCELLED if run.status == SearchStatus.COMPLETE else run.status
+        if not len(run.state.stack):
+            status = SearchStatus.COMPLETE
+        run = SearchRun(status=status, state=run.state, stats=run.stats)
+    res = fk.solver.result(run)
+    if verify:
+        from ..solver.verify import verify_solutions  # mpmath: imported when asked
+
+        verify_solutions(fk.csys, res.solutions)
     sols = [fk.decode(s.lo, s.hi, u, s) for s in res.solutions]
     seeding = {
         "planar_solutions": len(res2.solutions),
-        "planar_status": res2.status,
+        "planar_status": str(res2.status),
         "planar_time": t_planar,
         "seed_boxes": len(seeds_lo),
         "seed_radius": radius,
         "solutions_in_seeds": n_seeded,
-        "seeded_phase_status": phase1_status,
+        "seeded_phase_status": str(phase1_status),
         "time_to_seeded_solutions": t_seeded,
         "rest_of_domain_searched": searched_rest,
         "total_time": time.perf_counter() - t0,
     }
     notes = (
-        [] if searched_rest else ["only the seeded boxes were searched: the answer is not complete"]
+        []
+        if searched_rest
+        else ["only the seeded boxes were searched: the rest of the domain is pending"]
     )
-    return FKResult(robot.name, fk.formulation, u, status, sols, res, seeding=seeding, notes=notes)
+    return FKResult(
+        robot.name, fk.formulation, u, res.status, sols, res, seeding=seeding, notes=notes
+    )

@@ -30,7 +30,7 @@ from ..expr.scalar import ScalarProgram
 from ..robot.geometry import Pose
 from ..robot.model import Robot
 from ..solver.newton import KrawczykPoint
-from .fk import FKPose, FKSolver
+from .fk_solver import FKPose, FKSolver
 from .fk_systems import choose_formulation
 
 __all__ = ["Tracker", "TrackResult", "track"]

@@ -1,27 +1,47 @@
 """Branch-and-prune solving with certified solutions (ALIAS / IBEX style), batched.
 
 * :mod:`.newton`          -- linearisation, Krawczyk operator, Hansen–Sengupta sweep
-* :mod:`.contractors`     -- :class:`HC4`, :class:`IntervalNewton`
+* :mod:`.contractors`     -- :class:`HC4`, :class:`IntervalNewton`, partial Newton
+* :mod:`.shaving`         -- CID on the bisection variable
 * :mod:`.certify`         -- Krawczyk proofs with inflation, existence boxes, de-duplication
-* :mod:`.bisectors`       -- smear-sum-relative and largest-first bisection
+* :mod:`.bisectors`       -- smear-sum-relative, prioritized and largest-first bisection
 * :mod:`.buffer`          -- the box stack
-* :mod:`.branch_and_prune`-- :class:`Solver` and :func:`solve`
-* :mod:`.parallel`        -- the same search over ``multiprocessing`` workers
+* :mod:`.search`          -- the search driver shared by every branch-and-prune loop (solver,
+  forward kinematics, workspace paving, IK search): buffer, limits, cancellation,
+  progress, :class:`SearchStatus`, and the serial executor
+* :mod:`.executors`       -- the same search on local worker processes (and the choice of an
+  executor from ``None`` / a number / ``"auto"`` / a Dask client or address)
+* :mod:`.dask_executor`   -- ... and on a Dask cluster (optional extra ``distributed``)
+* :mod:`.branch_and_prune`-- :class:`Solver` (the solve step) and :func:`solve`
 * :mod:`.verify`          -- independent re-proof of certificates with ``mpmath.iv``
 * :mod:`.result`          -- :class:`SolveResult` and friends (plain, JSON-ready data)
 * :mod:`.summary`         -- undecided / pending boxes as bounded lists of hulls with counts
+
+Inside: search <- executors <- dask_executor (imported only when a Dask client or address is
+given), and search, executors <- branch_and_prune.  The driver knows nothing about systems:
+the solve step, the workspace paving (:mod:`certsolve.force.certified`) and the IK search
+(:mod:`certsolve.kinematics.ik_search`) plug into it the same way.
 """
 
-from .branch_and_prune import Progress, SearchState, Solver, solve
+from .branch_and_prune import SearchState, Solver, solve
+from .executors import ProcessExecutor, available_cores, resolve_executor
 from .result import Solution, SolveResult, Stats, Undecided
+from .search import Limits, Progress, SearchStatus, SerialExecutor, run_search
 
 __all__ = [
+    "Limits",
+    "ProcessExecutor",
     "Progress",
     "SearchState",
+    "SearchStatus",
+    "SerialExecutor",
     "Solution",
     "SolveResult",
     "Solver",
     "Stats",
     "Undecided",
+    "available_cores",
+    "resolve_executor",
+    "run_search",
     "solve",
 ]

@@ -1,6 +1,8 @@
 """The branch-and-prune solver: contract, certify, bisect -- a batch of boxes at a time.
 
-One *round* takes up to ``batch_size`` boxes from the buffer and, for all of them at once:
+:class:`Solver` is the *step* of the search driver (:mod:`.search`): the driver owns the
+buffer, the limits, progress and the executor; :meth:`Solver.process` takes a batch of up to
+``batch_size`` boxes and, for all of them at once:
 
 1. drops boxes inside the unicity box of a known solution;
 2. contracts with :class:`~.contractors.HC4` (boxes proven empty are dropped), then with
@@ -16,16 +18,18 @@ One *round* takes up to ``batch_size`` boxes from the buffer and, for all of the
    (:class:`~.bisectors.SmearSumRelative`), after a CID contraction
    (:class:`~.shaving.CID`) on the chosen variable.
 
-Limits (time, boxes, a progress callback returning ``False``) stop the search between
-rounds; the boxes still in the buffer are then reported as *pending* and the status is
-``incomplete``.  Nothing is dropped without a proof that it holds no solution.
+Limits (time, boxes, solutions, cancellation) stop the search between batches; the boxes
+still in the buffer are then reported as *pending* and the status names the limit.
+Nothing is dropped without a proof that it holds no solution.  The step and its state
+pickle, so batches can run on worker processes or a Dask cluster (:mod:`.executors`).
 """
 
 from __future__ import annotations
 
-import time
+import pickle
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -36,25 +40,16 @@ from .bisectors import SmearSumRelative, split
 from .buffer import BoxStack
 from .certify import Certifier, SolutionSet, box_difference
 from .contractors import HC4, IntervalNewton, PartialNewton, log_volume_ratio
+from .executors import resolve_executor
 from .relaxation import PolytopeHull
 from .result import Solution, SolveResult, Stats, Undecided
+from .search import Limits, Progress, SearchRun, SearchStatus, Tally, run_search
 from .shaving import CID
 from .summary import MAX_LISTED, summarize
 
-__all__ = ["Solver", "Progress", "solve"]
+__all__ = ["Solver", "SearchState", "solve"]
 
 _LOG_HALF = float(np.log(0.5))
-
-
-@dataclass
-class Progress:
-    """What a progress callback receives after each round."""
-
-    boxes: int
-    pending: int
-    solutions: int
-    undecided: int
-    elapsed: float
 
 
 class Solver:
@@ -146,87 +141,80 @@ class Solver:
         timeout: float | None = None,
         max_boxes: int | None = None,
         progress: Callable[[Progress], bool | None] | None = None,
-        workers: int = 1,
+        executor: Any = None,
         verify: bool = False,
         max_solutions: int | None = None,
+        cancel: Any = None,
+        boxes: tuple[np.ndarray, np.ndarray] | None = None,
+        workers: int | None = None,
     ) -> SolveResult:
-        """Run the search over the whole domain (see the module docstring).
+        """Run the search over the whole domain, or over ``boxes`` ``(lo, hi)`` if given.
 
-        ``max_solutions`` stops the search once that many solutions are certified (the
-        status is then ``incomplete`` unless nothing was left to explore).
+        ``executor``: where batches run (``None``: here; a number of local processes,
+        ``"auto"``, a ``distributed.Client`` ... see :func:`.executors.resolve_executor`);
+        ``workers`` is the older name of an integer ``executor``.  ``max_solutions`` stops
+        the search once that many solutions are certified; ``progress`` returning ``False``
+        or ``cancel.is_set()`` cancels it.  The status is ``complete`` when nothing is
+        pending, else the limit that stopped the search (:class:`.SearchStatus`).
         """
-        if workers > 1:
-            from .parallel import solve_parallel
-
-            result = solve_parallel(
-                self, workers=workers, timeout=timeout, max_boxes=max_boxes, progress=progress
-            )
-        else:
-            state = SearchState.start(self.system.domain, self.n)
-            self.run(
-                state,
-                timeout=timeout,
-                max_boxes=max_boxes,
-                progress=progress,
-                max_solutions=max_solutions,
-            )
-            result = self.result(state)
+        if boxes is None:
+            dom = self.system.domain
+            boxes = (dom[:, 0][None].copy(), dom[:, 1][None].copy())
+        run = run_search(
+            self,
+            *boxes,
+            limits=Limits(timeout=timeout, max_boxes=max_boxes, max_solutions=max_solutions),
+            executor=resolve_executor(executor, workers=workers),
+            progress=progress,
+            cancel=cancel,
+        )
+        result = self.result(run)
         if verify:
             from .verify import verify_solutions
 
             verify_solutions(self.csys, result.solutions)
         return result
 
-    # -- the loop ----------------------------------------------------------------------------
-    def run(
-        self,
-        state: SearchState,
-        *,
-        timeout: float | None = None,
-        max_boxes: int | None = None,
-        max_rounds: int | None = None,
-        progress: Callable[[Progress], bool | None] | None = None,
-        max_solutions: int | None = None,
-    ) -> None:
-        """Process rounds until the buffer is empty or a limit is hit (updates ``state``)."""
-        t0 = time.perf_counter()
-        stats = state.stats
-        rounds = 0
-        with np.errstate(all="ignore"):
-            while len(state.stack):
-                if timeout is not None and time.perf_counter() - t0 >= timeout:
-                    stats.stopped_by = "timeout"
-                    break
-                if max_boxes is not None and stats.boxes >= max_boxes:
-                    stats.stopped_by = "max_boxes"
-                    break
-                if max_rounds is not None and rounds >= max_rounds:
-                    break
-                if max_solutions is not None and state.solutions.count("ok") >= max_solutions:
-                    stats.stopped_by = "max_solutions"
-                    break
-                self.round(state)
-                rounds += 1
-                stats.max_pending = max(stats.max_pending, len(state.stack))
-                if progress is not None:
-                    p = Progress(
-                        stats.boxes,
-                        len(state.stack),
-                        state.solutions.count("ok"),
-                        len(state.undecided),
-                        stats.time + time.perf_counter() - t0,
-                    )
-                    if progress(p) is False:
-                        stats.stopped_by = "cancelled"
-                        break
-        stats.time += time.perf_counter() - t0
+    # -- the step of the search driver ------------------------------------------------------
+    def start(self, known: bytes | None = None) -> SearchState:
+        """An empty search state, with the solutions in ``known`` (see :meth:`known`)."""
+        sols = SolutionSet(self.n) if known is None else pickle.loads(known)
+        return SearchState(BoxStack(self.n), sols, [], Stats(), mark=len(sols))
 
-    def round(self, state: SearchState) -> None:
-        """One batched contract / certify / bisect step."""
+    def tally(self, state: SearchState) -> Tally:
+        return Tally(solutions=state.solutions.count("ok"), undecided=len(state.undecided))
+
+    def known(self, state: SearchState) -> bytes:
+        """The solution set, pickled (for tasks: unpickling is ~100x faster than adding the
+        solutions one by one, and the copy is the task's own)."""
+        return pickle.dumps(state.solutions, protocol=pickle.HIGHEST_PROTOCOL)
+
+    def found(self, state: SearchState):
+        """Solutions recorded since :meth:`start`, undecided boxes and counters."""
+        sols = state.solutions
+        new = range(state.mark, len(sols))
+        entries = [
+            (sols.E_lo[i], sols.E_hi[i], sols.U_lo[i], sols.U_hi[i], sols.kind[i]) for i in new
+        ]
+        st = state.stats
+        return entries, state.undecided, (st.bisections, st.certified, st.duplicates)
+
+    def merge(self, state: SearchState, found) -> None:
+        """Add a task's findings; a solution two tasks proved is recorded once."""
+        entries, undecided, (bisections, certified, duplicates) = found
+        for e0, e1, u0, u1, kind in entries:
+            if kind == "alias":
+                state.solutions.add(e0, e1, u0, u1, "alias")
+            elif not state.solutions.add(e0, e1, u0, u1, kind):
+                state.stats.duplicates += 1
+        state.undecided.extend(undecided)
+        state.stats.bisections += bisections
+        state.stats.certified += certified
+        state.stats.duplicates += duplicates
+
+    def process(self, lo: np.ndarray, hi: np.ndarray, state: SearchState) -> None:
+        """One batched contract / certify / bisect step on the boxes ``lo, hi``."""
         stats = state.stats
-        lo, hi = state.stack.pop(self.batch_size)
-        stats.boxes += lo.shape[0]
-        stats.rounds += 1
         keep, plo, phi = state.solutions.prune(lo, hi)
         lo0, hi0 = np.concatenate([lo[keep], plo]), np.concatenate([hi[keep], phi])
 
@@ -339,8 +327,10 @@ class Solver:
                 state.stats.duplicates += 1
 
     # -- results -----------------------------------------------------------------------------
-    def result(self, state: SearchState) -> SolveResult:
-        """The result of a search (undecided and pending boxes summarised, :mod:`.summary`)."""
+    def result(self, run: SearchRun) -> SolveResult:
+        """The :class:`SolveResult` of a finished search (undecided and pending boxes summarised,
+        :mod:`.summary`)."""
+        state = run.state
         sols = [Solution(e0, e1, u0, u1) for e0, e1, u0, u1 in state.solutions.items("ok")]
         sols.sort(key=lambda s: tuple(s.midpoint))
         und = [(u.lo, u.hi, u.reason) for u in state.undecided]
@@ -353,15 +343,17 @@ class Solver:
         summ = summarize(
             und, plo, phi, max_undecided=self.max_undecided, max_pending=self.max_pending
         )
-        complete = summ.pending_total == 0 and summ.undecided_dropped == 0
+        status = run.status
+        if status == SearchStatus.COMPLETE and summ.undecided_dropped:
+            status = SearchStatus.TRUNCATED  # nothing pending, but not every box is listed
         return SolveResult(
             variables=list(self.system.variables),
-            status="complete" if complete else "incomplete",
+            status=status,
             solutions=sols,
             undecided=[Undecided(a, b, r, k) for a, b, r, k in summ.undecided],
             pending_lo=summ.pending_lo,
             pending_hi=summ.pending_hi,
-            stats=state.stats,
+            stats=Stats.of(run.stats, state.stats, run.status),
             eps=self.eps,
             undecided_total=summ.undecided_total,
             undecided_dropped=summ.undecided_dropped,
@@ -372,18 +364,13 @@ class Solver:
 
 @dataclass
 class SearchState:
-    """Everything a search carries between rounds (and between worker tasks)."""
+    """The solver's state in a search (the driver's buffer and the records of a step)."""
 
     stack: BoxStack
     solutions: SolutionSet
     undecided: list
-    stats: Stats
-
-    @classmethod
-    def start(cls, domain: np.ndarray, n: int) -> SearchState:
-        st = BoxStack(n)
-        st.push(domain[:, 0][None].copy(), domain[:, 1][None].copy())
-        return cls(st, SolutionSet(n), [], Stats())
+    stats: Stats  # the step's counters: bisections, certified, duplicates
+    mark: int = 0  # solutions[:mark] were known when the state started
 
 
 def solve(
@@ -392,19 +379,24 @@ def solve(
     eps: float = 1e-8,
     timeout: float | None = None,
     max_boxes: int | None = None,
-    workers: int = 1,
+    executor: Any = None,
     verify: bool = False,
     progress: Callable[[Progress], bool | None] | None = None,
     max_solutions: int | None = None,
+    cancel: Any = None,
+    workers: int | None = None,
     **options,
 ) -> SolveResult:
-    """Find every solution of ``system`` in its domain (see :class:`Solver`)."""
+    """Find every solution of ``system`` in its domain (see :class:`Solver` and
+    :meth:`Solver.solve`)."""
     solver = Solver(system, eps=eps, **options)
     return solver.solve(
         timeout=timeout,
         max_boxes=max_boxes,
-        workers=workers,
+        executor=executor,
         verify=verify,
         progress=progress,
         max_solutions=max_solutions,
+        cancel=cancel,
+        workers=workers,
     )

@@ -139,15 +139,6 @@ class SolutionSet:
             keep[r] = False
         return keep, np.array(plo).reshape(-1, n), np.array(phi).reshape(-1, n)
 
-    def merge(self, other: SolutionSet) -> int:
-        """Add another set's solutions (e.g. from a worker); returns how many were new."""
-        new = 0
-        for i, kind in enumerate(other.kind):
-            if kind == "alias":
-                continue
-            new += self.add(other.E_lo[i], other.E_hi[i], other.U_lo[i], other.U_hi[i], kind)
-        return new
-
     def items(self, kind: str):
         for i, k in enumerate(self.kind):
             if k == kind:

@@ -9,7 +9,8 @@ A :class:`SolveResult` answers "where are the solutions of the system in the dom
   than ``eps`` without a proof (singular or tangent solutions, reason ``"eps"``), a proven
   solution whose box straddles the domain boundary (``"boundary"``), or one whose extra
   constraints could not be decided (``"constraint"``).
-* ``pending``: boxes not explored because a limit (time, boxes) stopped the search.
+* ``pending``: boxes not explored because a limit (time, boxes, solutions) or the caller
+  stopped the search.
 
 Undecided and pending boxes are listed as *hulls* with the number of boxes each contains
 (:mod:`.summary`): touching undecided boxes of the same reason are merged, and at most
@@ -18,9 +19,12 @@ pending boxes are merged by runs of the search stack into at most ``max_pending`
 (``pending_boxes``), which together contain every pending box.  ``undecided_total`` and
 ``pending_total`` count the boxes themselves.
 
-``status == "complete"`` means nothing is pending and no undecided box was left out of the
-listing: every solution of the system in the domain lies in a solution box or a listed
-undecided hull.  Nothing is ever silently dropped.
+``status`` is a :class:`~.search.SearchStatus`: ``"complete"`` means nothing is pending and
+no undecided box was left out of the listing: every solution of the system in the domain
+lies in a solution box or a listed undecided hull; ``"truncated"``: nothing is pending but
+some undecided boxes are only counted (``undecided_dropped``); otherwise it names what
+stopped the search (``"timeout"``, ``"max_boxes"``, ``"max_solutions"``, ``"cancelled"``).
+Nothing is ever silently dropped.
 """
 
 from __future__ import annotations
@@ -28,6 +32,8 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
+
+from .search import SearchStats, SearchStatus
 
 __all__ = ["Solution", "Undecided", "Stats", "SolveResult"]
 
@@ -81,14 +87,37 @@ class Undecided:
 @dataclass
 class Stats:
     boxes: int = 0  # boxes contracted
-    rounds: int = 0  # batched rounds
+    rounds: int = 0  # batches processed
     bisections: int = 0
     certified: int = 0  # Krawczyk proofs (before removing duplicates)
     duplicates: int = 0
     max_pending: int = 0
     time: float = 0.0  # wall seconds
+    cpu: float = 0.0  # CPU seconds, this process and every worker task
+    executor: str = "serial"  # "serial" | "processes" | "dask"
     workers: int = 1
-    stopped_by: str | None = None  # "timeout" | "max_boxes" | "max_solutions" | "cancelled"
+    tasks: int = 0  # worker tasks run
+    resubmitted: int = 0  # task slices handed out again after a lost worker
+    stopped_by: str | None = None  # the status when not complete (older name)
+
+    @classmethod
+    def of(cls, search: SearchStats, step: Stats, status: SearchStatus) -> Stats:
+        """The driver's counters and the solver step's, in one record."""
+        return cls(
+            boxes=search.boxes,
+            rounds=search.batches,
+            bisections=step.bisections,
+            certified=step.certified,
+            duplicates=step.duplicates,
+            max_pending=search.max_pending,
+            time=search.time,
+            cpu=search.cpu,
+            executor=search.executor,
+            workers=search.workers,
+            tasks=search.tasks,
+            resubmitted=search.resubmitted,
+            stopped_by=None if status == SearchStatus.COMPLETE else str(status),
+        )
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -97,7 +126,7 @@ class Stats:
 @dataclass
 class SolveResult:
     variables: list[str]
-    status: str  # "complete" | "incomplete" (see the module docstring)
+    status: SearchStatus
     solutions: list[Solution] = field(default_factory=list)
     undecided: list[Undecided] = field(default_factory=list)
     pending_lo: np.ndarray | None = None  # hulls of the pending boxes
@@ -117,7 +146,7 @@ class SolveResult:
 
     def to_dict(self) -> dict:
         return {
-            "status": self.status,
+            "status": str(self.status),
             "variables": list(self.variables),
             "solutions": [s.to_dict() for s in self.solutions],
             "undecided": [u.to_dict() for u in self.undecided],

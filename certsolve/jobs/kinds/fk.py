@@ -66,6 +66,9 @@ class FkParams(Params):
     eps: float = Field(default=1e-8, gt=0, le=1e9)
     timeout: float | None = Field(default=None, gt=0, description="time limit (s)")
     max_boxes: int | None = Field(default=None, ge=1)
+    max_solutions: int | None = Field(
+        default=None, ge=1, le=10**9, description="stop after this many certified poses"
+    )
     tau_max: float | None = Field(default=None, ge=0, le=MAX_FORCE, description="tension cap")
     formulation: Formulation = Field(
         default="auto", description="the FK equations (docs: README, forward kinematics)"
@@ -152,6 +155,7 @@ def run_fk(job: FkJob, ctx: RunContext) -> Any:
         eps=p.eps,
         timeout=ctx.time_limit,
         max_boxes=ctx.max_boxes,
+        max_solutions=p.max_solutions,
         tau_max=p.tau_max,
         formulation=p.formulation,
         seed_planar=p.seed_planar,

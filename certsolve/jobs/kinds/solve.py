@@ -18,6 +18,9 @@ class SolveParams(Params):
     eps: float = Field(default=1e-8, gt=0, le=1e9, description="boxes narrower stop")
     timeout: float | None = Field(default=None, gt=0, description="time limit (s)")
     max_boxes: int | None = Field(default=None, ge=1, description="limit on processed boxes")
+    max_solutions: int | None = Field(
+        default=None, ge=1, le=10**9, description="stop after this many certified solutions"
+    )
     verify: bool = Field(default=False, description="re-prove solutions with mpmath")
     max_undecided: int = Field(
         default=1000, ge=0, le=100_000, description="undecided hulls listed in the answer"
@@ -67,6 +70,7 @@ def run_solve(job: SolveJob, ctx: RunContext) -> Any:
         workers=1,
         verify=p.verify,
         progress=ctx.progress,
+        max_solutions=p.max_solutions,
         max_undecided=p.max_undecided,
         max_pending=p.max_pending,
     )

@@ -1,0 +1,276 @@
+"""The forward-kinematics solver: control vector ``u`` -> every equilibrium pose.
+
+:class:`FKSolver` compiles a formulation (:mod:`.fk_systems`) once for a robot and solves
+it for any ``u`` (the control vector is a parameter of the compiled system), returning an
+:class:`FKResult`: every pose in the search domain, each certified to be the only solution
+in its box, plus undecided and pending boxes -- the solver's guarantees, read back as poses.
+:func:`.fk.forward_kinematics` is the one-call form; :mod:`.seeding` builds on this module.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..robot.elastic import tension
+from ..robot.geometry import euler_zyx
+from ..robot.model import Robot
+from ..solver import SearchStatus, Solver
+from ..solver.bisectors import Prioritized
+from ..solver.result import SolveResult
+from .fk_systems import (
+    FKFormulation,
+    build_formulation,
+    pose_from_angles,
+    rotation_from_points,
+    search_domain,
+)
+
+__all__ = ["FKPose", "FKResult", "FKSolver", "with_tau_max"]
+
+
+@dataclass
+class FKPose:
+    """One certified equilibrium pose."""
+
+    position: np.ndarray  # (d,) platform frame origin, world
+    rotation: np.ndarray  # (d, d)
+    platform_points: np.ndarray  # (m, d) world coordinates of every wire's B_i
+    rho: np.ndarray  # (m,)
+    tau: np.ndarray  # (m,)
+    box: list  # existence box of the system's variables
+    variables: list[str]
+    certificate: str = "unique"
+    verified: bool | None = None
+
+    @property
+    def euler_deg(self) -> np.ndarray:
+        if self.rotation.shape == (3, 3):
+            return np.degrees(euler_zyx(self.rotation))
+        return np.degrees([np.arctan2(self.rotation[1, 0], self.rotation[0, 0])])
+
+    def to_dict(self) -> dict:
+        return {
+            "position": self.position.tolist(),
+            "rotation": self.rotation.tolist(),
+            "euler": self.euler_deg.tolist(),
+            "platform_points": self.platform_points.tolist(),
+            "rho": self.rho.tolist(),
+            "tau": self.tau.tolist(),
+            "certificate": self.certificate,
+            "verified": self.verified,
+            "box": self.box,
+            "variables": list(self.variables),
+        }
+
+
+@dataclass
+class FKResult:
+    robot: str
+    formulation: str
+    u: np.ndarray
+    status: SearchStatus  # of the search (see :class:`~certsolve.solver.SearchStatus`)
+    solutions: list[FKPose]
+    solve: SolveResult  # the underlying solver result (undecided, pending, stats)
+    seeding: dict | None = None
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def undecided(self):
+        return self.solve.undecided
+
+    @property
+    def pending(self):
+        return self.solve.pending
+
+    @property
+    def stats(self):
+        return self.solve.stats
+
+    def to_dict(self) -> dict:
+        d = self.solve.to_dict()
+        return {
+            "robot": self.robot,
+            "formulation": self.formulation,
+            "u": self.u.tolist(),
+            "status": str(self.status),
+            "solutions": [s.to_dict() for s in self.solutions],
+            "variables": d["variables"],
+            "undecided": d["undecided"],
+            "pending": d["pending"],
+            **{k: d[k] for k in ("undecided_total", "undecided_dropped", "pending_total")},
+            "pending_boxes": d["pending_boxes"],
+            "stats": d["stats"],
+            "seeding": self.seeding,
+            "notes": list(self.notes),
+        }
+
+
+def with_tau_max(robot: Robot, tau_max: float | None) -> Robot:
+    """The same robot with every wire's ``tau_max`` replaced (paper: 10, 20, 60 N ...)."""
+    if tau_max is None:
+        return robot
+    data = robot.spec.model_dump()
+    for w in data["wires"]:
+        w["tau"] = [min(w["tau"][0], float(tau_max)), float(tau_max)]
+    return Robot.load(data)
+
+
+def _newton_groups(names) -> list[np.ndarray]:
+    """Variable groups for Hansen's mixed Jacobian: wire lengths, reference point, rest.
+
+    The length columns are then enclosed with the platform at the box midpoint (the
+    ``A_i - B_i`` factor of ``∂(w_i (A_i - B_i))/∂ρ_i`` becomes a point), which doubles the
+    boxes that interval Newton discards in the cluster around a solution.
+    """
+    rho = np.array([v.startswith("rho") for v in names])
+    edge = np.array([v.startswith("e") for v in names])
+    groups = [rho, ~rho & ~edge, edge]
+    return [g for g in groups if g.any()]
+
+
+class FKSolver:
+    """Compile a formulation once, solve forward kinematics for many control vectors."""
+
+    def __init__(
+        self,
+        robot: Robot,
+        formulation: str = "auto",
+        *,
+        eps: float = 1e-8,
+        batch_size: int = 512,
+    ):
+        self.robot = robot
+        self.form: FKFormulation = build_formulation(robot, formulation)
+        # wire lengths are auxiliary: fixed by the pose through the length equations
+        mask = [not v.startswith("rho") for v in self.form.system.variables]
+        sub = self.form.info.get("translation")
+        subsystems = [(sub["equations"], sub["variables"])] if sub else []
+        bisector = None
+        if self.form.kind == "frame":
+            # orientation (edge vectors) first; the reference point only while it is wide
+            names = self.form.system.variables
+            bisector = Prioritized(
+                [v.startswith("e") for v in names],
+                [not v.startswith(("e", "rho")) for v in names],
+                alpha=0.25,
+            )
+        self.solver = Solver(
+            self.form.system,
+            eps=eps,
+            batch_size=batch_size,
+            bisect_mask=mask,
+            subsystems=subsystems,
+            bisector=bisector,
+            newton_groups=_newton_groups(self.form.system.variables),
+            cid_slices=0,
+            relax=False,
+        )
+        self.csys = self.solver.csys
+
+    @property
+    def formulation(self) -> str:
+        return self.form.name
+
+    def _prepare(self, u) -> tuple[np.ndarray, bool]:
+        u = np.asarray(u, dtype=float).ravel()
+        if u.shape != (self.robot.m,):
+            raise ValueError(f"u: expected {self.robot.m} values (one per wire), got {u.size}")
+        if not np.all(np.isfinite(u)):
+            raise ValueError("u: values must be finite")
+        self.csys.set_parameters(self.form.parameters_for(u))
+        dom, ok = search_domain(self.form, u)
+        self.csys.system.domain = dom
+        bis = self.solver.bisector
+        if isinstance(bis, Prioritized) and self.robot.dim == 3:
+            # narrow wire-length ranges (low tension limits) pin the platform position once
+            # its orientation is known: split the orientation first; wide ranges leave
+            # the position free, so it is split sooner (measured: T-16 at 10 N / 60 N; a
+            # planar platform has a single rotation and keeps the default)
+            rho = np.array([v.startswith("rho") for v in self.form.system.variables])
+            width = float(np.mean(dom[rho, 1] - dom[rho, 0])) if rho.any() else 0.0
+            bis.alpha = float(np.clip(width / 25.0, 0.25, 0.75))
+        return u, ok
+
+    def solve(
+        self,
+        u,
+        *,
+        timeout: float | None = None,
+        max_boxes: int | None = None,
+        max_solutions: int | None = None,
+        progress=None,
+        executor: Any = None,
+        verify: bool = False,
+        boxes: tuple[np.ndarray, np.ndarray] | None = None,
+        cancel: Any = None,
+        workers: int | None = None,
+    ) -> FKResult:
+        """All equilibrium poses for control ``u`` (``boxes``: search only these boxes).
+
+        Limits, ``executor``, ``progress`` and ``cancel`` as :meth:`.Solver.solve`.
+        """
+        u, ok = self._prepare(u)
+        notes = []
+        for i in (
+            np.flatnonzero(u < self.robot.u_min).tolist()
+            + np.flatnonzero(u > self.robot.u_max).tolist()
+        ):
+            notes.append(
+                f"u{i + 1} = {u[i]:g} is outside the stroke "
+                f"[{self.robot.u_min[i]:g}, {self.robot.u_max[i]:g}]"
+            )
+        if not ok:
+            notes.append("no wire length satisfies the tension limits inside the domain")
+            res = SolveResult(list(self.form.system.variables), SearchStatus.COMPLETE)
+            return FKResult(self.robot.name, self.formulation, u, res.status, [], res, notes=notes)
+        res = self.solver.solve(
+            timeout=timeout,
+            max_boxes=max_boxes,
+            max_solutions=max_solutions,
+            progress=progress,
+            executor=executor,
+            verify=verify,
+            boxes=boxes,
+            cancel=cancel,
+            workers=workers,
+        )
+        sols = [self.decode(s.lo, s.hi, u, s) for s in res.solutions]
+        return FKResult(self.robot.name, self.formulation, u, res.status, sols, res, notes=notes)
+
+    def decode(self, lo, hi, u, sol=None, point=None) -> FKPose:
+        """Read a robot pose from a (tight) solution box of the system's variables.
+
+        The pose is taken at ``point`` if given (e.g. a converged Newton point inside the
+        box), else at the box midpoint.
+        """
+        x = 0.5 * np.asarray(lo) + 0.5 * np.asarray(hi) if point is None else np.asarray(point)
+        f = self.form
+        r = self.robot
+        d, m = r.dim, r.m
+        rho = x[-m:].copy()
+        if f.kind in ("points", "frame"):
+            k = f.n_points
+            P = f.points_from(x)
+            points = f.L @ P
+            pos, R = rotation_from_points(f, P)
+            if x.size == k * d:  # reduced formulation: lengths from the points
+                rho = np.linalg.norm(r.A - points, axis=1)
+        else:
+            pos, R = pose_from_angles(f, x)
+            points = pos + r.B @ R.T
+        tau = tension(r, rho, u)
+        box = [[float(a), float(b)] for a, b in zip(lo, hi, strict=True)]
+        return FKPose(
+            pos,
+            R,
+            points,
+            rho,
+            tau,
+            box,
+            list(f.system.variables),
+            certificate=getattr(sol, "certificate", "unique"),
+            verified=getattr(sol, "verified", None),
+        )

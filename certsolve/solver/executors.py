@@ -1,0 +1,364 @@
+"""Executors of the search driver: where the batches of a :class:`~.search.Search` run.
+
+* :class:`~.search.SerialExecutor` -- in this process (the default);
+* :class:`ProcessExecutor` -- local worker processes (``concurrent.futures``, spawned);
+* :class:`~.dask_executor.DaskExecutor` -- the workers of a Dask cluster
+  (``distributed.Client``; optional extra ``certsolve[distributed]``).
+
+The two executors with workers share one loop (:class:`TaskExecutor`):
+
+1. a **serial warm-up** of ``warmup`` seconds in this process: a search that ends within
+   half of it never starts workers (starting processes costs 0.5-2 s), one that ends within
+   it never sends them a task; the workers start during the second half; then the buffer is
+   grown until it holds ``grow`` full batches for every slot (a batch of 5 boxes costs
+   nearly what one of 500 does: the numpy calls are the same), so a search too small to
+   fill the workers' batches stays serial;
+2. **tasks**: a slice of the buffer (an even share, at least a batch, at most
+   ``slice_size`` boxes, default two batches), what the step already
+   knows (e.g. certified solutions, so that workers prune them instead of proving them
+   again) and limits (``task_seconds`` of work, at most ``task_max_boxes`` boxes, the
+   remaining share of ``max_boxes`` and ``max_solutions``).  A task runs the batch loop on
+   its slice (:func:`~.search.run_task`) and returns its records and its unfinished
+   boxes, which go back into the buffer;
+3. the driver **waits on futures** (never polls), merges each result, reports progress,
+   hands out more work, and checks the limits.  A task whose worker was lost gives its
+   boxes back to the buffer; they are handed out again (up to ``max_attempts`` times).
+   On cancellation, and once ``max_solutions`` are certified, the running tasks are
+   cancelled and their boxes are pending; on the other limits the running tasks are
+   waited for (their budgets end with the time limit and share ``max_boxes``).
+
+Every box handed out comes back, processed or as a remaining box, so the result holds
+the same solutions, undecided regions and status as a serial run; box boundaries, box
+counts and the order of discovery may differ.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import pickle
+from abc import ABC, abstractmethod
+from collections import deque
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from multiprocessing import get_context
+from typing import Any
+
+import numpy as np
+
+from .search import (
+    Executor,
+    Limits,
+    Search,
+    SearchStatus,
+    SerialExecutor,
+    Step,
+    TaskResult,
+    run_task,
+)
+
+__all__ = [
+    "ProcessExecutor",
+    "TaskExecutor",
+    "TaskPool",
+    "available_cores",
+    "resolve_executor",
+]
+
+
+def available_cores() -> int:
+    """Cores this process may run on (``sched_getaffinity``, else ``os.cpu_count``)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # pragma: no cover - not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+class TaskPool(ABC):
+    """Workers that run tasks for one search (opened and closed by :class:`TaskExecutor`)."""
+
+    workers: int  # worker processes
+    slots: int  # tasks kept in flight
+
+    @abstractmethod
+    def submit(self, lo: np.ndarray, hi: np.ndarray, known: Any, limits: Limits) -> Any:
+        """Start a task; returns a handle."""
+
+    @abstractmethod
+    def next_done(self) -> tuple[Any, TaskResult | None, BaseException | None]:
+        """Block until a task ends: ``(handle, result, None)`` or ``(handle, None, error)``."""
+
+    @abstractmethod
+    def lost(self, error: BaseException) -> bool:
+        """True if ``error`` means the task's worker was lost (the task may be run again)."""
+
+    @abstractmethod
+    def cancel(self, handles: list) -> None:
+        """Cancel running tasks (their results are not waited for)."""
+
+    def refresh(self) -> None:  # noqa: B027 - optional hook
+        """Update :attr:`slots` (e.g. workers joined or left a cluster)."""
+
+    @abstractmethod
+    def close(self) -> None: ...
+
+
+# stops that do not wait for the running tasks (the others end within their task budget)
+_PROMPT = (SearchStatus.CANCELLED, SearchStatus.MAX_SOLUTIONS)
+
+
+class TaskExecutor(ABC):
+    """The loop shared by the executors with workers (see the module docstring)."""
+
+    name = "tasks"
+
+    def __init__(
+        self,
+        *,
+        warmup: float = 2.0,
+        task_seconds: float = 1.0,
+        slice_size: int | None = None,
+        task_max_boxes: int | None = None,
+        grow: float = 1.0,
+        max_attempts: int = 4,
+    ):
+        if not warmup >= 0:
+            raise ValueError("warmup must be >= 0 (seconds)")
+        if not task_seconds > 0:
+            raise ValueError("task_seconds must be positive")
+        if slice_size is not None and int(slice_size) < 1:
+            raise ValueError("slice_size must be >= 1")
+        if task_max_boxes is not None and int(task_max_boxes) < 1:
+            raise ValueError("task_max_boxes must be >= 1")
+        self.warmup = float(warmup)
+        self.task_seconds = float(task_seconds)
+        self.slice_size = slice_size
+        self.task_max_boxes = task_max_boxes
+        if not grow >= 0:
+            raise ValueError("grow must be >= 0 (batches per slot)")
+        self.grow = float(grow)
+        self.max_attempts = int(max_attempts)
+
+    @abstractmethod
+    def open(self, step: Step) -> TaskPool: ...
+
+    def run(self, search: Search) -> None:
+        def done() -> bool:
+            return search.stopped() or not len(search.state.stack)
+
+        search.run_serial(until=self.warmup / 2)
+        if done():
+            return  # done (or stopped) before the workers were needed
+        pool = self.open(search.step)  # workers start while the warm-up goes on
+        try:
+            search.run_serial(until=self.warmup)
+            if done():
+                return
+            search.run_serial(grow_to=math.ceil(self.grow * pool.slots * search.step.batch_size))
+            if done():
+                return
+            search.stats.workers = pool.workers
+            self._loop(search, pool)
+        finally:
+            pool.close()
+
+    def _loop(self, search: Search, pool: TaskPool) -> None:
+        step, state = search.step, search.state
+        batch = step.batch_size
+        most = 2 * batch if self.slice_size is None else self.slice_size
+        running: dict[Any, tuple[np.ndarray, np.ndarray, int]] = {}
+        retry: deque[tuple[np.ndarray, np.ndarray, int]] = deque()  # slices of lost tasks
+        while True:
+            if not search.stopped():
+                known = None
+                while len(running) < pool.slots and (retry or len(state.stack)):
+                    if known is None:
+                        known = step.known(state)
+                    if retry:
+                        lo, hi, attempt = retry.popleft()
+                    else:
+                        # an even share, but a full batch if there is one: a small batch
+                        # costs nearly what a full one does (numpy calls per batch)
+                        share = math.ceil(len(state.stack) / (pool.slots - len(running)))
+                        lo, hi = search.take(min(most, max(share, batch)))
+                        attempt = 1
+                    limits = search.task_limits(pool.slots, self.task_seconds, self.task_max_boxes)
+                    running[pool.submit(lo, hi, known, limits)] = (lo, hi, attempt)
+            if not running:
+                break
+            handle, result, error = pool.next_done()
+            lo, hi, attempt = running.pop(handle)
+            if error is not None:
+                if not pool.lost(error):
+                    raise error
+                if attempt >= self.max_attempts:
+                    raise RuntimeError(
+                        f"a task failed {attempt} times (its worker was lost each time)"
+                    ) from error
+                search.stats.resubmitted += 1
+                retry.append((lo, hi, attempt + 1))
+                continue
+            search.absorb(lo.shape[0], result)
+            search.report()
+            pool.refresh()
+            if search.stopped() and search.reason in _PROMPT and running:
+                pool.cancel(list(running))
+                for lo, hi, _ in running.values():
+                    search.give_back(lo, hi)
+                running.clear()
+        for lo, hi, _ in retry:  # stopped before they were handed out again
+            search.give_back(lo, hi)
+
+
+# -- local processes ------------------------------------------------------------------------
+def _load(step_bytes: bytes) -> None:
+    """Start-up task: the imports the step needs, while the driver's warm-up goes on."""
+    pickle.loads(step_bytes)
+
+
+def _run_pickled(step_bytes: bytes, lo, hi, known, limits: Limits) -> TaskResult:
+    """A task in a worker process: the step travels pickled with every task (a few
+    hundred kB, unpickled in milliseconds), so workers keep no state between tasks."""
+    return run_task(pickle.loads(step_bytes), lo, hi, known, limits)
+
+
+class _ProcessPool(TaskPool):
+    """A ``ProcessPoolExecutor``; when a worker process dies the pool is broken (every
+    running task fails with ``BrokenProcessPool``): a new pool runs the next tasks."""
+
+    def __init__(self, step: Step, workers: int, max_restarts: int = 8):
+        self.workers = workers
+        self.slots = workers + 1  # one queued task hides the round trip
+        self._step = pickle.dumps(step)
+        self._pool: ProcessPoolExecutor | None = None
+        self._generation = 0  # of the current pool
+        self._running: dict = {}  # future -> generation of its pool
+        self._ready: deque = deque()
+        self._restarts = 0
+        self._max_restarts = max_restarts
+        self._start()
+
+    def _start(self) -> None:
+        self._pool = ProcessPoolExecutor(self.workers, mp_context=get_context("spawn"))
+        for _ in range(self.workers):
+            self._pool.submit(_load, self._step)
+
+    def submit(self, lo, hi, known, limits):
+        if self._pool is None:
+            self._start()
+        try:
+            fut = self._pool.submit(_run_pickled, self._step, lo, hi, known, limits)
+        except BrokenProcessPool:  # a worker died while no task was running
+            self._restart()
+            if self._restarts > self._max_restarts:
+                raise
+            fut = self._pool.submit(_run_pickled, self._step, lo, hi, known, limits)
+        self._running[fut] = self._generation
+        return fut
+
+    def _restart(self) -> None:
+        self._pool.shutdown(wait=False, cancel_futures=True)
+        self._generation += 1
+        self._restarts += 1
+        self._start()
+
+    def next_done(self):
+        if not self._ready:
+            done, _ = wait(list(self._running), return_when=FIRST_COMPLETED)
+            self._ready.extend(done)
+        fut = self._ready.popleft()
+        generation = self._running.pop(fut, -1)
+        try:
+            return fut, fut.result(), None
+        except BrokenProcessPool as exc:
+            if generation == self._generation:
+                self._restart()
+            return fut, None, exc
+        except Exception as exc:  # noqa: BLE001 - handed to the driver
+            return fut, None, exc
+
+    def lost(self, error):
+        return isinstance(error, BrokenProcessPool) and self._restarts <= self._max_restarts
+
+    def cancel(self, handles):
+        for fut in handles:
+            fut.cancel()
+            self._running.pop(fut, None)
+
+    def close(self):
+        if self._pool is not None:
+            # tasks still running after a cancellation end within their time budget
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = None
+
+
+class ProcessExecutor(TaskExecutor):
+    """Local worker processes (spawned for each search, after the serial warm-up)."""
+
+    name = "processes"
+
+    def __init__(self, workers: int | None = None, **options):
+        super().__init__(**options)
+        workers = available_cores() if workers is None else workers
+        if isinstance(workers, bool) or int(workers) != workers or workers < 1:
+            raise ValueError("workers must be an integer >= 1")
+        self.workers = int(workers)
+
+    def open(self, step: Step) -> TaskPool:
+        return _ProcessPool(step, self.workers)
+
+    def __repr__(self) -> str:
+        return f"ProcessExecutor(workers={self.workers})"
+
+
+# -- choosing an executor -------------------------------------------------------------------
+def _is_dask_client(obj) -> bool:
+    cls = type(obj)
+    return cls.__name__ == "Client" and cls.__module__.split(".")[0] == "distributed"
+
+
+def resolve_executor(spec: Any = None, *, workers: int | None = None) -> Executor:
+    """An executor from a user's choice.
+
+    ``None`` / ``"serial"`` / ``1``: this process; an integer ``n > 1``: ``n`` local
+    processes; ``"auto"`` / ``"processes"``: one process per available core (serial on a
+    single core); a ``distributed.Client`` or a scheduler address (``"tcp://host:8786"``):
+    that Dask cluster; an executor object: itself.  ``workers`` is the older name of an
+    integer ``spec`` (give one or the other).
+    """
+    if workers is not None:
+        if spec is not None:
+            raise ValueError("give either executor or workers, not both")
+        spec = workers
+    if spec is None:
+        return SerialExecutor()
+    if isinstance(spec, str):
+        s = spec.strip()
+        if s in ("serial", "1"):
+            return SerialExecutor()
+        if s in ("auto", "processes"):
+            n = available_cores()
+            return SerialExecutor() if n == 1 else ProcessExecutor(n)
+        if "://" in s:
+            from .dask_executor import DaskExecutor
+
+            return DaskExecutor(s)
+        if s.isdigit():
+            return resolve_executor(int(s))
+        raise ValueError(
+            f"executor: expected 'serial', 'auto', 'processes', a number of workers, a "
+            f"scheduler address (tcp://host:port) or a distributed.Client; got {spec!r}"
+        )
+    if isinstance(spec, bool):
+        raise ValueError("executor: expected a number of workers, not a boolean")
+    if isinstance(spec, (int, np.integer)):
+        if spec < 1:
+            raise ValueError("executor: the number of workers must be >= 1")
+        return SerialExecutor() if spec == 1 else ProcessExecutor(int(spec))
+    if _is_dask_client(spec):
+        from .dask_executor import DaskExecutor
+
+        return DaskExecutor(spec)
+    if callable(getattr(spec, "run", None)) and isinstance(getattr(spec, "name", None), str):
+        return spec
+    raise ValueError(f"executor: cannot run a search on {type(spec).__name__}")

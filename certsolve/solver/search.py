@@ -1,0 +1,431 @@
+"""The search driver: one batched loop over a box buffer for every branch-and-prune search.
+
+The solver, the forward kinematics, the certified workspace paving and the IK enclosure
+search differ only in what they do to a batch of boxes.  That is a *step*
+(:class:`Step`); everything around it is here, written once:
+
+* the **buffer**: the step's state holds a :class:`~.buffer.BoxStack`; a batch is the last
+  ``step.batch_size`` boxes (depth-first at the batch level);
+* the **limits** (:class:`Limits`): wall time, processed boxes, and certified results
+  ("solutions": whatever the step certifies -- solutions, inside boxes, an IK point);
+* **cancellation**: a progress callback returning ``False``, or a ``cancel`` event
+  (anything with ``is_set()``, e.g. :class:`threading.Event`) set by another thread;
+* **progress**: one :class:`Progress` record after every batch (serial) or task (workers);
+* one **status** (:class:`SearchStatus`): ``complete`` when nothing is pending, else why the
+  search stopped.
+
+The guarantee the driver keeps: a box taken from the buffer is either given to the step,
+which accounts for all of it (proven empty, recorded in its state, or pushed back as smaller
+boxes), or it comes back to the buffer.  When the search stops, the pending boxes and the
+step's records together cover the initial boxes: nothing is dropped by the driver.
+
+*Executors* decide where batches run: :class:`SerialExecutor` (here, the default),
+local processes and Dask (:mod:`.executors`).  Executors that use workers send *tasks*
+(:func:`run_task`): a slice of the buffer, what is already known (e.g. certified solutions,
+so that workers do not prove them again) and per-task limits; a task runs the same batch
+loop on its own small buffer and returns what it found and the boxes it did not finish.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from enum import StrEnum
+from typing import Any, Protocol
+
+import numpy as np
+
+__all__ = [
+    "Executor",
+    "Limits",
+    "Progress",
+    "Search",
+    "SearchRun",
+    "SearchStats",
+    "SearchStatus",
+    "SerialExecutor",
+    "Step",
+    "Tally",
+    "TaskResult",
+    "run_search",
+    "run_task",
+]
+
+
+class SearchStatus(StrEnum):
+    """How a search ended: ``complete`` means nothing is pending, the limits name the limit
+    (or the caller) that stopped it with boxes left to explore; ``truncated`` (a result
+    status, never a stop) means nothing is pending but the answer lists only part of its
+    undecided boxes (the others are counted)."""
+
+    COMPLETE = "complete"
+    TRUNCATED = "truncated"
+    TIMEOUT = "timeout"
+    MAX_BOXES = "max_boxes"
+    MAX_SOLUTIONS = "max_solutions"
+    CANCELLED = "cancelled"
+
+
+@dataclass(kw_only=True, frozen=True)
+class Limits:
+    """When to stop early (``None``: no limit).
+
+    ``timeout``: wall seconds; ``max_boxes``: boxes processed by the step; ``max_solutions``:
+    results the step certifies (:attr:`Tally.solutions`).  Limits are checked between
+    batches, so a search may overshoot by one batch (one task per worker with workers).
+    """
+
+    timeout: float | None = None
+    max_boxes: int | None = None
+    max_solutions: int | None = None
+
+    def __post_init__(self) -> None:
+        if self.timeout is not None and not self.timeout >= 0:
+            raise ValueError("timeout must be >= 0 (seconds)")
+        for name in ("max_boxes", "max_solutions"):
+            v = getattr(self, name)
+            if v is not None and (isinstance(v, bool) or int(v) != v or v < 0):
+                raise ValueError(f"{name} must be an integer >= 0")
+
+
+@dataclass
+class Progress:
+    """What a progress callback receives after each batch (serial) or task (workers).
+
+    ``solutions`` and ``undecided`` are the step's counts (:class:`Tally`); ``extra`` holds
+    the step's own figures (the paving's ``inside`` / ``outside`` / ``inside_share`` ...).
+    """
+
+    boxes: int  # processed so far
+    pending: int  # in the buffer or handed out to workers
+    solutions: int
+    undecided: int
+    elapsed: float  # wall seconds
+    tasks: int = 0  # worker tasks finished
+    extra: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass(kw_only=True)
+class Tally:
+    """A step's counts of what its state holds (for limits and progress)."""
+
+    solutions: int  # what max_solutions counts
+    undecided: int = 0
+    extra: dict[str, float] = field(default_factory=dict)
+
+
+class Step(Protocol):
+    """What the driver needs from a search.  The step's *state* must have a ``stack``
+    (:class:`~.buffer.BoxStack`); the rest of it is the step's business.
+
+    Executors with workers also use :meth:`known`, :meth:`found` and :meth:`merge`, and
+    the step and its state must pickle.
+    """
+
+    batch_size: int
+
+    def start(self, known: Any = None) -> Any:
+        """A new state with an empty stack, seeded with ``known`` (see :meth:`known`)."""
+
+    def process(self, lo: np.ndarray, hi: np.ndarray, state: Any) -> None:
+        """Process a batch ``(B, n)``: record results in ``state``, push what remains of the
+        boxes on ``state.stack``.  Whatever is neither pushed nor recorded is proven empty."""
+
+    def tally(self, state: Any) -> Tally: ...
+
+    def known(self, state: Any) -> Any:
+        """What a task must know from ``state`` (small, picklable; ``None`` if nothing)."""
+
+    def found(self, state: Any) -> Any:
+        """What ``state`` recorded since :meth:`start` (picklable), for :meth:`merge`."""
+
+    def merge(self, state: Any, found: Any) -> None:
+        """Add a task's :meth:`found` to ``state``."""
+
+
+@dataclass(kw_only=True)
+class SearchStats:
+    """Counters of one search (steps add their own in their state)."""
+
+    executor: str = "serial"  # "serial" | "processes" | "dask"
+    workers: int = 1
+    boxes: int = 0  # boxes processed by the step
+    batches: int = 0
+    tasks: int = 0  # worker tasks finished
+    resubmitted: int = 0  # task slices handed out again after a worker was lost
+    max_pending: int = 0
+    time: float = 0.0  # wall seconds
+    cpu: float = 0.0  # CPU seconds: this process plus every task
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(kw_only=True)
+class SearchRun:
+    """The end of a search: its status, the step's state (records, and the pending boxes
+    in ``state.stack``) and the counters."""
+
+    status: SearchStatus
+    state: Any
+    stats: SearchStats
+
+    @property
+    def pending(self) -> int:
+        return len(self.state.stack)
+
+
+ProgressCallback = Callable[[Progress], bool | None]
+
+
+class Search:
+    """One search in progress: the step and its state, limits, callbacks and counters.
+
+    Executors drive it: :meth:`run_serial` processes batches here; :meth:`take`,
+    :meth:`give_back` and :meth:`absorb` hand slices of the buffer to workers and take their
+    results back.  ``count_new``: limits on solutions count only what this search finds
+    (a task seeded with known solutions), not what its state started with.
+    """
+
+    def __init__(
+        self,
+        step: Step,
+        state: Any,
+        limits: Limits | None = None,
+        *,
+        progress: ProgressCallback | None = None,
+        cancel: Any = None,
+        stats: SearchStats | None = None,
+        count_new: bool = False,
+    ):
+        self.step = step
+        self.state = state
+        self.limits = limits or Limits()
+        self.progress = progress
+        self.cancel = cancel
+        self.stats = stats or SearchStats()
+        self.reason: SearchStatus | None = None  # why the search stopped, once it has
+        self.in_flight = 0  # boxes handed out to tasks and not back yet
+        self._base = step.tally(state).solutions if count_new else 0
+        self._boxes0 = self.stats.boxes
+        self._t0 = time.perf_counter()
+        self._c0 = time.process_time()
+        self._elapsed0 = self.stats.time
+        self._cpu0 = self.stats.cpu
+        self._task_cpu = 0.0
+
+    # -- clock and limits --------------------------------------------------------------------
+    def elapsed(self) -> float:
+        """Seconds since this search started."""
+        return time.perf_counter() - self._t0
+
+    def remaining_time(self) -> float | None:
+        t = self.limits.timeout
+        return None if t is None else max(t - self.elapsed(), 0.0)
+
+    def solutions(self) -> int:
+        return self.step.tally(self.state).solutions - self._base
+
+    def boxes(self) -> int:
+        """Boxes processed by this search (not counting earlier runs of the same state)."""
+        return self.stats.boxes - self._boxes0
+
+    def stopped(self) -> bool:
+        """True once a limit, the cancel event or the progress callback stopped the search."""
+        if self.reason is not None:
+            return True
+        lim = self.limits
+        if self.cancel is not None and self.cancel.is_set():
+            self.reason = SearchStatus.CANCELLED
+        elif lim.timeout is not None and self.elapsed() >= lim.timeout:
+            self.reason = SearchStatus.TIMEOUT
+        elif lim.max_boxes is not None and self.boxes() >= lim.max_boxes:
+            self.reason = SearchStatus.MAX_BOXES
+        elif lim.max_solutions is not None and self.solutions() >= lim.max_solutions:
+            self.reason = SearchStatus.MAX_SOLUTIONS
+        return self.reason is not None
+
+    @property
+    def pending(self) -> int:
+        return len(self.state.stack) + self.in_flight
+
+    # -- serial work -------------------------------------------------------------------------
+    def batch(self) -> None:
+        """Process one batch from the buffer here."""
+        lo, hi = self.state.stack.pop(self.step.batch_size)
+        self.step.process(lo, hi, self.state)
+        self.stats.boxes += lo.shape[0]
+        self.stats.batches += 1
+        self.stats.max_pending = max(self.stats.max_pending, self.pending)
+        self.report()
+
+    def run_serial(self, *, until: float | None = None, grow_to: int | None = None) -> None:
+        """Process batches here until the buffer is empty or the search stopped; also stop
+        after ``until`` seconds, or once the buffer holds ``grow_to`` boxes."""
+        stack = self.state.stack
+        with np.errstate(all="ignore"):
+            while len(stack) and not self.stopped():
+                if until is not None and self.elapsed() >= until:
+                    break
+                if grow_to is not None and len(stack) >= grow_to:
+                    break
+                self.batch()
+
+    # -- work on tasks -----------------------------------------------------------------------
+    def take(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Hand out up to ``k`` boxes from the buffer; they stay counted as pending."""
+        lo, hi = self.state.stack.pop(k)
+        self.in_flight += lo.shape[0]
+        return lo, hi
+
+    def give_back(self, lo: np.ndarray, hi: np.ndarray) -> None:
+        """Boxes of a task that will not return (lost worker, cancelled): pending again."""
+        self.in_flight -= lo.shape[0]
+        self.state.stack.push(lo, hi)
+
+    def absorb(self, handed: int, result: TaskResult) -> None:
+        """A task's result for ``handed`` boxes: its records, its unfinished boxes."""
+        self.in_flight -= handed
+        self.step.merge(self.state, result.found)
+        self.state.stack.push(result.lo, result.hi)
+        self.stats.boxes += result.boxes
+        self.stats.batches += result.batches
+        self.stats.tasks += 1
+        self.stats.max_pending = max(self.stats.max_pending, self.pending)
+        self._task_cpu += result.cpu
+
+    def task_limits(self, slots: int, seconds: float, boxes: int | None = None) -> Limits:
+        """Limits for one task of at most ``seconds`` and ``boxes`` when ``slots`` tasks
+        share the remaining budget."""
+        lim = self.limits
+        t = self.remaining_time()
+        sols = None
+        if lim.max_boxes is not None:
+            share = max(1, math.ceil((lim.max_boxes - self.boxes()) / slots))
+            boxes = share if boxes is None else min(boxes, share)
+        if lim.max_solutions is not None:
+            sols = max(1, lim.max_solutions - self.solutions())
+        return Limits(
+            timeout=seconds if t is None else min(seconds, t), max_boxes=boxes, max_solutions=sols
+        )
+
+    # -- reporting ---------------------------------------------------------------------------
+    def report(self) -> None:
+        """Call the progress callback; ``False`` from it cancels the search."""
+        if self.progress is None:
+            return
+        t = self.step.tally(self.state)
+        p = Progress(
+            self.stats.boxes,
+            self.pending,
+            t.solutions,
+            t.undecided,
+            self._elapsed0 + self.elapsed(),
+            self.stats.tasks,
+            dict(t.extra),
+        )
+        if self.progress(p) is False and self.reason is None:
+            self.reason = SearchStatus.CANCELLED
+
+    def finish(self) -> SearchRun:
+        """The run's status and counters (call once every task is back)."""
+        if self.in_flight:
+            raise RuntimeError("search finished with boxes still handed out")
+        self.stats.time = self._elapsed0 + self.elapsed()
+        self.stats.cpu = self._cpu0 + time.process_time() - self._c0 + self._task_cpu
+        if len(self.state.stack) == 0:
+            status = SearchStatus.COMPLETE
+        elif self.reason is None:
+            raise RuntimeError("search stopped with pending boxes and no reason")
+        else:
+            status = self.reason
+        return SearchRun(status=status, state=self.state, stats=self.stats)
+
+
+class Executor(Protocol):
+    """Where the batches of a :class:`Search` run."""
+
+    name: str
+
+    def run(self, search: Search) -> None:
+        """Work until the buffer is empty and every task is back, or the search stopped."""
+
+
+class SerialExecutor:
+    """Every batch in this process, one after the other."""
+
+    name = "serial"
+
+    def run(self, search: Search) -> None:
+        search.run_serial()
+
+    def __repr__(self) -> str:
+        return "SerialExecutor()"
+
+
+def run_search(
+    step: Step,
+    lo: np.ndarray | None = None,
+    hi: np.ndarray | None = None,
+    *,
+    limits: Limits | None = None,
+    executor: Executor | None = None,
+    progress: ProgressCallback | None = None,
+    cancel: Any = None,
+    previous: SearchRun | None = None,
+) -> SearchRun:
+    """Search the boxes ``lo, hi`` (``(B, n)``) with ``step`` (see the module docstring).
+
+    ``previous`` continues an earlier run: its state (records and pending boxes) and
+    counters; ``lo, hi`` are then added to its buffer.  ``executor`` defaults to
+    :class:`SerialExecutor` (see :func:`.executors.resolve_executor` for the others).
+    """
+    executor = executor or SerialExecutor()
+    if previous is None:
+        state, stats = step.start(), SearchStats()
+    else:
+        state, stats = previous.state, previous.stats
+    if lo is not None:
+        state.stack.push(np.atleast_2d(lo), np.atleast_2d(hi))
+    search = Search(step, state, limits, progress=progress, cancel=cancel, stats=stats)
+    search.stats.executor = executor.name
+    executor.run(search)
+    return search.finish()
+
+
+@dataclass(kw_only=True)
+class TaskResult:
+    """What a task sends back: the step's new records and the boxes it did not finish."""
+
+    found: Any
+    lo: np.ndarray
+    hi: np.ndarray
+    boxes: int
+    batches: int
+    cpu: float  # thread CPU seconds of the task
+    wall: float
+
+
+def run_task(step: Step, lo: np.ndarray, hi: np.ndarray, known: Any, limits: Limits) -> TaskResult:
+    """The worker side of every executor: the batch loop on a slice of the buffer.
+
+    A function of its inputs only: ``step`` (scattered once per search with Dask),
+    the boxes, what is known and the task's limits.
+    """
+    t0, c0 = time.perf_counter(), time.thread_time()
+    state = step.start(known)
+    state.stack.push(lo, hi)
+    search = Search(step, state, limits, count_new=True)
+    search.run_serial()
+    rlo, rhi = state.stack.snapshot()
+    return TaskResult(
+        found=step.found(state),
+        lo=rlo,
+        hi=rhi,
+        boxes=search.stats.boxes,
+        batches=search.stats.batches,
+        cpu=time.thread_time() - c0,
+        wall=time.perf_counter() - t0,
+    )
