@@ -1,15 +1,15 @@
 """Searches on local worker processes and on a Dask cluster give the serial answer.
 
-One ``distributed.LocalCluster`` with 2 worker processes serves the whole module (started
-once, with ``allowed-failures = 0`` so that a task on a killed worker fails at once and the
-driver, not the scheduler, must hand its boxes out again).  Every search here skips the
+One ``distributed.LocalCluster`` with 2 worker processes serves the whole module (the
+``dask_client`` fixture of ``conftest.py``, with ``allowed-failures = 0`` so that a task on
+a killed worker fails at once and the driver, not the scheduler, must hand its boxes out
+again).  Every search here skips the
 serial warm-up and growth phase, so that its boxes go through the workers.
 """
 
 from __future__ import annotations
 
 import json
-import logging
 import multiprocessing
 import os
 import signal
@@ -29,27 +29,8 @@ TASK = {"warmup": 0.0, "grow": 0.0, "task_seconds": 0.25}
 
 
 @pytest.fixture(scope="module")
-def client():
-    distributed = pytest.importorskip("distributed")
-    import dask
-
-    config = {
-        "distributed.scheduler.allowed-failures": 0,
-        # Dask's MALLOC_TRIM_THRESHOLD_=65536 doubles the time of numpy-heavy batches
-        "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
-    }
-    with dask.config.set(config):
-        cluster = distributed.LocalCluster(
-            n_workers=2,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-            silence_logs=logging.CRITICAL,
-        )
-    client = distributed.Client(cluster, set_as_default=False)
-    yield client
-    client.close()
-    cluster.close()
+def client(dask_client):
+    return dask_client
 
 
 def make_executor(request, kind: str, **options):
