@@ -93,6 +93,16 @@ def assert_same_solutions(res, ref) -> None:
     assert len(res.undecided) == len(ref.undecided)
 
 
+def assert_nothing_lost(res, ref) -> None:
+    """A stopped search lost nothing: each reference solution is certified or lies in a
+    pending box."""
+    boxes = [(s.lo, s.hi) for s in res.solutions]
+    boxes += list(zip(res.pending_lo, res.pending_hi, strict=True))
+    for s in ref.solutions:
+        x = s.midpoint
+        assert any(np.all((a <= x) & (x <= b)) for a, b in boxes)
+
+
 # -- the same answer ---------------------------------------------------------------------------
 def test_solve_equals_serial(katsura, workers):
     system, ref = katsura
@@ -135,6 +145,7 @@ def test_max_solutions_is_honoured(katsura, any_executor):
     res = solve(system, max_solutions=3, executor=any_executor)
     assert res.status == "max_solutions" and len(res.pending) > 0
     assert 3 <= len(res.solutions) < 16
+    assert_nothing_lost(res, katsura[1])  # the running tasks' boxes came back pending
 
 
 def test_progress_callback_cancels(katsura, any_executor):
@@ -148,13 +159,7 @@ def test_progress_callback_cancels(katsura, any_executor):
     res = solve(system, executor=any_executor, progress=progress)
     assert res.status == "cancelled" and len(res.pending) > 0
     assert seen[-1].boxes >= 3000 and len(res.solutions) == seen[-1].solutions
-    # nothing lost: every reference solution is certified or in a pending box
-    ref = katsura[1]
-    boxes = [(s.lo, s.hi) for s in res.solutions]
-    boxes += list(zip(res.pending_lo, res.pending_hi, strict=True))
-    for s in ref.solutions:
-        x = s.midpoint
-        assert any(np.all((a <= x) & (x <= b)) for a, b in boxes)
+    assert_nothing_lost(res, katsura[1])
 
 
 # -- lost workers ------------------------------------------------------------------------------
