@@ -4,7 +4,8 @@ One ``distributed.LocalCluster`` (2 worker processes, ``allowed-failures = 0``: 
 killed worker fails at once, so the service itself must run the job again) and one
 service on it (FastAPI ``TestClient``) serve the module.  A job on the cluster gives the
 result the local pool gives; a cancel stops the running search through its progress
-callback (partial result kept); a worker killed mid-job costs that job one attempt, not
+callback (partial result kept), and a job that never reads its flag has its worker
+restarted after the grace; a worker killed mid-job costs that job one attempt, not
 the other job running beside it, and the service keeps serving.
 """
 
@@ -51,7 +52,9 @@ def settings_for(data_dir: Path, **kw) -> ServiceSettings:
 def service(dask_client, tmp_path_factory):
     """The HTTP API of a service whose jobs run on the module's cluster."""
     address = dask_client.scheduler.address
-    settings = settings_for(tmp_path_factory.mktemp("dask-svc"), scheduler=address)
+    settings = settings_for(
+        tmp_path_factory.mktemp("dask-svc"), scheduler=address, cancel_grace=3.0
+    )
     with TestClient(create_app(settings)) as http:
         yield http
 
@@ -123,6 +126,28 @@ def test_cancel_stops_the_running_search(service):
     assert j["error"] == "cancelled while running (partial result)"
     assert time.monotonic() - t0 < 60  # a bound on a hang, not a timing claim
     # the worker is free again: a quick job runs
+    other = wait(service, submit(service, {"kind": "sleep", "params": {"seconds": 0.1}}))
+    assert other["status"] == "done"
+
+
+def test_cancel_of_a_job_that_never_reads_its_flag_restarts_its_worker(service, dask_client):
+    job_id = submit(service, {"kind": "sleep", "params": {"seconds": 120, "cooperative": False}})
+    wait(service, job_id, until=lambda j: j["status"] == "running")
+    deadline = time.monotonic() + 30
+    while not (
+        busy := [w for w, k in dask_client.processing().items() if any(job_id in x for x in k)]
+    ):
+        assert time.monotonic() < deadline, "the job's task never started"
+        time.sleep(0.05)
+    pid = dask_client.run(os.getpid, workers=busy)[busy[0]]
+    assert service.delete(f"/v1/jobs/{job_id}").status_code == 202
+    j = wait(service, job_id)
+    assert j["status"] == "cancelled" and "dropped" in j["error"], j
+    # its worker process was restarted by its nanny: the thread is gone with it
+    deadline = time.monotonic() + 60
+    while pid in dask_client.run(os.getpid).values() or len(dask_client.nthreads()) < 2:
+        assert time.monotonic() < deadline, "the worker was not restarted"
+        time.sleep(0.2)
     other = wait(service, submit(service, {"kind": "sleep", "params": {"seconds": 0.1}}))
     assert other["status"] == "done"
 

@@ -16,8 +16,8 @@ service's disk:
   its lease, which the dispatcher sets when the store holds a cancel request (or the job
   was taken away); the search stops between two rounds and its partial result is kept.
   A job still running ``cancel_grace`` seconds after the request (``kill_grace`` past its
-  time limit) is ended in the store and its task cancelled; a thread that never reads its
-  flag runs on until its own limits stop it;
+  time limit) is ended in the store, its task cancelled and the worker running it
+  restarted (by its nanny), as the pool kills its process;
 * the **outcome** is the task's return value, which the dispatcher records with
   ``JobStore.finish`` under the job's lease (a job ended meanwhile is left as it is);
 * a **lost worker**: the scheduler first runs the task again elsewhere (up to its
@@ -317,10 +317,25 @@ class DaskJobRunner:
             self._set_flag(flight.job.id, flight.lease)
 
     def _abandon(self, flight: _Flight, status: JobStatus, error: str) -> None:
+        """End the job in the store, cancel its task and restart the worker running it
+        (as the pool kills its process): a thread cannot be stopped from outside."""
         if self.store.force_finish(flight.job.id, flight.lease, status, error):
             flight.abandoned = True
             self._halt(flight)
+            key = flight.future.key
+            where = [w for w, keys in self.client.processing().items() if key in keys]
             self.client.cancel([flight.future])
+            if where:
+                threading.Thread(
+                    target=self._restart, args=(where,), name="certsolve-dask-restart", daemon=True
+                ).start()
+
+    def _restart(self, workers: list[str]) -> None:
+        log.warning("restarting Dask worker(s) %s: a dropped job was still running", workers)
+        try:
+            self.client.restart_workers(workers, raise_for_error=False)
+        except Exception as exc:  # noqa: BLE001 - no nanny, or the client is closing
+            log.warning("cannot restart Dask worker(s) %s: %s", workers, exc)
 
     def _set_flag(self, job_id: str, lease: str) -> None:
         from distributed import Event
