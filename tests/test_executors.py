@@ -9,6 +9,7 @@ serial warm-up and growth phase, so that its boxes go through the workers.
 
 from __future__ import annotations
 
+import importlib
 import json
 import multiprocessing
 import os
@@ -213,6 +214,9 @@ def cli(capsys, *argv):
 
 
 def test_cli_scheduler_runs_on_the_cluster(capsys, client):
+    # a worker the kill test restarted imports certsolve first: under load, that import
+    # could outlast the whole (2.6 s) search, which would then end in the serial warm-up
+    client.run(importlib.import_module, "certsolve.solver.dask_executor")
     address = client.scheduler.address
     code, out, _ = cli(capsys, "solve", K5, "--scheduler", address, "--json")
     d = json.loads(out)

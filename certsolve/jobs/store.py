@@ -513,18 +513,13 @@ class JobStore:
                 "SELECT id, attempts, max_attempts, cancel_requested_at FROM jobs WHERE status = ?"
             )
             args: list[Any] = [JobStatus.RUNNING]
-            if worker_pids is not None:
-                pids = [int(p) for p in worker_pids]
-                if not pids:
-                    return []
-                sql += f" AND worker_pid IN ({', '.join('?' * len(pids))})"
-                args += pids
-            if leases is not None:
-                held = [str(x) for x in leases]
-                if not held:
-                    return []
-                sql += f" AND lease IN ({', '.join('?' * len(held))})"
-                args += held
+            for col, given, cast in (("worker_pid", worker_pids, int), ("lease", leases, str)):
+                if given is not None:
+                    vals = [cast(v) for v in given]
+                    if not vals:
+                        return []
+                    sql += f" AND {col} IN ({', '.join('?' * len(vals))})"
+                    args += vals
             for job_id, attempts, max_attempts, cancel_at in con.execute(sql, args).fetchall():
                 if not count_attempt:
                     attempts = max(0, attempts - 1)
