@@ -5,11 +5,14 @@
   posted and the clock stops when the last one is done (median of --repeat runs);
 * the overhead of one job over the direct library call (median): a job is posted, its
   status polled every --poll seconds until done, one job at a time; compared with
-  ``parse_minibex`` + ``solve`` in this process.
+  ``parse_minibex`` + ``solve`` in this process;
+* with ``--dask N``, the same for a service whose jobs run on a ``distributed.LocalCluster``
+  of N single-threaded worker processes (``serve --scheduler``; the scheduler runs in this
+  process, not in the service's).
 
 Usage::
 
-    python benchmarks/api_bench.py [--jobs 200] [--latency-jobs 40] [--workers 1,2]
+    python benchmarks/api_bench.py [--jobs 200] [--latency-jobs 40] [--workers 1,2] [--dask 2]
 """
 
 from __future__ import annotations
@@ -39,7 +42,7 @@ def free_port() -> int:
 
 
 class Server:
-    def __init__(self, workers: int):
+    def __init__(self, workers: int, scheduler: str | None = None):
         self.tmp = tempfile.TemporaryDirectory(prefix="certsolve-bench-")
         port = free_port()
         self.proc = subprocess.Popen(
@@ -50,8 +53,7 @@ class Server:
                 "serve",
                 "--port",
                 str(port),
-                "--workers",
-                str(workers),
+                *(["--workers", str(workers)] if scheduler is None else ["--scheduler", scheduler]),
                 "--data-dir",
                 self.tmp.name,
                 "--log-level",
@@ -136,44 +138,79 @@ def direct(n: int) -> list[float]:
     return out[3:]
 
 
+def local_cluster(n: int):
+    """A LocalCluster of ``n`` single-threaded worker processes (docs/distributed.md)."""
+    import logging
+
+    import dask
+    import distributed
+
+    env = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
+    with dask.config.set(env):
+        return distributed.LocalCluster(
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.CRITICAL,
+        )
+
+
+def measure(server: Server, args) -> tuple[list[float], tuple[list[float], list[float]]]:
+    rates = [throughput(server, args.jobs) for _ in range(args.repeat)]
+    return rates, latencies(server, args.latency_jobs, args.poll)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--jobs", type=int, default=200, help="jobs per throughput run")
     ap.add_argument("--repeat", type=int, default=3, help="throughput runs (median)")
     ap.add_argument("--latency-jobs", type=int, default=40, help="jobs for the overhead")
     ap.add_argument("--workers", default="1,2", help="worker counts to compare")
+    ap.add_argument("--dask", type=int, default=0, help="also on a LocalCluster of N workers")
     ap.add_argument("--poll", type=float, default=0.002, help="status poll interval (s)")
     args = ap.parse_args()
-    counts = [int(w) for w in args.workers.split(",")]
+    counts = [int(w) for w in args.workers.split(",") if w]
 
     rows = []
-    lat = None
     for w in counts:
         server = Server(w)
         try:
-            rates = [throughput(server, args.jobs) for _ in range(args.repeat)]
-            if lat is None:
-                lat = latencies(server, args.latency_jobs, args.poll)
+            rows.append((f"{w} processes", *measure(server, args)))
         finally:
             server.close()
-        rows.append((w, statistics.median(rates), min(rates), max(rates)))
+    if args.dask:
+        cluster = local_cluster(args.dask)
+        try:
+            server = Server(args.dask, scheduler=cluster.scheduler_address)
+            try:
+                rows.append((f"dask, {args.dask} workers", *measure(server, args)))
+            finally:
+                server.close()
+        finally:
+            cluster.close()
     d = direct(args.latency_jobs)
+    md = statistics.median(d) * 1e3
 
     print(f"certsolve job service, {os.cpu_count()} cores (shared), small solve jobs")
+    print(f"direct library call (parse + solve), median of {len(d)}: {md:.2f} ms")
     print()
-    print(f"{'workers':>8} {'jobs/s (median)':>16} {'min':>8} {'max':>8}")
-    for w, med, lo, hi in rows:
-        print(f"{w:>8} {med:>16.1f} {lo:>8.1f} {hi:>8.1f}")
-    print()
-    assert lat is not None
-    client, worker = lat
-    md, mc, mw = (statistics.median(x) * 1e3 for x in (d, client, worker))
-    print(f"{'one job, median of ' + str(len(d)):<44} {'ms':>8}")
-    print(f"{'direct library call (parse + solve)':<44} {md:>8.2f}")
-    print(f"{'job, run time inside the worker':<44} {mw:>8.2f}")
-    print(f"{'job, POST to done as seen by the client':<44} {mc:>8.2f}")
-    print(f"{'overhead of a job over the direct call':<44} {mc - md:>8.2f}")
-    print(f"(client polls every {args.poll * 1e3:g} ms; 1-worker server)")
+    head = ("runner", "jobs/s", "min", "max", "elapsed", "POST->done", "overhead")
+    print(
+        f"{head[0]:>18} {head[1]:>8} {head[2]:>7} {head[3]:>7} {head[4]:>10} {head[5]:>11}"
+        f" {head[6]:>9}"
+    )
+    for name, rates, (client, worker) in rows:
+        mc, mw = (statistics.median(x) * 1e3 for x in (client, worker))
+        print(
+            f"{name:>18} {statistics.median(rates):>8.1f} {min(rates):>7.1f} {max(rates):>7.1f}"
+            f" {mw:>8.2f}ms {mc:>9.2f}ms {mc - md:>7.2f}ms"
+        )
+    print(
+        f"(jobs/s: median of {args.repeat} batches of {args.jobs}; times: median of "
+        f"{args.latency_jobs} jobs run one at a time, client polls every {args.poll * 1e3:g} ms;"
+        " elapsed: the job's claim to its recorded end)"
+    )
     return 0
 
 

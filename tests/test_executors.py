@@ -1,15 +1,16 @@
 """Searches on local worker processes and on a Dask cluster give the serial answer.
 
-One ``distributed.LocalCluster`` with 2 worker processes serves the whole module (started
-once, with ``allowed-failures = 0`` so that a task on a killed worker fails at once and the
-driver, not the scheduler, must hand its boxes out again).  Every search here skips the
+One ``distributed.LocalCluster`` with 2 worker processes serves the whole module (the
+``dask_client`` fixture of ``conftest.py``, with ``allowed-failures = 0`` so that a task on
+a killed worker fails at once and the driver, not the scheduler, must hand its boxes out
+again).  Every search here skips the
 serial warm-up and growth phase, so that its boxes go through the workers.
 """
 
 from __future__ import annotations
 
+import importlib
 import json
-import logging
 import multiprocessing
 import os
 import signal
@@ -29,27 +30,8 @@ TASK = {"warmup": 0.0, "grow": 0.0, "task_seconds": 0.25}
 
 
 @pytest.fixture(scope="module")
-def client():
-    distributed = pytest.importorskip("distributed")
-    import dask
-
-    config = {
-        "distributed.scheduler.allowed-failures": 0,
-        # Dask's MALLOC_TRIM_THRESHOLD_=65536 doubles the time of numpy-heavy batches
-        "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
-    }
-    with dask.config.set(config):
-        cluster = distributed.LocalCluster(
-            n_workers=2,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-            silence_logs=logging.CRITICAL,
-        )
-    client = distributed.Client(cluster, set_as_default=False)
-    yield client
-    client.close()
-    cluster.close()
+def client(dask_client):
+    return dask_client
 
 
 def make_executor(request, kind: str, **options):
@@ -112,6 +94,16 @@ def assert_same_solutions(res, ref) -> None:
     assert len(res.undecided) == len(ref.undecided)
 
 
+def assert_nothing_lost(res, ref) -> None:
+    """A stopped search lost nothing: each reference solution is certified or lies in a
+    pending box."""
+    boxes = [(s.lo, s.hi) for s in res.solutions]
+    boxes += list(zip(res.pending_lo, res.pending_hi, strict=True))
+    for s in ref.solutions:
+        x = s.midpoint
+        assert any(np.all((a <= x) & (x <= b)) for a, b in boxes)
+
+
 # -- the same answer ---------------------------------------------------------------------------
 def test_solve_equals_serial(katsura, workers):
     system, ref = katsura
@@ -154,6 +146,7 @@ def test_max_solutions_is_honoured(katsura, any_executor):
     res = solve(system, max_solutions=3, executor=any_executor)
     assert res.status == "max_solutions" and len(res.pending) > 0
     assert 3 <= len(res.solutions) < 16
+    assert_nothing_lost(res, katsura[1])  # the running tasks' boxes came back pending
 
 
 def test_progress_callback_cancels(katsura, any_executor):
@@ -167,13 +160,7 @@ def test_progress_callback_cancels(katsura, any_executor):
     res = solve(system, executor=any_executor, progress=progress)
     assert res.status == "cancelled" and len(res.pending) > 0
     assert seen[-1].boxes >= 3000 and len(res.solutions) == seen[-1].solutions
-    # nothing lost: every reference solution is certified or in a pending box
-    ref = katsura[1]
-    boxes = [(s.lo, s.hi) for s in res.solutions]
-    boxes += list(zip(res.pending_lo, res.pending_hi, strict=True))
-    for s in ref.solutions:
-        x = s.midpoint
-        assert any(np.all((a <= x) & (x <= b)) for a, b in boxes)
+    assert_nothing_lost(res, katsura[1])
 
 
 # -- lost workers ------------------------------------------------------------------------------
@@ -227,6 +214,9 @@ def cli(capsys, *argv):
 
 
 def test_cli_scheduler_runs_on_the_cluster(capsys, client):
+    # a worker the kill test restarted imports certsolve first: under load, that import
+    # could outlast the whole (2.6 s) search, which would then end in the serial warm-up
+    client.run(importlib.import_module, "certsolve.solver.dask_executor")
     address = client.scheduler.address
     code, out, _ = cli(capsys, "solve", K5, "--scheduler", address, "--json")
     d = json.loads(out)

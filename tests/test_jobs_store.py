@@ -110,6 +110,18 @@ def test_release_requeues_then_fails_after_max_attempts(store):
     assert store.get(other).status == "running"
 
 
+def test_release_by_lease_touches_that_job_alone(store):
+    """Jobs claimed for no local process (a Dask worker) share worker_pid NULL: each is
+    released by its lease."""
+    a, b = store.add([new(), new()])
+    (ja, la), (jb, _) = store.claim(None), store.claim(None)
+    assert {ja.id, jb.id} == {a, b} and store.get(a).worker_pid is None
+    assert store.release("its Dask worker was lost", leases=[la]) == [(ja.id, "queued")]
+    assert store.get(jb.id).status == "running"
+    assert store.release("x", leases=[]) == [] and store.release("x", leases=["nope"]) == []
+    assert store.get(jb.id).status == "running"
+
+
 def test_restart_recovery_and_orderly_shutdown(store):
     a, b, c = store.add([new(), new(), new()])
     store.claim(1)

@@ -26,6 +26,7 @@ __all__ = [
     "add_executor_options",
     "describe_run",
     "executor_from_args",
+    "scheduler_from_args",
     "user_errors",
     "option_names",
     "validated",
@@ -166,6 +167,28 @@ def add_executor_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def scheduler_from_args(args: argparse.Namespace) -> str | None:
+    """The Dask scheduler address of ``--scheduler``, else of ``$CERTSOLVE_SCHEDULER``
+    unless ``--workers`` was given (``tcp://`` added when missing); None: no cluster."""
+    address = args.scheduler
+    if address is None and args.workers is None:
+        address = os.environ.get(SCHEDULER_ENV) or None
+    if address is None:
+        return None
+    where = "--scheduler" if args.scheduler is not None else f"${SCHEDULER_ENV}"
+    address = address.strip()
+    if not address or any(c.isspace() for c in address):
+        raise CliError(f"{where}: expected a scheduler address tcp://HOST:PORT")
+    if "://" not in address:
+        address = "tcp://" + address
+    if importlib.util.find_spec("distributed") is None:
+        raise CliError(
+            f"{where}: running on a Dask cluster needs the optional dependency "
+            "'distributed': pip install 'certsolve[distributed]'"
+        )
+    return address
+
+
 def executor_from_args(args: argparse.Namespace) -> str | int:
     """The executor spec for the library: ``"auto"``, a number of processes, or a Dask
     scheduler address.  An explicit ``--workers`` wins over ``$CERTSOLVE_SCHEDULER``."""
@@ -174,21 +197,8 @@ def executor_from_args(args: argparse.Namespace) -> str | int:
             "--workers and --scheduler: give one (with --scheduler the cluster's workers run "
             "the search)"
         )
-    address = args.scheduler
-    if address is None and args.workers is None:
-        address = os.environ.get(SCHEDULER_ENV) or None
+    address = scheduler_from_args(args)
     if address is not None:
-        where = "--scheduler" if args.scheduler is not None else f"${SCHEDULER_ENV}"
-        address = address.strip()
-        if not address or any(c.isspace() for c in address):
-            raise CliError(f"{where}: expected a scheduler address tcp://HOST:PORT")
-        if "://" not in address:
-            address = "tcp://" + address
-        if importlib.util.find_spec("distributed") is None:
-            raise CliError(
-                f"{where}: running on a Dask cluster needs the optional dependency "
-                "'distributed': pip install 'certsolve[distributed]'"
-            )
         return address
     text = "auto" if args.workers is None else args.workers.strip()
     if text == "auto":

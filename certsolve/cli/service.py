@@ -1,6 +1,7 @@
 """The job service on this machine, from the command line.
 
-* ``certsolve serve``  -- run the HTTP API with its worker processes (``docs/api.md``)
+* ``certsolve serve``  -- run the HTTP API with its worker processes, or with its jobs on a
+  Dask cluster (``--scheduler``; ``docs/api.md``, ``docs/distributed.md``)
 * ``certsolve batch``  -- run a JSON-lines file of jobs offline, resumable
 
 The client commands (``submit``, ``status``, ``result``, ``cancel``) are in :mod:`.remote`.
@@ -12,7 +13,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .common import CliError, print_json
+from .common import SCHEDULER_ENV, CliError, print_json, scheduler_from_args
 
 
 def register(sub) -> None:
@@ -24,13 +25,21 @@ def register(sub) -> None:
 def _register_serve(sub) -> None:
     p = sub.add_parser(
         "serve",
-        description="Serve the job API (FastAPI + uvicorn). Jobs run in worker processes and "
-        "are kept in DATA_DIR/jobs.sqlite3: a restart loses nothing. The web page is at /, "
-        "the API docs at /docs.",
+        description="Serve the job API (FastAPI + uvicorn). Jobs run in worker processes "
+        "(or on a Dask cluster: --scheduler) and are kept in DATA_DIR/jobs.sqlite3: a restart "
+        "loses nothing. The web page is at /, the API docs at /docs.",
     )
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (127.0.0.1)")
     p.add_argument("--port", type=int, default=8000, help="port (8000)")
     p.add_argument("--workers", type=int, default=None, help="worker processes (cores)")
+    p.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="tcp://HOST:PORT",
+        help="run the jobs on the Dask cluster of this scheduler, one job per worker thread, "
+        f"instead of local worker processes (default: ${SCHEDULER_ENV} if set and --workers "
+        "is not given; needs pip install 'certsolve[distributed]')",
+    )
     p.add_argument("--data-dir", default=None, help="job store directory (./certsolve-data)")
     p.add_argument("--max-attempts", type=int, default=None, help="runs of a crashing job (2)")
     p.add_argument(
@@ -69,9 +78,21 @@ def _register_serve(sub) -> None:
 
 
 def _settings(args, **extra):
+    """The service settings of a command's options and the ``CERTSOLVE_*`` variables; a
+    Dask scheduler only from ``--scheduler`` / ``$CERTSOLVE_SCHEDULER`` of a command that
+    has the option (:func:`.common.scheduler_from_args`)."""
+    import os
+
     from ..jobs import ServiceSettings
     from ..jobs.access import AccessError, load_access
 
+    environ = {k: v for k, v in os.environ.items() if k != SCHEDULER_ENV}
+    if hasattr(args, "scheduler"):
+        if args.scheduler is not None and args.workers is not None:
+            raise CliError(
+                "--workers and --scheduler: give one (the cluster's workers run the jobs)"
+            )
+        extra["scheduler"] = scheduler_from_args(args)
     try:
         if getattr(args, "tokens", None):
             extra["access"] = load_access(args.tokens)
@@ -79,6 +100,7 @@ def _settings(args, **extra):
             extra["keep_days"] = args.keep_days
             extra["housekeeping_interval"] = min(3600.0, args.keep_days * 86400.0 / 4)
         return ServiceSettings.from_env(
+            environ,
             data_dir=Path(args.data_dir) if getattr(args, "data_dir", None) else None,
             workers=args.workers,
             max_attempts=getattr(args, "max_attempts", None),
@@ -124,6 +146,17 @@ def _check_port(host: str, port: int) -> None:
             raise CliError(f"cannot listen on {host}:{port} ({exc.strerror})") from None
 
 
+def _check_scheduler(address: str) -> None:
+    """A clear error now if the Dask scheduler cannot be reached (not a traceback from
+    the server's start-up)."""
+    from ..jobs.dask_runner import check_scheduler
+
+    try:
+        check_scheduler(address)
+    except (OSError, TimeoutError) as exc:
+        raise CliError(f"--scheduler {address}: cannot reach the Dask scheduler ({exc})") from None
+
+
 def run_serve(args: argparse.Namespace) -> int:
     import logging
 
@@ -149,6 +182,8 @@ def run_serve(args: argparse.Namespace) -> int:
             "(or $CERTSOLVE_TOKENS), or --insecure to serve without them"
         )
     _check_port(args.host, args.port)
+    if settings.scheduler is not None:
+        _check_scheduler(settings.scheduler)
     try:
         service = JobService(settings)
         service.acquire()
@@ -160,9 +195,12 @@ def run_serve(args: argparse.Namespace) -> int:
     )
     access = settings.access
     who = "no tokens" if access is None else f"tokens of {len(access.clients)} client(s)"
+    where = f"{settings.workers} worker(s)"
+    if settings.scheduler is not None:
+        where = f"jobs on the Dask cluster at {settings.scheduler}"
     print(
         f"certsolve: serving http://{args.host}:{args.port} (web page at /, docs at /docs) with "
-        f"{settings.workers} worker(s), {who}, jobs in {settings.data_dir.resolve()}",
+        f"{where}, {who}, jobs in {settings.data_dir.resolve()}",
         file=sys.stderr,
         flush=True,
     )

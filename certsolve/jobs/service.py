@@ -1,4 +1,7 @@
-"""The job service: validated requests in, job records out; owns the store and the pool.
+"""The job service: validated requests in, job records out; owns the store and the runner
+of its jobs -- local worker processes (:class:`~.pool.WorkerPool`), or the Dask cluster of
+``settings.scheduler`` (:class:`~.dask_runner.DaskJobRunner`); both run the same
+:func:`~.worker.run_job` and record everything in the store.
 
 Used by the HTTP API (:mod:`certsolve.api`) and the offline batch runner.  One service owns
 a data directory at a time (an exclusive ``flock`` on ``service.lock``); on start it
@@ -23,7 +26,7 @@ import time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from datetime import UTC, datetime
-from typing import Any
+from typing import Any, Protocol
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
@@ -40,6 +43,7 @@ from .store import JobRow, JobStore, NewJob, new_job_id
 __all__ = [
     "BatchError",
     "BatchRequest",
+    "JobRunner",
     "JobService",
     "LimitError",
     "NoResult",
@@ -48,6 +52,7 @@ __all__ = [
     "ServiceError",
     "job_record",
     "iso_time",
+    "make_runner",
     "owner_filter",
 ]
 
@@ -164,8 +169,31 @@ def owner_filter(client: Client | None) -> str | None:
     return None if client is None or client.admin else client.name
 
 
+class JobRunner(Protocol):
+    """Where the jobs of the store run: :class:`.WorkerPool` or :class:`.DaskJobRunner`."""
+
+    restarts: int
+
+    def start(self) -> None: ...
+    def stop(self, timeout: float = 10.0) -> None: ...
+    def notify(self) -> None: ...
+    def alive(self) -> int: ...
+
+
+def make_runner(settings: ServiceSettings, store: JobStore) -> JobRunner | None:
+    """The runner ``settings`` ask for: the Dask cluster of ``scheduler``, else
+    ``workers`` local processes (None for 0: jobs are accepted, none run)."""
+    if settings.scheduler is not None:
+        from .dask_runner import DaskJobRunner
+
+        return DaskJobRunner(settings, store)
+    if settings.workers > 0:
+        return WorkerPool(settings, store)
+    return None
+
+
 class JobService:
-    """Submit, inspect and cancel jobs; run them on a :class:`.WorkerPool`."""
+    """Submit, inspect and cancel jobs; run them on a :class:`JobRunner`."""
 
     def __init__(self, settings: ServiceSettings):
         self.settings = settings
@@ -177,7 +205,7 @@ class JobService:
                 f"{settings.data_dir}: cannot use as data directory ({exc})"
             ) from None
         self.adapter = request_adapter(settings.enable_test_kinds)
-        self.pool: WorkerPool | None = None
+        self.pool: JobRunner | None = None
         self.housekeeper: Housekeeper | None = None
         self._lock_fd: int | None = None
 
@@ -202,7 +230,8 @@ class JobService:
         self._lock_fd = fd
 
     def start(self) -> None:
-        """Take the data directory, recover interrupted jobs, start the workers."""
+        """Take the data directory, recover interrupted jobs, start the runner (on a
+        Dask cluster: ``OSError`` / ``TimeoutError`` if its scheduler cannot be reached)."""
         self.acquire()
         recovered = self.store.release("the service stopped while the job was running")
         if recovered:
@@ -216,9 +245,11 @@ class JobService:
         if self.housekeeper is None:
             self.housekeeper = Housekeeper(self.store, self.settings)
             self.housekeeper.start()
-        if self.settings.workers > 0 and self.pool is None:
-            self.pool = WorkerPool(self.settings, self.store)
-            self.pool.start()
+        if self.pool is None:
+            runner = make_runner(self.settings, self.store)
+            if runner is not None:
+                runner.start()
+                self.pool = runner
 
     def close(self) -> None:
         if self.housekeeper is not None:
@@ -422,10 +453,13 @@ class JobService:
 
     def health(self) -> dict[str, Any]:
         counts = self.store.counts()
+        scheduler = self.settings.scheduler
         return {
             "status": "ok",
             "workers": {
-                "configured": self.settings.workers,
+                "runner": "processes" if scheduler is None else "dask",
+                "scheduler": scheduler,
+                "configured": self.settings.workers if scheduler is None else None,
                 "alive": self.pool.alive() if self.pool else 0,
                 "restarts": self.pool.restarts if self.pool else 0,
             },

@@ -1,5 +1,6 @@
-"""Service settings: where jobs live, how many workers, per-job defaults and ceilings, who
-may use the service (:mod:`.access`), how quick calls are bounded, how long jobs are kept."""
+"""Service settings: where jobs live, where they run (local worker processes, or the Dask
+cluster of ``scheduler``), per-job defaults and ceilings, who may use the service
+(:mod:`.access`), how quick calls are bounded, how long jobs are kept."""
 
 from __future__ import annotations
 
@@ -31,6 +32,8 @@ class ServiceSettings:
 
     data_dir: Path = field(default_factory=lambda: Path("certsolve-data"))
     workers: int = field(default_factory=default_workers)
+    # a Dask scheduler (tcp://host:8786): jobs run on its cluster, not on ``workers``
+    scheduler: str | None = None
 
     # -- per-job limits: defaults and ceilings ------------------------------------------------
     default_timeout: float = 600.0  # seconds of wall time
@@ -97,6 +100,10 @@ class ServiceSettings:
             raise ValueError("quick_workers and quick_heavy_workers must be >= 1")
         if not 0 < self.memory_stop <= 1:
             raise ValueError("memory_stop must be in (0, 1]")
+        if self.scheduler is not None and (
+            not self.scheduler.strip() or any(c.isspace() for c in self.scheduler.strip())
+        ):
+            raise ValueError("scheduler: expected a scheduler address tcp://HOST:PORT")
 
     @property
     def db_path(self) -> Path:
@@ -117,15 +124,18 @@ class ServiceSettings:
 
     @classmethod
     def from_env(cls, environ=None, **overrides) -> ServiceSettings:
-        """Settings from ``CERTSOLVE_DATA_DIR``, ``CERTSOLVE_WORKERS``, ``CERTSOLVE_TOKENS``
-        (the token table as JSON), ``CERTSOLVE_KEEP_DAYS``, ``CERTSOLVE_TEST_KINDS`` (for
-        ``uvicorn certsolve.api.app:create_app --factory``), then ``overrides``."""
+        """Settings from ``CERTSOLVE_DATA_DIR``, ``CERTSOLVE_WORKERS``,
+        ``CERTSOLVE_SCHEDULER`` (jobs on that Dask cluster), ``CERTSOLVE_TOKENS`` (the token
+        table as JSON), ``CERTSOLVE_KEEP_DAYS``, ``CERTSOLVE_TEST_KINDS`` (for ``uvicorn
+        certsolve.api.app:create_app --factory``), then ``overrides``."""
         env = os.environ if environ is None else environ
         values: dict = {}
         if env.get("CERTSOLVE_DATA_DIR"):
             values["data_dir"] = Path(env["CERTSOLVE_DATA_DIR"])
         if env.get("CERTSOLVE_WORKERS"):
             values["workers"] = int(env["CERTSOLVE_WORKERS"])
+        if env.get("CERTSOLVE_SCHEDULER", "").strip():
+            values["scheduler"] = env["CERTSOLVE_SCHEDULER"].strip()
         if env.get("CERTSOLVE_KEEP_DAYS"):
             values["keep_days"] = float(env["CERTSOLVE_KEEP_DAYS"])
         if "access" not in overrides or overrides["access"] is None:

@@ -398,9 +398,10 @@ class JobStore:
         return [JobRow._from(r) for r in rows]
 
     # -- workers --------------------------------------------------------------------------------
-    def claim(self, worker_pid: int) -> tuple[JobRow, str] | None:
+    def claim(self, worker_pid: int | None) -> tuple[JobRow, str] | None:
         """Take the oldest queued job whose owner may run one more: ``(job with its
-        request, lease)`` or None."""
+        request, lease)`` or None.  ``worker_pid`` is None when the job does not run in
+        a process of this host (a Dask worker)."""
         con = self._conn()
         # a plain read first: idle workers poll without taking the write lock
         if con.execute(_NEXT_QUEUED).fetchone() is None:
@@ -495,9 +496,11 @@ class JobStore:
         reason: str,
         *,
         worker_pids: Iterable[int] | None = None,
+        leases: Iterable[str] | None = None,
         count_attempt: bool = True,
     ) -> builtins.list[tuple[str, JobStatus]]:
-        """Running jobs whose worker is gone (all running jobs if ``worker_pids`` is None).
+        """Running jobs whose worker is gone: those of ``worker_pids``, or held under one of
+        ``leases``, or all running jobs if both are None.
 
         Each is re-queued if it has attempts left, failed with ``reason`` otherwise, and
         cancelled if a cancel was requested.  ``count_attempt=False`` (an orderly shutdown)
@@ -510,12 +513,13 @@ class JobStore:
                 "SELECT id, attempts, max_attempts, cancel_requested_at FROM jobs WHERE status = ?"
             )
             args: list[Any] = [JobStatus.RUNNING]
-            if worker_pids is not None:
-                pids = [int(p) for p in worker_pids]
-                if not pids:
-                    return []
-                sql += f" AND worker_pid IN ({', '.join('?' * len(pids))})"
-                args += pids
+            for col, given, cast in (("worker_pid", worker_pids, int), ("lease", leases, str)):
+                if given is not None:
+                    vals = [cast(v) for v in given]
+                    if not vals:
+                        return []
+                    sql += f" AND {col} IN ({', '.join('?' * len(vals))})"
+                    args += vals
             for job_id, attempts, max_attempts, cancel_at in con.execute(sql, args).fetchall():
                 if not count_attempt:
                     attempts = max(0, attempts - 1)

@@ -17,6 +17,11 @@ past its time limit, ``cancel_grace`` after a cancel).
 
 A worker dies with its parent (``PR_SET_PDEATHSIG``, and a ``getppid`` check in case that
 is unavailable), so a killed service never leaves workers writing to the store.
+
+:func:`run_job` writes only through two methods of the store, ``heartbeat`` and ``finish``
+(:class:`JobChannel`): a Dask worker runs the very same function with a channel that
+relays them to the service (:mod:`.dask_runner`), and without the memory limit (a Dask
+worker's memory is the nanny's business).
 """
 
 from __future__ import annotations
@@ -28,7 +33,7 @@ import signal
 import sqlite3
 import sys
 import time
-from typing import Any
+from typing import Any, Protocol
 
 from .jsonutil import dumps
 from .partial import stored_result
@@ -37,6 +42,7 @@ from .status import JobStatus
 from .store import JobRow, JobStore
 
 __all__ = [
+    "JobChannel",
     "JobMonitor",
     "die_with_parent",
     "restore_memory_limit",
@@ -50,6 +56,27 @@ log = logging.getLogger("certsolve.jobs.worker")
 EXIT_FRESH = 3  # the worker exits after a memory error; the supervisor starts a new one
 
 _PROGRESS_FIELDS = ("boxes", "pending", "solutions", "undecided", "elapsed")
+
+
+class JobChannel(Protocol):
+    """What a running job writes to: the store (:class:`.JobStore`), or a relay to it."""
+
+    def heartbeat(self, job_id: str, lease: str, progress: dict | None) -> tuple[bool, bool]:
+        """Record progress; ``(still ours, cancel requested)``."""
+        ...
+
+    def finish(
+        self,
+        job_id: str,
+        lease: str,
+        status: JobStatus,
+        *,
+        result: str | None = None,
+        error: str | None = None,
+        progress: dict | None = None,
+    ) -> bool:
+        """Record the outcome; False if the job is no longer ours."""
+        ...
 
 
 def die_with_parent(parent_pid: int) -> None:
@@ -156,7 +183,7 @@ class JobMonitor:
 
     def __init__(
         self,
-        store: JobStore,
+        store: JobChannel,
         job: JobRow,
         lease: str,
         *,
@@ -217,21 +244,24 @@ class JobMonitor:
 
 
 def run_job(
-    store: JobStore,
+    store: JobChannel,
     job: JobRow,
     lease: str,
     settings: ServiceSettings,
     *,
     parent_pid: int | None = None,
+    limit_memory: bool = True,
 ) -> bool:
-    """Run one claimed job and record its outcome; True if the worker should exit after."""
+    """Run one claimed job and record its outcome; True if the worker should exit after.
+
+    ``limit_memory=False``: no ``RLIMIT_AS`` and no memory stop (a Dask worker)."""
     from pydantic import ValidationError
 
     from .kinds import KINDS, KindUnavailable, RunContext, request_adapter
 
     limits = job.limits
     exit_after = False
-    memory_mb = limits.get("memory_mb")
+    memory_mb = limits.get("memory_mb") if limit_memory else None
     stop_at = None if memory_mb is None else int(settings.memory_stop * memory_mb * 2**20)
     monitor = JobMonitor(
         store,

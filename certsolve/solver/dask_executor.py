@@ -25,7 +25,7 @@ from typing import Any
 from .executors import TaskExecutor, TaskPool
 from .search import Step, run_task
 
-__all__ = ["DaskExecutor", "import_distributed"]
+__all__ = ["DaskExecutor", "import_distributed", "lost_errors"]
 
 log = logging.getLogger(__name__)
 
@@ -51,7 +51,7 @@ class _DaskPool(TaskPool):
         self.client = client
         self._owned = owned
         self._as_completed = distributed.as_completed(loop=client.loop)
-        self._lost_types = _lost_errors()
+        self._lost_types = lost_errors()
         try:
             client.wait_for_workers(1, timeout=worker_timeout)
         except TimeoutError:
@@ -128,7 +128,8 @@ def _check_malloc(client) -> None:
         )
 
 
-def _lost_errors() -> tuple[type[BaseException], ...]:
+def lost_errors() -> tuple[type[BaseException], ...]:
+    """The errors of a future whose task was lost with its worker (not the task's own)."""
     from distributed.client import FutureCancelledError
     from distributed.comm.core import CommClosedError
     from distributed.scheduler import KilledWorker
