@@ -75,6 +75,7 @@ class ServiceSettings:
     kill_grace: float = 5.0  # a job running past its time limit by this much is killed
     memory_stop: float = 0.85  # a job stops (keeping its result) at this share of memory_mb
     supervise_interval: float = 0.2
+    checkpoint_interval: float = 30.0  # a running search saves itself this often (s)
 
     # -- testing --------------------------------------------------------------------------------
     enable_test_kinds: bool = False  # the hidden ``sleep`` kind (tests, benchmarks)
@@ -97,6 +98,8 @@ class ServiceSettings:
             raise ValueError("quick_workers and quick_heavy_workers must be >= 1")
         if not 0 < self.memory_stop <= 1:
             raise ValueError("memory_stop must be in (0, 1]")
+        if not self.checkpoint_interval >= 0:
+            raise ValueError("checkpoint_interval must be >= 0 (seconds)")
 
     @property
     def db_path(self) -> Path:
