@@ -197,6 +197,14 @@ def test_a_checkpoint_of_another_search_is_refused(k5, tmp_path):
     path.write_bytes(b"not a checkpoint")
     with pytest.raises(CheckpointError, match="unreadable"):
         solver.solve(max_boxes=10, checkpoint=Checkpoint.file(path))
+
+    # a write that fails (disk full ...) is skipped: the search goes on and says why
+    def full(data):
+        raise OSError(28, "No space left on device")
+
+    cp = Checkpoint(full, interval=0.0)
+    res = solver.solve(max_boxes=600, checkpoint=cp)
+    assert res.status == "max_boxes" and cp.writes == 0 and "No space" in cp.error
     # not strict (the job service): an unusable snapshot is ignored, the search starts afresh
     cp = Checkpoint(lambda d: None, lambda: b"junk", strict=False)
     res = solver.solve(max_boxes=10, checkpoint=cp)

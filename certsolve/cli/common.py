@@ -285,6 +285,8 @@ class checkpointing:  # noqa: N801 - a context manager used like a function
                 f"checkpoint: resumed from {self.path} ({cp.resumed_from} boxes done before)",
                 file=sys.stderr,
             )
+        if cp.error is not None:
+            print(f"checkpoint: NOT saved to {self.path}: {cp.error}", file=sys.stderr)
         if cp.writes and exc[0] is None:
             done = self.status in ("complete", "truncated")
             then = "the search is complete" if done else "run the same command again to resume"

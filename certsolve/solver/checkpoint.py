@@ -221,7 +221,8 @@ class Checkpoint:
     search starts afresh) instead of raising :class:`CheckpointError`.
 
     After a run: ``writes``, ``write_time`` (seconds spent writing), ``size`` (bytes of the
-    last snapshot) and ``resumed_from`` (boxes processed when it was restored, or None).
+    last snapshot), ``resumed_from`` (boxes processed when it was restored, or None) and
+    ``error`` (why the last failed write was skipped, or None).
     """
 
     def __init__(
@@ -246,6 +247,7 @@ class Checkpoint:
         self.size = 0
         self.resumed_from: int | None = None
         self.ignored: str | None = None  # why a stored snapshot was not used (strict=False)
+        self.error: str | None = None  # why the last write failed (it was skipped)
         self._last = time.monotonic()
 
     @classmethod
@@ -284,9 +286,17 @@ class Checkpoint:
             self.write(search)
 
     def write(self, search: Search) -> None:
+        """Save a snapshot now.  A snapshot that cannot be built or stored (out of memory,
+        disk full) is skipped -- the search goes on, the previous one stays -- and
+        :attr:`error` says why."""
         t0 = time.perf_counter()
-        data = self.snapshot(search)
-        self._save(data)
+        try:
+            data = self.snapshot(search)
+            self._save(data)
+        except (OSError, MemoryError) as exc:
+            self.error = f"{type(exc).__name__}: {exc}"
+            self._last = time.monotonic()
+            return
         self._last = time.monotonic()
         self.writes += 1
         self.size = len(data)
