@@ -364,3 +364,26 @@ def test_job_resumes_from_its_checkpoint_after_its_worker_is_killed(k5, tmp_path
     assert 0 < res["stats"]["resumed_boxes"] < ref.stats.boxes  # did not start from zero
     assert [s["box"] for s in res["solutions"]] == boxes_of(ref.solutions)
     assert res["stats"]["boxes"] == ref.stats.boxes
+
+
+def test_design_resumes_to_the_same_classification():
+    """The certified design has a loop of its own; it saves and resumes the same way."""
+    from certsolve.force.design import design
+
+    spec = str(ROOT / "examples/design/krut3-spec.json")
+    kw = {"eps": 1 / 8, "workspace_eps": 2.5, "batch": 256}
+    ref = design(spec=spec, **kw)
+    mem = Memory()
+    runs = 0
+    while True:
+        res = design(spec=spec, max_boxes=1500, checkpoint=mem.checkpoint(), **kw)
+        runs += 1
+        if res.status == "complete":
+            break
+        assert res.status == "max_boxes" and len(res.pending) and runs < 40
+    assert runs >= 3 and res.resumed_from > 0 and res.pairs == ref.pairs
+    for key in ("good", "bad", "undecided", "margin", "witness"):
+        assert np.array_equal(getattr(res, key), getattr(ref, key)), key
+    assert len(ref.good) and len(ref.bad) and res.best_robot == ref.best_robot
+    with pytest.raises(CheckpointError):
+        design(spec=spec, **{**kw, "eps": 1 / 4}, checkpoint=mem.checkpoint())

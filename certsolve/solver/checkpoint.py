@@ -20,9 +20,9 @@ solver's equations, domain, parameters, ``eps`` ...), the initial boxes and the 
 ``key``.  A checkpoint of another problem is refused (:class:`CheckpointError`).
 
 **Format.** An ``.npz`` archive (numpy's zip of ``.npy`` files, read with
-``allow_pickle=False``): ``meta`` (UTF-8 JSON: format version, fingerprint, counters and
-the *shape* of the records), ``lo`` / ``hi`` (the pending boxes) and ``a0, a1, ...`` (the
-records' arrays).  The records are written by a small codec (:func:`encode`) of
+``allow_pickle=False``): ``meta`` (UTF-8 JSON: format version, fingerprint and the *shape*
+of the records: the step's records, the pending boxes ``lo`` / ``hi``, the counters) and
+``a0, a1, ...`` (the records' arrays).  The records are written by a small codec (:func:`encode`) of
 ``None``, numbers, strings, tuples, lists, string-keyed dicts, numpy arrays and dataclass
 instances of ``certsolve`` itself -- lists of same-shape arrays, of tuples and of
 dataclasses are stored as columns, one array each.  Nothing is unpickled: a checkpoint
@@ -41,6 +41,10 @@ fresh time limit and box budget; ``max_solutions`` counts every solution, those 
 included.  The counters (``boxes``, ``time``, ``cpu`` ...) go on from their saved values;
 ``resumed`` counts the restores and ``resumed_boxes`` is the boxes already processed at
 the last one.
+
+A search with a loop of its own (the certified design, :mod:`certsolve.force.design`)
+uses the same archive through :meth:`Checkpoint.begin_records` / :meth:`~Checkpoint.due`
+/ :meth:`~Checkpoint.save_records`: its records are whatever it needs to go on.
 """
 
 from __future__ import annotations
@@ -64,7 +68,16 @@ from .search import SearchStats
 if TYPE_CHECKING:
     from .search import Search, Step
 
-__all__ = ["Checkpoint", "CheckpointError", "decode", "encode", "fingerprint"]
+__all__ = [
+    "Checkpoint",
+    "CheckpointError",
+    "decode",
+    "encode",
+    "fingerprint",
+    "pack",
+    "unpack",
+    "write_atomic",
+]
 
 FORMAT = 1
 
@@ -289,9 +302,12 @@ class Checkpoint:
         """Save a snapshot now.  A snapshot that cannot be built or stored (out of memory,
         disk full) is skipped -- the search goes on, the previous one stays -- and
         :attr:`error` says why."""
+        self._write(lambda: self.snapshot(search))
+
+    def _write(self, build: Callable[[], bytes]) -> None:
         t0 = time.perf_counter()
         try:
-            data = self.snapshot(search)
+            data = build()
             self._save(data)
         except (OSError, MemoryError) as exc:
             self.error = f"{type(exc).__name__}: {exc}"
@@ -306,47 +322,85 @@ class Checkpoint:
     def snapshot(self, search: Search) -> bytes:
         """The search as bytes (module docstring)."""
         lo, hi = search.pending_boxes()
-        arrays: list[np.ndarray] = []
-        found = encode(search.step.found(search.state), arrays)
-        meta = {
-            "format": FORMAT,
-            "fingerprint": self.fingerprint,
-            "step": type(search.step).__qualname__,
+        records = {
+            "found": search.step.found(search.state),
+            "lo": lo,
+            "hi": hi,
             "stats": search.counters().to_dict(),
-            "found": found,
-            "saved_at": time.time(),
         }
-        buf = io.BytesIO()
-        text = np.frombuffer(json.dumps(meta).encode(), dtype=np.uint8)
-        named = {f"a{i}": a for i, a in enumerate(arrays)}
-        np.savez(buf, meta=text, lo=lo, hi=hi, **named)
-        return buf.getvalue()
+        return pack(self.fingerprint, type(search.step).__qualname__, records)
 
     def restore(self, step: Step, data: bytes) -> tuple[Any, SearchStats]:
         """``(state, counters)`` from a snapshot of this search (:meth:`snapshot`)."""
-        try:
-            with np.load(io.BytesIO(data), allow_pickle=False) as z:
-                meta = json.loads(z["meta"].tobytes().decode())
-                lo, hi = z["lo"], z["hi"]
-                arrays = [z[f"a{i}"] for i in range(sum(k.startswith("a") for k in z.files))]
-        except (OSError, ValueError, KeyError, EOFError) as exc:
-            raise CheckpointError(f"checkpoint unreadable: {exc}") from None
-        if meta.get("format") != FORMAT:
-            raise CheckpointError(f"checkpoint format {meta.get('format')!r} not supported")
-        if meta.get("fingerprint") != self.fingerprint:
-            raise CheckpointError(
-                f"the checkpoint is of another search ({meta.get('step')}: another problem "
-                "or other settings); remove it or choose another file to start afresh"
-            )
+        records = unpack(data, self.fingerprint)
         state = step.start()
-        step.merge(state, decode(meta["found"], arrays))
-        state.stack.push(lo, hi)
+        step.merge(state, records["found"])
+        state.stack.push(records["lo"], records["hi"])
         names = {f.name for f in dataclasses.fields(SearchStats)}
-        stats = SearchStats(**{k: v for k, v in meta["stats"].items() if k in names})
+        stats = SearchStats(**{k: v for k, v in records["stats"].items() if k in names})
         self.resumed_from = stats.boxes
         stats.resumed += 1
         stats.resumed_boxes = stats.boxes
         return state, stats
+
+    # -- loops of their own (not on the driver) -------------------------------------------------
+    def begin_records(self, describe: str) -> Any | None:
+        """For a search with its own loop: fingerprint it from ``describe`` (its problem and
+        settings as text) and the key; the records of a stored snapshot of it, or None."""
+        self.fingerprint = hashlib.sha256(f"{describe}\nkey:{self.key}".encode()).hexdigest()
+        self._last = time.monotonic()
+        data = self._load()
+        if data is None:
+            return None
+        try:
+            return unpack(data, self.fingerprint)
+        except CheckpointError as exc:
+            if self.strict:
+                raise
+            self.ignored = str(exc)
+            return None
+
+    def due(self) -> bool:
+        """``interval`` seconds have passed since the last write."""
+        return time.monotonic() - self._last >= self.interval
+
+    def save_records(self, what: str, records: Any) -> None:
+        """Write ``records`` now (errors as :meth:`write`)."""
+        self._write(lambda: pack(self.fingerprint, what, records))
+
+
+def pack(fingerprint: str | None, what: str, records: Any) -> bytes:
+    """``records`` (see :func:`encode`) as an ``.npz`` archive (module docstring)."""
+    arrays: list[np.ndarray] = []
+    meta = {
+        "format": FORMAT,
+        "fingerprint": fingerprint,
+        "what": what,
+        "records": encode(records, arrays),
+        "saved_at": time.time(),
+    }
+    buf = io.BytesIO()
+    text = np.frombuffer(json.dumps(meta).encode(), dtype=np.uint8)
+    np.savez(buf, meta=text, **{f"a{i}": a for i, a in enumerate(arrays)})
+    return buf.getvalue()
+
+
+def unpack(data: bytes, fingerprint: str | None) -> Any:
+    """The records of an archive written by :func:`pack` for the same ``fingerprint``."""
+    try:
+        with np.load(io.BytesIO(data), allow_pickle=False) as z:
+            meta = json.loads(z["meta"].tobytes().decode())
+            arrays = [z[f"a{i}"] for i in range(sum(k.startswith("a") for k in z.files))]
+    except (OSError, ValueError, KeyError, EOFError) as exc:
+        raise CheckpointError(f"checkpoint unreadable: {exc}") from None
+    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+        raise CheckpointError("checkpoint format not supported")
+    if meta.get("fingerprint") != fingerprint:
+        raise CheckpointError(
+            f"the checkpoint is of another search ({meta.get('what')}: another problem "
+            "or other settings); remove it or choose another file to start afresh"
+        )
+    return decode(meta["records"], arrays)
 
 
 def write_atomic(path: Path, data: bytes) -> None:
