@@ -270,10 +270,34 @@ def test_version_1_store_is_migrated(tmp_path):
     )
     con.close()
     store = JobStore(path)
-    assert store.schema_version() == 2
+    assert store.schema_version() == 3
     row = store.get("old1")
     assert row.status == "queued" and row.owner is None
     (job_id,) = store.add([owned("a")])
     assert store.get(job_id).owner == "a"
-    assert store.claim(1)[0].id == "old1"
+    job, lease = store.claim(1)
+    assert job.id == "old1"
+    assert store.save_search_checkpoint("old1", lease, b"x")  # the table was created
+    store.close()
+
+
+def test_search_checkpoints_follow_the_lease_and_the_job(tmp_path):
+    store = JobStore(tmp_path / "jobs.sqlite3")
+    a, b = store.add([owned(None), owned(None)])
+    job, lease = store.claim(1)
+    assert job.id == a and store.search_checkpoint(a) is None
+    assert store.save_search_checkpoint(a, lease, b"one")
+    assert store.save_search_checkpoint(a, lease, b"two")  # replaced
+    assert not store.save_search_checkpoint(a, "another lease", b"stale")
+    assert not store.save_search_checkpoint(b, lease, b"not running")
+    assert store.search_checkpoint(a) == b"two" and store.search_checkpoint(b) is None
+    # the worker died: the job is queued again and keeps its checkpoint for the next run
+    assert store.release("killed", worker_pids=[1]) == [(a, "queued")]
+    assert store.search_checkpoint(a) == b"two"
+    job, lease2 = store.claim(2)
+    assert job.id == a and not store.save_search_checkpoint(a, lease, b"old lease")
+    assert store.save_search_checkpoint(a, lease2, b"three")
+    # a final status drops it
+    assert store.finish(a, lease2, "done", result="{}")
+    assert store.search_checkpoint(a) is None
     store.close()

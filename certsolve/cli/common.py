@@ -23,7 +23,9 @@ from typing import Any, TypeVar
 __all__ = [
     "CliError",
     "Deadline",
+    "add_checkpoint_options",
     "add_executor_options",
+    "checkpointing",
     "describe_run",
     "executor_from_args",
     "scheduler_from_args",
@@ -210,6 +212,104 @@ def executor_from_args(args: argparse.Namespace) -> str | int:
     if n < 1:
         raise CliError(f"--workers: expected an integer >= 1 or 'auto', got {args.workers!r}")
     return n
+
+
+def add_checkpoint_options(parser: argparse.ArgumentParser) -> None:
+    """``--checkpoint FILE`` and ``--checkpoint-interval S`` (read by :func:`checkpointing`)."""
+    parser.add_argument(
+        "--checkpoint",
+        default=None,
+        metavar="FILE",
+        help="save the search to FILE as it goes (and when it stops: time limit, Ctrl-C); "
+        "if FILE exists, resume from it: run the same command again until it is complete",
+    )
+    parser.add_argument(
+        "--checkpoint-interval",
+        type=float,
+        default=30.0,
+        metavar="S",
+        help="seconds between two saves (a kill -9 loses at most this much work)",
+    )
+
+
+class checkpointing:  # noqa: N801 - a context manager used like a function
+    """``with checkpointing(args, "solve") as (checkpoint, cancel):`` -- the search's
+    :class:`~certsolve.solver.checkpoint.Checkpoint` (None without ``--checkpoint``) and a
+    cancel event: while the block runs, a first Ctrl-C sets it (the search stops after
+    its batch and writes the checkpoint), a second one interrupts at once.  On leaving,
+    says on stderr what was resumed and saved.  ``interrupted`` tells whether Ctrl-C
+    stopped the search."""
+
+    def __init__(self, args: argparse.Namespace, command: str):
+        self.path = getattr(args, "checkpoint", None)
+        self.interval = getattr(args, "checkpoint_interval", 30.0)
+        self.command = command
+        self.checkpoint = None
+        self.interrupted = False
+        self.status: str | None = None  # the command sets the search's status
+        self._old = None
+
+    def __enter__(self):
+        import signal
+        import threading
+
+        if self.path is None:
+            return None, None
+        from ..solver.checkpoint import Checkpoint
+
+        if not (self.interval >= 0 and self.interval < float("inf")):
+            raise CliError(f"--checkpoint-interval: expected seconds >= 0, got {self.interval}")
+        folder = os.path.dirname(os.path.abspath(self.path))
+        if not os.path.isdir(folder):
+            raise CliError(f"--checkpoint: no directory {folder}")
+        self.checkpoint = Checkpoint.file(
+            self.path, interval=self.interval, key=f"certsolve {self.command}"
+        )
+        cancel = threading.Event()
+
+        def stop(signum, frame):
+            if self.interrupted:
+                raise KeyboardInterrupt
+            self.interrupted = True
+            cancel.set()
+            print(
+                "\ninterrupted: stopping after this batch and saving the checkpoint "
+                "(Ctrl-C again to quit at once)",
+                file=sys.stderr,
+            )
+
+        if threading.current_thread() is threading.main_thread():
+            self._old = signal.signal(signal.SIGINT, stop)
+        return self.checkpoint, cancel
+
+    def __exit__(self, *exc) -> None:
+        import signal
+
+        if self._old is not None:
+            signal.signal(signal.SIGINT, self._old)
+        cp = self.checkpoint
+        if cp is None:
+            return
+        if cp.resumed_from is not None:
+            print(
+                f"checkpoint: resumed from {self.path} ({cp.resumed_from} boxes done before)",
+                file=sys.stderr,
+            )
+        if cp.error is not None:
+            print(f"checkpoint: NOT saved to {self.path}: {cp.error}", file=sys.stderr)
+        if cp.writes and exc[0] is None:
+            done = self.status in ("complete", "truncated")
+            then = "the search is complete" if done else "run the same command again to resume"
+            print(
+                f"checkpoint: saved to {self.path} ({cp.size / 1e6:.2f} MB, {cp.writes} "
+                f"write(s), {cp.write_time:.2f} s); {then}",
+                file=sys.stderr,
+            )
+
+    @property
+    def exit_code(self) -> int:
+        """130 when Ctrl-C stopped the search (its partial answer was printed), else 0."""
+        return 130 if self.interrupted else 0
 
 
 def describe_run(stats) -> str:

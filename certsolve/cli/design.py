@@ -12,7 +12,15 @@ from __future__ import annotations
 import argparse
 import json
 
-from .common import CliError, parse_floats, print_json, progress_reporter, validated
+from .common import (
+    CliError,
+    add_checkpoint_options,
+    checkpointing,
+    parse_floats,
+    print_json,
+    progress_reporter,
+    validated,
+)
 
 DEFAULT_EPS = 1 / 16  # = certsolve.force.design_spec.DEFAULT_EPS, without importing it here
 
@@ -66,6 +74,7 @@ def register(sub) -> None:
         default=None,
         help="write the robot at the centre of the best proven box (largest margin)",
     )
+    add_checkpoint_options(p)
     p.add_argument("--no-boxes", action="store_true", help="omit the box lists from --json")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
@@ -110,15 +119,25 @@ def run(args: argparse.Namespace) -> int:
     params = validated(DesignParams, args, values, robot=robot, option=option)
     axes = _axes(args.axes, len(spec.parameters))
     progress, stop = progress_reporter(not args.json, line=_design_line)
+    saving = checkpointing(args, "design")
     try:
-        res = design(
-            spec=spec,
-            eps=params.eps,
-            workspace_eps=params.workspace_eps,
-            progress=progress,
-            timeout=params.timeout,
-            max_boxes=params.max_boxes,
-        )
+        with saving as (checkpoint, cancel):
+
+            def watch(info) -> bool:  # the line on stderr; Ctrl-C stops (and saves)
+                if progress is not None:
+                    progress(info)
+                return cancel is None or not cancel.is_set()
+
+            res = design(
+                spec=spec,
+                eps=params.eps,
+                workspace_eps=params.workspace_eps,
+                progress=watch,
+                timeout=params.timeout,
+                max_boxes=params.max_boxes,
+                checkpoint=checkpoint,
+            )
+            saving.status = res.status
     finally:
         stop()
     if args.plot:
@@ -137,7 +156,7 @@ def run(args: argparse.Namespace) -> int:
         print_json(out)
     else:
         print(format_design(res, args.plot, args.emit_robot, emitted))
-    return 0
+    return saving.exit_code
 
 
 def _pct(x: float) -> str:

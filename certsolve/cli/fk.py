@@ -7,7 +7,9 @@ import argparse
 from .common import (
     CliError,
     Deadline,
+    add_checkpoint_options,
     add_executor_options,
+    checkpointing,
     describe_run,
     executor_from_args,
     parse_floats,
@@ -50,6 +52,7 @@ def register(sub) -> None:
         "--max-solutions", type=int, default=None, help="stop after this many certified poses"
     )
     add_executor_options(p)
+    add_checkpoint_options(p)
     p.add_argument("--verify", action="store_true", help="re-prove solutions with mpmath")
     p.add_argument(
         "--seed-planar",
@@ -103,6 +106,7 @@ def run(args: argparse.Namespace) -> int:
                 ("--max-solutions", args.max_solutions is not None),
                 ("--workers", args.workers is not None),
                 ("--scheduler", args.scheduler is not None),
+                ("--checkpoint", args.checkpoint is not None),
             )
             if value
         ]
@@ -122,24 +126,31 @@ def run(args: argparse.Namespace) -> int:
         else:
             print(format_track(robot, res))
         return 0
+    if args.checkpoint is not None and args.seed_planar:
+        raise CliError("--checkpoint: not available with --seed-planar (a search in two phases)")
     executor = executor_from_args(args)
     deadline = Deadline(params.timeout, args.started)
     show, stop = progress_reporter(not args.json)
+    saving = checkpointing(args, "fk")
     try:
-        res = forward_kinematics(
-            robot,
-            params.u,
-            formulation=params.formulation,
-            eps=params.eps,
-            timeout=deadline.solver_timeout(),
-            max_boxes=params.max_boxes,
-            max_solutions=params.max_solutions,
-            seed_planar=params.seed_planar,
-            seeded_only=params.seeded_only,
-            progress=deadline.progress(show),
-            executor=executor,
-            verify=args.verify,
-        )
+        with saving as (checkpoint, cancel):
+            res = forward_kinematics(
+                robot,
+                params.u,
+                formulation=params.formulation,
+                eps=params.eps,
+                timeout=deadline.solver_timeout(),
+                max_boxes=params.max_boxes,
+                max_solutions=params.max_solutions,
+                seed_planar=params.seed_planar,
+                seeded_only=params.seeded_only,
+                progress=deadline.progress(show),
+                executor=executor,
+                verify=args.verify,
+                cancel=cancel,
+                checkpoint=checkpoint,
+            )
+            saving.status = str(res.status)
     finally:
         stop()
     deadline.mark(res)
@@ -147,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
         print_json(res.to_dict())
     else:
         print(format_result(robot, res))
-    return 0
+    return saving.exit_code
 
 
 def _pose_lines(robot, s) -> list[str]:

@@ -19,7 +19,9 @@ import numpy as np
 from ..robot import Pose, Robot
 from .common import (
     CliError,
+    add_checkpoint_options,
     add_executor_options,
+    checkpointing,
     describe_run,
     executor_from_args,
     parse_floats,
@@ -104,6 +106,7 @@ def register(sub) -> None:
     w.add_argument("--timeout", type=float, default=None, help="time limit in seconds")
     w.add_argument("--max-boxes", type=int, default=None, help="limit on processed boxes")
     add_executor_options(w)
+    add_checkpoint_options(w)
     w.add_argument("--plot", metavar="PNG", default=None, help="picture of the paving (PNG)")
     w.add_argument("--no-boxes", action="store_true", help="omit the box lists from --json")
     w.add_argument("--json", action="store_true", help="print one JSON object")
@@ -311,20 +314,25 @@ def run_workspace(args: argparse.Namespace) -> int:
     params = validated(WorkspaceParams, args, values, robot=robot.spec)
     executor = executor_from_args(args)
     progress, stop = progress_reporter(not args.json, line=_paving_line)
+    saving = checkpointing(args, "workspace")
     try:
-        ws = certified_workspace(
-            robot,
-            params.min_force,
-            [list(b) for b in params.box],
-            params.eps,
-            progress=progress,
-            timeout=params.timeout,
-            orientation=orientation_arg(params.orientation),
-            eps_angle=params.eps_angle,
-            external=params.external,
-            max_boxes=params.max_boxes,
-            executor=executor,
-        )
+        with saving as (checkpoint, cancel):
+            ws = certified_workspace(
+                robot,
+                params.min_force,
+                [list(b) for b in params.box],
+                params.eps,
+                progress=progress,
+                timeout=params.timeout,
+                orientation=orientation_arg(params.orientation),
+                eps_angle=params.eps_angle,
+                external=params.external,
+                max_boxes=params.max_boxes,
+                executor=executor,
+                cancel=cancel,
+                checkpoint=checkpoint,
+            )
+            saving.status = str(ws.status)
     finally:
         stop()
     if args.plot:
@@ -338,7 +346,7 @@ def run_workspace(args: argparse.Namespace) -> int:
         print_json(out)
     else:
         print(format_workspace(ws, args.plot))
-    return 0
+    return saving.exit_code
 
 
 def format_workspace(ws, plot) -> str:

@@ -7,7 +7,9 @@ import argparse
 from ..solver.summary import MAX_LISTED
 from .common import (
     Deadline,
+    add_checkpoint_options,
     add_executor_options,
+    checkpointing,
     describe_run,
     executor_from_args,
     print_json,
@@ -47,6 +49,7 @@ def register(sub) -> None:
         "--max-solutions", type=int, default=None, help="stop after this many certified solutions"
     )
     add_executor_options(p)
+    add_checkpoint_options(p)
     p.add_argument("--verify", action="store_true", help="re-prove solutions with mpmath")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
@@ -68,15 +71,20 @@ def run(args: argparse.Namespace) -> int:
         max_pending=params.max_pending,
     )
     show, stop = progress_reporter(not args.json)
+    saving = checkpointing(args, "solve")
     try:
-        result = solver.solve(
-            timeout=deadline.solver_timeout(),
-            max_boxes=params.max_boxes,
-            max_solutions=params.max_solutions,
-            executor=executor,
-            verify=params.verify,
-            progress=deadline.progress(show),
-        )
+        with saving as (checkpoint, cancel):
+            result = solver.solve(
+                timeout=deadline.solver_timeout(),
+                max_boxes=params.max_boxes,
+                max_solutions=params.max_solutions,
+                executor=executor,
+                verify=params.verify,
+                progress=deadline.progress(show),
+                cancel=cancel,
+                checkpoint=checkpoint,
+            )
+            saving.status = str(result.status)
     finally:
         stop()
     deadline.mark(result)
@@ -84,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
         print_json(result.to_dict())
     else:
         print(format_result(system.name or args.file, result))
-    return 0
+    return saving.exit_code
 
 
 def format_result(name: str, result) -> str:

@@ -247,6 +247,15 @@ class PavingStep:
     def start(self, known=None) -> PavingState:
         return PavingState(BoxStack(self.scale.size))
 
+    def fingerprint(self) -> str:
+        """The robot and the request, as text (for checkpoints)."""
+        ext = None if self.external is None else np.asarray(self.external).tolist()
+        return (
+            f"robot: {self.robot.spec.model_dump_json()}\nmin_force: {self.min_force!r}, "
+            f"external: {ext}, d: {self.d}, rotation: {self.use_rot}, "
+            f"eps: {self.scale.tolist()!r}"
+        )
+
     def process(self, lo: np.ndarray, hi: np.ndarray, state: PavingState) -> None:
         d = self.d
         glo, ghi, full_rank, wires_ok = slack_enclosures(
@@ -320,6 +329,7 @@ def certified_workspace(
     executor: Any = None,
     cancel: Any = None,
     max_solutions: int | None = None,
+    checkpoint: Any = None,
 ) -> CertifiedWorkspace:
     """Pave ``box`` (positions, cm) into boxes proven inside/outside ``{f_min ≥ min_force}``.
 
@@ -331,6 +341,8 @@ def certified_workspace(
     ``cancel.is_set()``) stops the paving (status ``"cancelled"``, the rest is
     ``pending``).  ``max_solutions`` stops it after that many inside boxes.  ``executor``
     as :meth:`certsolve.solver.Solver.solve`: the paving is the same on every executor.
+    ``checkpoint`` (:class:`~certsolve.solver.checkpoint.Checkpoint`): save the paving as
+    it goes and resume it from the last save.
     """
     if not (np.isfinite(min_force) and min_force > 0):
         raise ValueError("min_force must be a positive number (N)")
@@ -368,6 +380,7 @@ def certified_workspace(
         executor=resolve_executor(executor),
         progress=progress,
         cancel=cancel,
+        checkpoint=checkpoint,
     )
     state = run.state
 

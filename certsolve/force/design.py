@@ -53,6 +53,7 @@ from ..robot.model import Robot
 from ..robot.params import AffineRobot
 from ..robot.schema import RobotFileError
 from ..solver.bisectors import split as bisect
+from ..solver.checkpoint import Checkpoint
 from .certified import parse_box
 from .design_spec import DesignSpec, DesignSpecError, load_design_spec
 from .enclosure import slack_enclosures
@@ -113,10 +114,11 @@ class DesignResult:
     best: int | None
     best_robot: dict | None
     status: str  # complete | timeout | stopped | max_boxes
-    pairs: int  # (parameter box, pose box) pairs evaluated
+    pairs: int  # (parameter box, pose box) pairs evaluated (every run of a resumed search)
     parameter_boxes: int  # parameter boxes examined
-    time: float
+    time: float  # seconds of this run
     notes: list[str] = field(default_factory=list)
+    resumed_from: int | None = None  # pairs evaluated before this run (from a checkpoint)
 
     def share(self, cls: BoxClass | str) -> float:
         """Share of the parameter box's volume in the class ``cls``."""
@@ -162,6 +164,7 @@ class DesignResult:
             "counts": {str(c): int(len(getattr(self, str(c)))) for c in BoxClass},
             "shares": {str(c): self.share(c) for c in BoxClass},
             "pairs": self.pairs,
+            "resumed_from": self.resumed_from,
             "parameter_boxes": self.parameter_boxes,
             "time": self.time,
             "best": best,
@@ -246,6 +249,7 @@ def design(
     timeout: float | None = None,
     max_boxes: int | None = None,
     batch: int = 1024,
+    checkpoint: Checkpoint | None = None,
 ) -> DesignResult:
     """Classify the parameter boxes (module docstring).
 
@@ -258,6 +262,11 @@ def design(
     with a :class:`DesignProgress`; returning ``False`` stops the search.  ``max_boxes``
     limits the evaluated pairs.  Raises :class:`~.design_spec.DesignSpecError` (a
     ``ValueError``) naming the field for bad input.
+
+    ``checkpoint`` (:class:`~certsolve.solver.checkpoint.Checkpoint`): save the search (its
+    parameter boxes and queued pairs) every ``checkpoint.interval`` seconds and when it
+    stops, and resume from a saved one of the same problem; ``timeout`` and ``max_boxes``
+    apply to each run.
     """
     t0 = time.perf_counter()
     if spec is None:
@@ -304,6 +313,17 @@ def design(
     q_hi = W[None, :, 1].copy()
     pairs = 0
     status = "complete"
+    resumed_from = None
+    if checkpoint is not None:
+        about = (
+            f"design\nrobot: {rb.spec.model_dump_json()}\n"
+            f"spec: {ds.model_dump_json(exclude={'robot'})}\nbatch: {int(batch)}"
+        )
+        saved = checkpoint.begin_records(about)
+        if saved is not None:
+            boxes, q_pid, q_lo, q_hi, pairs = _restore(saved, k)
+            resumed_from = checkpoint.resumed_from = pairs
+    pairs0 = pairs  # limits apply to each run
 
     def finalize(pid: int):
         """All pairs of ``pid`` are done: classify it, or split it and queue its halves."""
@@ -332,7 +352,7 @@ def design(
         if timeout is not None and time.perf_counter() - t0 > timeout:
             status = "timeout"
             break
-        if max_boxes is not None and pairs >= max_boxes:
+        if max_boxes is not None and pairs - pairs0 >= max_boxes:
             status = "max_boxes"
             break
         pid, lo, hi = q_pid[:batch], q_lo[:batch], q_hi[:batch]
@@ -374,13 +394,58 @@ def design(
                 np.add.at(boxes.open, sp, 2)
         for p in boxes.ready():
             finalize(int(p))
+        if checkpoint is not None and checkpoint.due():
+            checkpoint.save_records("design", _records(boxes, q_pid, q_lo, q_hi, pairs))
         if progress is not None:
             info = _progress(boxes, theta, pairs, len(q_pid), t0)
             if progress(info) is False:
                 status = "stopped" if len(q_pid) else status
                 break
 
-    return _result(ds, affine, W, angles, weps, boxes, status, pairs, t0)
+    if checkpoint is not None:
+        checkpoint.save_records("design", _records(boxes, q_pid, q_lo, q_hi, pairs))
+    res = _result(ds, affine, W, angles, weps, boxes, status, pairs, t0)
+    res.resumed_from = resumed_from
+    return res
+
+
+def _records(boxes: _Boxes, q_pid, q_lo, q_hi, pairs: int) -> dict:
+    """The search's state as arrays (for a checkpoint; dicts flattened in their order)."""
+    n = boxes.n
+    dpid = [p for p, parts in boxes.deferred.items() for _ in parts]
+    dbox = [b for parts in boxes.deferred.values() for b in parts]
+    d = q_lo.shape[1]
+    return {
+        **{name: getattr(boxes, name)[:n] for name in ("lo", "hi", "open", "bad", "done")},
+        "margin": boxes.margin[:n],
+        "cls_id": np.array(list(boxes.cls), dtype=np.int64),
+        "cls": [str(c) for c in boxes.cls.values()],
+        "witness_id": np.array(list(boxes.witness), dtype=np.int64),
+        "witness": np.array(list(boxes.witness.values())).reshape(-1, d, 2),
+        "deferred_id": np.array(dpid, dtype=np.int64),
+        "deferred": np.array(dbox).reshape(-1, d, 2),
+        "q_pid": q_pid,
+        "q_lo": q_lo,
+        "q_hi": q_hi,
+        "pairs": int(pairs),
+    }
+
+
+def _restore(saved: dict, k: int):
+    """``(boxes, q_pid, q_lo, q_hi, pairs)`` from :func:`_records`."""
+    boxes = _Boxes(k)
+    for name in ("lo", "hi", "open", "bad", "done", "margin"):
+        setattr(boxes, name, np.array(saved[name]))
+    boxes.n = len(boxes.open)
+    boxes.cls = {
+        int(p): BoxClass(c) for p, c in zip(saved["cls_id"].tolist(), saved["cls"], strict=True)
+    }
+    boxes.witness = {int(p): w for p, w in zip(saved["witness_id"].tolist(), saved["witness"])}
+    boxes.deferred = {}
+    for p, b in zip(saved["deferred_id"].tolist(), saved["deferred"], strict=True):
+        boxes.deferred.setdefault(int(p), []).append(b)
+    q = (np.array(saved["q_pid"]), np.array(saved["q_lo"]), np.array(saved["q_hi"]))
+    return (boxes, *q, int(saved["pairs"]))
 
 
 def _progress(boxes: _Boxes, theta, pairs, queued, t0) -> DesignProgress:

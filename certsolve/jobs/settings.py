@@ -78,6 +78,7 @@ class ServiceSettings:
     kill_grace: float = 5.0  # a job running past its time limit by this much is killed
     memory_stop: float = 0.85  # a job stops (keeping its result) at this share of memory_mb
     supervise_interval: float = 0.2
+    checkpoint_interval: float = 30.0  # a running search saves itself this often (s)
 
     # -- testing --------------------------------------------------------------------------------
     enable_test_kinds: bool = False  # the hidden ``sleep`` kind (tests, benchmarks)
@@ -104,6 +105,8 @@ class ServiceSettings:
             not self.scheduler.strip() or any(c.isspace() for c in self.scheduler.strip())
         ):
             raise ValueError("scheduler: expected a scheduler address tcp://HOST:PORT")
+        if not self.checkpoint_interval >= 0:
+            raise ValueError("checkpoint_interval must be >= 0 (seconds)")
 
     @property
     def db_path(self) -> Path:

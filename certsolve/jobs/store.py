@@ -19,9 +19,16 @@ jobs of owners that already run their ``max_running`` (the ``owners`` table).  F
 jobs older than a cut-off are deleted by :meth:`JobStore.purge`, which then truncates the
 write-ahead log.
 
+A running job's search saves itself in the ``checkpoints`` table
+(:meth:`JobStore.save_search_checkpoint`, under the job's lease; one opaque blob per job,
+written by :mod:`certsolve.solver.checkpoint`): a job re-queued after its worker died
+resumes from it (:meth:`JobStore.search_checkpoint`).  The blob is deleted when the job
+reaches a final status (and with the job by :meth:`JobStore.purge`).
+
 Schema versions (``PRAGMA user_version``): 1 -- the jobs table; 2 -- ``jobs.owner`` and
 the ``owners`` table (a version-1 store is migrated when opened: existing jobs have no
-owner, so only admins see them once tokens are required).
+owner, so only admins see them once tokens are required); 3 -- the ``checkpoints`` table
+(created when an older store is opened).
 
 Nothing here imports numpy or the solver.
 """
@@ -53,7 +60,7 @@ __all__ = [
     "new_job_id",
 ]
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 
 _TABLES = """
 CREATE TABLE IF NOT EXISTS jobs (
@@ -82,6 +89,11 @@ CREATE TABLE IF NOT EXISTS jobs (
 CREATE TABLE IF NOT EXISTS owners (
     name                TEXT PRIMARY KEY,
     max_running         INTEGER
+);
+CREATE TABLE IF NOT EXISTS checkpoints (
+    job_id              TEXT PRIMARY KEY,
+    data                BLOB NOT NULL,
+    saved_at            REAL NOT NULL
 );
 """
 _INDEXES = f"""
@@ -462,11 +474,35 @@ class JobStore:
         if progress is not None:
             sets += ", progress = ?"
             args.append(json.dumps(progress))
+        with self._tx() as con:
+            cur = con.execute(
+                f"UPDATE jobs SET {sets} WHERE id = ? AND lease = ? AND status = ?",
+                [*args, job_id, lease, JobStatus.RUNNING],
+            )
+            if cur.rowcount == 1:
+                con.execute("DELETE FROM checkpoints WHERE job_id = ?", (job_id,))
+        return cur.rowcount == 1
+
+    # -- search checkpoints ---------------------------------------------------------------------
+    def save_search_checkpoint(self, job_id: str, lease: str, data: bytes) -> bool:
+        """Store the latest checkpoint of a running job's search (replacing the previous
+        one); False if the job is no longer held under ``lease``."""
         cur = self._conn().execute(
-            f"UPDATE jobs SET {sets} WHERE id = ? AND lease = ? AND status = ?",
-            [*args, job_id, lease, JobStatus.RUNNING],
+            "INSERT INTO checkpoints (job_id, data, saved_at) "
+            "SELECT id, ?, ? FROM jobs WHERE id = ? AND lease = ? AND status = ? "
+            "ON CONFLICT(job_id) DO UPDATE SET data = excluded.data, saved_at = excluded.saved_at",
+            (sqlite3.Binary(data), time.time(), job_id, lease, JobStatus.RUNNING),
         )
         return cur.rowcount == 1
+
+    def search_checkpoint(self, job_id: str) -> bytes | None:
+        """The last checkpoint stored for a job's search, or None."""
+        row = (
+            self._conn()
+            .execute("SELECT data FROM checkpoints WHERE job_id = ?", (job_id,))
+            .fetchone()
+        )
+        return bytes(row[0]) if row else None
 
     def request_cancel(self, job_id: str) -> JobRow | None:
         """Cancel a queued job at once; ask a running one to stop.  None if unknown."""
@@ -483,6 +519,7 @@ class JobStore:
                     f"fseq = {_NEXT_FSEQ} WHERE id = ?",
                     (JobStatus.CANCELLED, now, now, job_id),
                 )
+                con.execute("DELETE FROM checkpoints WHERE job_id = ?", (job_id,))
             elif status is JobStatus.RUNNING:
                 con.execute(
                     "UPDATE jobs SET cancel_requested_at = coalesce(cancel_requested_at, ?) "
@@ -538,6 +575,8 @@ class JobStore:
                     f"finished_at = ?, fseq = {_NEXT_FSEQ if final else 'NULL'} WHERE id = ?",
                     (status, error, attempts, now if final else None, job_id),
                 )
+                if final:
+                    con.execute("DELETE FROM checkpoints WHERE job_id = ?", (job_id,))
                 out.append((job_id, status))
         return out
 
@@ -561,6 +600,7 @@ class JobStore:
                     (float(before), *final, int(chunk)),
                 )
                 n = cur.rowcount
+                con.execute("DELETE FROM checkpoints WHERE job_id NOT IN (SELECT id FROM jobs)")
             total += n
             if n < chunk:
                 break

@@ -10,6 +10,10 @@ short of memory ends ``done`` with its partial result (``stopped_by: "memory"``)
 failing; only an allocation that jumps over the margin still fails the job (and the worker
 exits so that the supervisor starts a fresh one).
 
+A job's search saves itself in the store every ``checkpoint_interval`` seconds
+(:func:`job_checkpoint`); when the job runs again after its worker died, it resumes from
+the last save with a fresh time limit and box budget.
+
 Whatever stopped the search (its time or box limit, memory, a cancel), the result is
 bounded before it is stored (:func:`.partial.stored_result`), with the memory limit lifted
 again: building it takes a fraction of the grace the supervisor gives a job (``kill_grace``
@@ -243,6 +247,25 @@ class JobMonitor:
         return True
 
 
+def job_checkpoint(store: JobStore, job: JobRow, lease: str, interval: float):
+    """The :class:`~certsolve.solver.checkpoint.Checkpoint` of a job's search: saved in the
+    store under the job's lease every ``interval`` seconds, resumed from when the job runs
+    again after its worker died.  A snapshot that does not fit is ignored (the search starts
+    afresh); a store too busy to take one is logged, and the search goes on."""
+    from ..solver.checkpoint import Checkpoint
+
+    def save(data: bytes) -> None:
+        try:
+            store.save_search_checkpoint(job.id, lease, data)
+        except sqlite3.Error as exc:
+            log.warning("checkpoint of job %s not saved: %s", job.id, exc)
+
+    def load() -> bytes | None:
+        return store.search_checkpoint(job.id)
+
+    return Checkpoint(save, load, interval=interval, key=f"job {job.kind}", strict=False)
+
+
 def run_job(
     store: JobChannel,
     job: JobRow,
@@ -282,6 +305,10 @@ def run_job(
             time_limit=float(limits["timeout"]),
             max_boxes=int(limits["max_boxes"]),
             progress=monitor,
+            # a job on a Dask worker has no store to save into: not checkpointed there
+            checkpoint=job_checkpoint(store, job, lease, settings.checkpoint_interval)
+            if isinstance(store, JobStore)
+            else None,
         )
         old_limit = set_memory_limit(memory_mb)
         try:

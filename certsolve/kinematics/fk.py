@@ -35,6 +35,7 @@ def forward_kinematics(
     verify: bool = False,
     cancel: Any = None,
     workers: int | None = None,
+    checkpoint: Any = None,
 ) -> FKResult:
     """Every equilibrium pose of ``robot`` for the control vector ``u`` (see
     :mod:`.fk_solver`).
@@ -43,10 +44,14 @@ def forward_kinematics(
     counterpart first and searches around its solutions before the rest of the domain
     (:func:`.seeding.seeded_forward_kinematics`); ``seeded_only`` skips the rest (the rest
     is then reported pending).  ``executor`` (or the older ``workers``), ``verify``, the
-    limits, ``progress`` and ``cancel`` apply to either search (see :meth:`.Solver.solve`).
+    limits, ``progress`` and ``cancel`` apply to either search (see :meth:`.Solver.solve`);
+    ``checkpoint`` (:class:`~certsolve.solver.checkpoint.Checkpoint`) to the plain search
+    only.
     """
     if seeded_only and not seed_planar:
         raise ValueError("seeded_only needs seed_planar")
+    if checkpoint is not None and seed_planar:
+        raise ValueError("checkpoint: not available with seed_planar (a search in two phases)")
     executor = resolve_executor(executor, workers=workers)
     robot = with_tau_max(robot, tau_max)
     search = {
@@ -65,6 +70,6 @@ def forward_kinematics(
     t0 = time.perf_counter()
     fk = FKSolver(robot, formulation, eps=eps)
     compile_time = time.perf_counter() - t0
-    res = fk.solve(u, **search)
+    res = fk.solve(u, checkpoint=checkpoint, **search)
     res.notes.append(f"compiled in {compile_time:.3f} s")
     return res

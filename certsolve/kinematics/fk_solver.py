@@ -207,10 +207,13 @@ class FKSolver:
         boxes: tuple[np.ndarray, np.ndarray] | None = None,
         cancel: Any = None,
         workers: int | None = None,
+        checkpoint: Any = None,
     ) -> FKResult:
         """All equilibrium poses for control ``u`` (``boxes``: search only these boxes).
 
-        Limits, ``executor``, ``progress`` and ``cancel`` as :meth:`.Solver.solve`.
+        Limits, ``executor``, ``progress``, ``cancel`` and ``checkpoint`` as
+        :meth:`.Solver.solve` (the fingerprint covers ``u``: the system's parameters and
+        domain).
         """
         u, ok = self._prepare(u)
         notes = []
@@ -236,6 +239,7 @@ class FKSolver:
             boxes=boxes,
             cancel=cancel,
             workers=workers,
+            checkpoint=checkpoint,
         )
         sols = [self.decode(s.lo, s.hi, u, s) for s in res.solutions]
         return FKResult(self.robot.name, self.formulation, u, res.status, sols, res, notes=notes)

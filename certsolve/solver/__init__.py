@@ -12,6 +12,7 @@
 * :mod:`.executors`       -- the same search on local worker processes (and the choice of an
   executor from ``None`` / a number / ``"auto"`` / a Dask client or address)
 * :mod:`.dask_executor`   -- ... and on a Dask cluster (optional extra ``distributed``)
+* :mod:`.checkpoint`      -- a search saved as it goes and resumed (:class:`Checkpoint`)
 * :mod:`.branch_and_prune`-- :class:`Solver` (the solve step) and :func:`solve`
 * :mod:`.verify`          -- independent re-proof of certificates with ``mpmath.iv``
 * :mod:`.result`          -- :class:`SolveResult` and friends (plain, JSON-ready data)
@@ -24,11 +25,14 @@ the solve step, the workspace paving (:mod:`certsolve.force.certified`) and the 
 """
 
 from .branch_and_prune import SearchState, Solver, solve
+from .checkpoint import Checkpoint, CheckpointError
 from .executors import ProcessExecutor, available_cores, resolve_executor
 from .result import Solution, SolveResult, Stats, Undecided
 from .search import Limits, Progress, SearchStatus, SerialExecutor, run_search
 
 __all__ = [
+    "Checkpoint",
+    "CheckpointError",
     "Limits",
     "ProcessExecutor",
     "Progress",

@@ -34,11 +34,13 @@ from typing import Any
 import numpy as np
 
 from ..expr.compiled import CompiledSystem
+from ..expr.node import to_string
 from ..expr.system import System
 from ..interval.core import splittable_width
 from .bisectors import SmearSumRelative, split
 from .buffer import BoxStack
 from .certify import Certifier, SolutionSet, box_difference
+from .checkpoint import Checkpoint
 from .contractors import HC4, IntervalNewton, PartialNewton, log_volume_ratio
 from .executors import resolve_executor
 from .relaxation import PolytopeHull
@@ -147,6 +149,7 @@ class Solver:
         cancel: Any = None,
         boxes: tuple[np.ndarray, np.ndarray] | None = None,
         workers: int | None = None,
+        checkpoint: Checkpoint | None = None,
     ) -> SolveResult:
         """Run the search over the whole domain, or over ``boxes`` ``(lo, hi)`` if given.
 
@@ -156,6 +159,8 @@ class Solver:
         the search once that many solutions are certified; ``progress`` returning ``False``
         or ``cancel.is_set()`` cancels it.  The status is ``complete`` when nothing is
         pending, else the limit that stopped the search (:class:`.SearchStatus`).
+        ``checkpoint`` (:class:`.checkpoint.Checkpoint`): save the search as it goes and
+        resume it from the last save (limits apply to each run).
         """
         if boxes is None:
             dom = self.system.domain
@@ -167,6 +172,7 @@ class Solver:
             executor=resolve_executor(executor, workers=workers),
             progress=progress,
             cancel=cancel,
+            checkpoint=checkpoint,
         )
         result = self.result(run)
         if verify:
@@ -176,6 +182,29 @@ class Solver:
         return result
 
     # -- the step of the search driver ------------------------------------------------------
+    def fingerprint(self) -> str:
+        """The problem and the settings that shape the answer, as text (for checkpoints,
+        :mod:`.checkpoint`): equations, constraints, domain, parameter values, ``eps`` and
+        the contractors' and bisector's settings."""
+        sysm, c = self.system, self.csys
+        mask = None if self.bisect_mask is None else self.bisect_mask.tolist()
+        parts = [
+            "variables: " + ",".join(sysm.variables),
+            "domain: " + repr(sysm.domain.tolist()),
+            *(f"eq: {to_string(e)}" for e in sysm.equations),
+            *(
+                f"constraint: {to_string(k.expr)} in [{k.lo!r}, {k.hi!r}] {k.redundant}"
+                for k in sysm.constraints
+            ),
+            f"parameters: {c.param_names} {c.param_lo.tolist()!r} {c.param_hi.tolist()!r}",
+            f"eps: {self.eps!r}, hc4: {self.hc4.max_passes}, relax: {self.relax is not None}, "
+            f"cid: {None if self.cid is None else self.cid.slices}, mask: {mask}",
+            f"newton: {[g.tolist() for g in self.newton.groups or []]}",
+            f"partial: {[(p.S.tolist(), p.V.tolist()) for p in self.partial]}",
+            f"bisector: {type(self.bisector).__name__} {_settings(self.bisector)}",
+        ]
+        return "\n".join(parts)
+
     def start(self, known: bytes | None = None) -> SearchState:
         """An empty search state, with the solutions in ``known`` (see :meth:`known`)."""
         sols = SolutionSet(self.n) if known is None else pickle.loads(known)
@@ -362,6 +391,17 @@ class Solver:
         )
 
 
+def _settings(obj) -> str:
+    """The plain settings of a part (numbers, strings, arrays), sorted by name."""
+    items = []
+    for k, v in sorted(vars(obj).items()):
+        if isinstance(v, np.ndarray):
+            v = v.tolist()
+        if isinstance(v, (bool, int, float, str, list, tuple, type(None))):
+            items.append(f"{k}={v!r}")
+    return ", ".join(items)
+
+
 @dataclass
 class SearchState:
     """The solver's state in a search (the driver's buffer and the records of a step)."""
@@ -385,6 +425,7 @@ def solve(
     max_solutions: int | None = None,
     cancel: Any = None,
     workers: int | None = None,
+    checkpoint: Checkpoint | None = None,
     **options,
 ) -> SolveResult:
     """Find every solution of ``system`` in its domain (see :class:`Solver` and
@@ -399,4 +440,5 @@ def solve(
         max_solutions=max_solutions,
         cancel=cancel,
         workers=workers,
+        checkpoint=checkpoint,
     )

@@ -198,7 +198,7 @@ class TaskExecutor(ABC):
                 search.stats.resubmitted += 1
                 retry.append((lo, hi, attempt + 1))
                 continue
-            search.absorb(lo.shape[0], result)
+            search.absorb(lo, result)
             search.report()
             pool.refresh()
             if search.stopped() and search.reason in _PROMPT and running:
@@ -211,6 +211,13 @@ class TaskExecutor(ABC):
 
 
 # -- local processes ------------------------------------------------------------------------
+def _ignore_interrupt() -> None:
+    """Worker start-up: Ctrl-C is the driver's business (it stops the search itself)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def _load(step_bytes: bytes) -> None:
     """Start-up task: the imports the step needs, while the driver's warm-up goes on."""
     pickle.loads(step_bytes)
@@ -239,7 +246,9 @@ class _ProcessPool(TaskPool):
         self._start()
 
     def _start(self) -> None:
-        self._pool = ProcessPoolExecutor(self.workers, mp_context=get_context("spawn"))
+        self._pool = ProcessPoolExecutor(
+            self.workers, mp_context=get_context("spawn"), initializer=_ignore_interrupt
+        )
         for _ in range(self.workers):
             self._pool.submit(_load, self._step)
 

@@ -99,6 +99,8 @@ class Stats:
     tasks: int = 0  # worker tasks run
     resubmitted: int = 0  # task slices handed out again after a lost worker
     stopped_by: str | None = None  # the status when not complete (older name)
+    resumed: int = 0  # times the search was restored from a checkpoint
+    resumed_boxes: int = 0  # boxes already processed at the last restore
 
     @classmethod
     def of(cls, search: SearchStats, step: Stats, status: SearchStatus) -> Stats:
@@ -117,6 +119,8 @@ class Stats:
             tasks=search.tasks,
             resubmitted=search.resubmitted,
             stopped_by=None if status == SearchStatus.COMPLETE else str(status),
+            resumed=search.resumed,
+            resumed_boxes=search.resumed_boxes,
         )
 
     def to_dict(self) -> dict:

@@ -12,7 +12,9 @@ search differ only in what they do to a batch of boxes.  That is a *step*
   (anything with ``is_set()``, e.g. :class:`threading.Event`) set by another thread;
 * **progress**: one :class:`Progress` record after every batch (serial) or task (workers);
 * one **status** (:class:`SearchStatus`): ``complete`` when nothing is pending, else why the
-  search stopped.
+  search stopped;
+* **checkpoints** (optional, :mod:`.checkpoint`): the search saved at intervals and when it
+  stops, and resumed from the last save.
 
 The guarantee the driver keeps: a box taken from the buffer is either given to the step,
 which accounts for all of it (proven empty, recorded in its state, or pushed back as smaller
@@ -33,9 +35,12 @@ import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from enum import StrEnum
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from .checkpoint import Checkpoint
 
 __all__ = [
     "Executor",
@@ -158,6 +163,8 @@ class SearchStats:
     max_pending: int = 0
     time: float = 0.0  # wall seconds
     cpu: float = 0.0  # CPU seconds: this process plus every task
+    resumed: int = 0  # times the search was restored from a checkpoint (.checkpoint)
+    resumed_boxes: int = 0  # boxes already processed at the last restore
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -186,7 +193,8 @@ class Search:
     Executors drive it: :meth:`run_serial` processes batches here; :meth:`take`,
     :meth:`give_back` and :meth:`absorb` hand slices of the buffer to workers and take their
     results back.  ``count_new``: limits on solutions count only what this search finds
-    (a task seeded with known solutions), not what its state started with.
+    (a task seeded with known solutions), not what its state started with.  ``checkpoint``
+    (a :class:`~.checkpoint.Checkpoint`) saves the search after batches and tasks.
     """
 
     def __init__(
@@ -199,6 +207,7 @@ class Search:
         cancel: Any = None,
         stats: SearchStats | None = None,
         count_new: bool = False,
+        checkpoint: Checkpoint | None = None,
     ):
         self.step = step
         self.state = state
@@ -208,6 +217,8 @@ class Search:
         self.stats = stats or SearchStats()
         self.reason: SearchStatus | None = None  # why the search stopped, once it has
         self.in_flight = 0  # boxes handed out to tasks and not back yet
+        self.checkpoint = checkpoint
+        self._out: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # slices handed out, by id
         self._base = step.tally(state).solutions if count_new else 0
         self._boxes0 = self.stats.boxes
         self._t0 = time.perf_counter()
@@ -260,6 +271,8 @@ class Search:
         self.stats.batches += 1
         self.stats.max_pending = max(self.stats.max_pending, self.pending)
         self.report()
+        if self.checkpoint is not None:
+            self.checkpoint.tick(self)
 
     def run_serial(self, *, until: float | None = None, grow_to: int | None = None) -> None:
         """Process batches here until the buffer is empty or the search stopped; also stop
@@ -278,16 +291,20 @@ class Search:
         """Hand out up to ``k`` boxes from the buffer; they stay counted as pending."""
         lo, hi = self.state.stack.pop(k)
         self.in_flight += lo.shape[0]
+        self._out[id(lo)] = (lo, hi)
         return lo, hi
 
     def give_back(self, lo: np.ndarray, hi: np.ndarray) -> None:
         """Boxes of a task that will not return (lost worker, cancelled): pending again."""
         self.in_flight -= lo.shape[0]
+        self._out.pop(id(lo), None)
         self.state.stack.push(lo, hi)
 
-    def absorb(self, handed: int, result: TaskResult) -> None:
-        """A task's result for ``handed`` boxes: its records, its unfinished boxes."""
-        self.in_flight -= handed
+    def absorb(self, lo: np.ndarray, result: TaskResult) -> None:
+        """A task's result for the slice ``lo`` (as :meth:`take` handed it out): its
+        records, its unfinished boxes."""
+        self.in_flight -= lo.shape[0]
+        self._out.pop(id(lo), None)
         self.step.merge(self.state, result.found)
         self.state.stack.push(result.lo, result.hi)
         self.stats.boxes += result.boxes
@@ -295,6 +312,23 @@ class Search:
         self.stats.tasks += 1
         self.stats.max_pending = max(self.stats.max_pending, self.pending)
         self._task_cpu += result.cpu
+        if self.checkpoint is not None:
+            self.checkpoint.tick(self)
+
+    def pending_boxes(self) -> tuple[np.ndarray, np.ndarray]:
+        """Copies of the pending boxes: the buffer, then the slices handed out to tasks."""
+        lo, hi = self.state.stack.snapshot()
+        if self._out:
+            lo = np.concatenate([lo, *(a for a, _ in self._out.values())])
+            hi = np.concatenate([hi, *(b for _, b in self._out.values())])
+        return lo, hi
+
+    def counters(self) -> SearchStats:
+        """A copy of the counters as they are now (time and CPU included)."""
+        stats = SearchStats(**self.stats.to_dict())
+        stats.time = self._elapsed0 + self.elapsed()
+        stats.cpu = self._cpu0 + time.process_time() - self._c0 + self._task_cpu
+        return stats
 
     def task_limits(self, slots: int, seconds: float, boxes: int | None = None) -> Limits:
         """Limits for one task of at most ``seconds`` and ``boxes`` when ``slots`` tasks
@@ -375,23 +409,40 @@ def run_search(
     progress: ProgressCallback | None = None,
     cancel: Any = None,
     previous: SearchRun | None = None,
+    checkpoint: Checkpoint | None = None,
 ) -> SearchRun:
     """Search the boxes ``lo, hi`` (``(B, n)``) with ``step`` (see the module docstring).
 
     ``previous`` continues an earlier run: its state (records and pending boxes) and
     counters; ``lo, hi`` are then added to its buffer.  ``executor`` defaults to
     :class:`SerialExecutor` (see :func:`.executors.resolve_executor` for the others).
+
+    ``checkpoint`` (:class:`~.checkpoint.Checkpoint`): if it holds a snapshot of this
+    search (same step, problem and initial boxes ``lo, hi``), the search resumes from it
+    instead of starting from ``lo, hi``; it is saved every ``checkpoint.interval``
+    seconds and when the search stops.
     """
     executor = executor or SerialExecutor()
-    if previous is None:
+    resumed = None
+    if checkpoint is not None:
+        if previous is not None:
+            raise ValueError("a checkpointed search cannot continue a previous run")
+        resumed = checkpoint.begin(step, lo, hi)
+    if resumed is not None:
+        state, stats = resumed
+    elif previous is None:
         state, stats = step.start(), SearchStats()
     else:
         state, stats = previous.state, previous.stats
-    if lo is not None:
+    if lo is not None and resumed is None:
         state.stack.push(np.atleast_2d(lo), np.atleast_2d(hi))
-    search = Search(step, state, limits, progress=progress, cancel=cancel, stats=stats)
+    search = Search(
+        step, state, limits, progress=progress, cancel=cancel, stats=stats, checkpoint=checkpoint
+    )
     search.stats.executor = executor.name
     executor.run(search)
+    if checkpoint is not None:
+        checkpoint.write(search)
     return search.finish()
 
 

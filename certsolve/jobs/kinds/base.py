@@ -292,7 +292,8 @@ def angles_schema(dof: int, *, ranges: bool) -> dict | None:
 # -- running --------------------------------------------------------------------------------------
 @dataclass(kw_only=True)
 class RunContext:
-    """What a runner gets besides its request: limits and the progress callback.
+    """What a runner gets besides its request: limits, the progress callback and the
+    search's checkpoint (runners of searches on the driver pass it to the library call).
 
     ``progress(p)`` takes the library's progress object (``boxes``, ``pending``,
     ``solutions``, ``undecided``, ``elapsed``) and returns False when the job must stop
@@ -302,6 +303,9 @@ class RunContext:
     time_limit: float
     max_boxes: int
     progress: Callable[[Any], bool] = field(default=lambda p: True)
+    #: where the search saves itself and resumes from (a
+    #: :class:`~certsolve.solver.checkpoint.Checkpoint`; None: not saved)
+    checkpoint: Any = None
 
 
 def library_function(kind: str, module: str, name: str) -> Callable:
@@ -316,7 +320,7 @@ def library_function(kind: str, module: str, name: str) -> Callable:
 
 
 # passed when the library takes them, else enforced by the worker (progress callback, kill)
-_ADVISORY = frozenset({"timeout", "max_boxes", "progress"})
+_ADVISORY = frozenset({"timeout", "max_boxes", "progress", "checkpoint"})
 
 
 def call_supported(fn: Callable, *args: Any, **options: Any) -> Any:

@@ -131,6 +131,7 @@ def run_design(job: DesignJob, ctx: RunContext) -> Any:
         progress=ctx.progress,
         timeout=ctx.time_limit,
         max_boxes=ctx.max_boxes,
+        checkpoint=ctx.checkpoint,
     )
 
 

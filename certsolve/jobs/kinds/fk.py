@@ -161,6 +161,7 @@ def run_fk(job: FkJob, ctx: RunContext) -> Any:
         seed_planar=p.seed_planar,
         seeded_only=p.seeded_only,
         progress=ctx.progress,
+        checkpoint=None if p.seed_planar else ctx.checkpoint,  # one search only
     )
     return result
 

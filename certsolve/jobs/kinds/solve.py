@@ -73,6 +73,7 @@ def run_solve(job: SolveJob, ctx: RunContext) -> Any:
         max_solutions=p.max_solutions,
         max_undecided=p.max_undecided,
         max_pending=p.max_pending,
+        checkpoint=ctx.checkpoint,
     )
     return result
 

@@ -85,6 +85,7 @@ def run_workspace(job: WorkspaceJob, ctx: RunContext) -> Any:
         orientation=orientation_arg(p.orientation),
         eps_angle=p.eps_angle,
         external=p.external,
+        checkpoint=ctx.checkpoint,
     )
     return result
 
