@@ -157,8 +157,10 @@ def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
     y0 = ylo <= 0.0
     y0 &= yhi >= 0.0
     if y0.any():
-        k = np.nonzero(y0)
-        lo[k], hi[k] = _mul_inverse_zero(zlo[k], zhi[k], ylo[k], yhi[k], xlo[k], xhi[k])
+        k = np.flatnonzero(y0)
+        glo, ghi = _mul_inverse_zero(*(np.take(a, k) for a in (zlo, zhi, ylo, yhi, xlo, xhi)))
+        np.put(lo, k, glo)
+        np.put(hi, k, ghi)
     return lo, hi
 
 

@@ -113,23 +113,34 @@ def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
 
 
 def _mul_inverse_zero(zlo, zhi, ylo, yhi, xlo, xhi):
-    """:func:`mul_inverse` where ``0 ∈ [y]`` (1-D arrays)."""
+    """:func:`mul_inverse` where ``0 ∈ [y]`` (1-D arrays).
+
+    With ``0 ∉ [z]`` the quotient set is two half-lines, both bounded by a quotient of the
+    same endpoint ``e`` of ``[z]`` nearest 0 (``e = z̲`` when ``z > 0``, ``z̄`` when ``z < 0``):
+
+    * ``y ∈ (0, ȳ]``: ``[e/ȳ, ∞)`` if ``z > 0``, ``(-∞, e/ȳ]`` if ``z < 0``;
+    * ``y ∈ [y̲, 0)``: ``(-∞, e/y̲]`` if ``z > 0``, ``[e/y̲, ∞)`` if ``z < 0``.
+
+    Each half-line is met with ``[x]`` (the infinite end leaves that bound of ``[x]``), then
+    the hull of the non-empty meets is taken; ``0 ∈ [z]`` gives ``[x]`` (take ``y = 0``).
+    """
     z0 = (zlo <= 0.0) & (zhi >= 0.0)
     zpos = zlo > 0.0
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        # y in (0, yhi]: z>0 -> [zlo/yhi, inf);  z<0 -> (-inf, zhi/yhi]
-        has_p = yhi > 0.0
-        p_lo = np.where(zpos, down(zlo / yhi), -_INF)
-        p_hi = np.where(zpos, _INF, up(zhi / yhi))
-        p_lo = np.where(has_p, p_lo, _INF)
-        p_hi = np.where(has_p, p_hi, -_INF)
-        # y in [ylo, 0): z>0 -> (-inf, zlo/ylo];  z<0 -> [zhi/ylo, inf)
-        has_n = ylo < 0.0
-        n_lo = np.where(zpos, -_INF, down(zhi / ylo))
-        n_hi = np.where(zpos, up(zlo / ylo), _INF)
-        n_lo = np.where(has_n, n_lo, _INF)
-        n_hi = np.where(has_n, n_hi, -_INF)
-    glo, ghi = _hull_of_meets(xlo, xhi, p_lo, p_hi, n_lo, n_hi)
+        e = np.where(zpos, zlo, zhi)
+        qp = e / yhi
+        qn = e / ylo
+        # meet of [x] with the y > 0 half-line (a) and with the y < 0 one (b)
+        alo = np.where(zpos, np.maximum(xlo, down(qp)), xlo)
+        ahi = np.where(zpos, xhi, np.minimum(xhi, up(qp)))
+        blo = np.where(zpos, xlo, np.maximum(xlo, down(qn)))
+        bhi = np.where(zpos, np.minimum(xhi, up(qn)), xhi)
+    a_ok = alo <= ahi
+    a_ok &= yhi > 0.0
+    b_ok = blo <= bhi
+    b_ok &= ylo < 0.0
+    glo = np.where(a_ok, np.where(b_ok, np.minimum(alo, blo), alo), np.where(b_ok, blo, _INF))
+    ghi = np.where(a_ok, np.where(b_ok, np.maximum(ahi, bhi), ahi), np.where(b_ok, bhi, -_INF))
     return np.where(z0, xlo, glo), np.where(z0, xhi, ghi)
 
 

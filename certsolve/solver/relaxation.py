@@ -40,6 +40,7 @@ import numpy as np
 
 from ..expr.compiled import CompiledSystem
 from ..interval.linalg import gamma
+from ..interval.reductions import all_last, any_last
 from ..interval.rounding import down, up
 from .bisectors import smear_scores
 from .lp import dual_active_set
@@ -74,8 +75,8 @@ def xtaylor_rows(csys: CompiledSystem, lo, hi):
     ok = (
         defined
         & np.all(np.isfinite(G), axis=(1, 2))
-        & np.all(np.isfinite(rho), axis=1)
-        & np.all(np.isfinite(w), axis=1)
+        & all_last(np.isfinite(rho))
+        & all_last(np.isfinite(w))
     )
     return G, rho, w, ok
 
@@ -177,7 +178,7 @@ class PolytopeHull:
             base = lo[idx]
             nlo = np.fmax(base, down(base + dlo))
             nhi = np.fmin(hi[idx], up(base + dhi))
-        emp |= np.any(nlo > nhi, axis=1)
+        emp |= any_last(nlo > nhi)
         lo[idx] = np.where(emp[:, None], lo[idx], nlo)
         hi[idx] = np.where(emp[:, None], hi[idx], nhi)
         empty[idx] = emp
