@@ -17,7 +17,14 @@ from hypothesis import strategies as st
 from strategies import finite, interval_and_point
 
 from certsolve.interval import inplace, projections
-from certsolve.interval.reductions import all_last, any_last, count_last, max_last, min_last
+from certsolve.interval.reductions import (
+    all_last,
+    any_last,
+    count_last,
+    max_last,
+    min_last,
+    to_front,
+)
 
 mpmath.mp.dps = 60
 
@@ -112,5 +119,48 @@ def test_mul_inverse_zero_divisor_contracts_to_the_quotients():
 def test_mul_inverse_empty_operand_gives_empty():
     """An empty [x] (lo > hi) stays empty: the projection never invents points."""
     for args in _both_sizes(1.0, 2.0, -1.0, 2.0, 3.0, -3.0):
+        lo, hi = inplace.mul_inverse(*args)
+        assert np.all(~(lo <= hi))
+
+
+@pytest.mark.parametrize(
+    "shape, axis", [((300, 28, 7), 1), ((40, 64, 16), 1), ((5, 3, 1), 1), ((9, 6, 4), 0)]
+)
+def test_sums_along_an_inner_axis_are_bit_identical(shape, axis):
+    """Cancellation-heavy data: any other order of additions would differ somewhere."""
+    rng = np.random.default_rng(shape[0])
+    a = rng.standard_normal(shape) * 10.0 ** rng.integers(-8, 9, shape)
+    assert np.array_equal(np.sum(to_front(a, axis), axis=0), np.sum(a, axis=axis))
+    with pytest.raises(ValueError):
+        to_front(a, -1)
+
+
+UNBOUNDED = [
+    # z, y (0 ∉ y), x, a point (x, y) with x·y ∈ z
+    ((1.0, np.inf), (1.0, np.inf), (1.0, 2.0), (1.5, 10.0)),
+    ((-np.inf, np.inf), (1.0, np.inf), (-3.0, 2.0), (-2.0, 1e300)),
+    ((5.0, np.inf), (-np.inf, -1.0), (-np.inf, np.inf), (-7.0, -3.0)),
+    ((-np.inf, -1.0), (2.0, np.inf), (-np.inf, 0.0), (-1.0, 5.0)),
+    ((1.0, np.inf), (1.0, np.inf), (-np.inf, np.inf), (1e-200, 1e250)),
+]
+
+
+@pytest.mark.parametrize("z, y, x, point", UNBOUNDED)
+def test_mul_projection_with_unbounded_corners_is_not_nan(z, y, x, point):
+    """Corner quotients ∞/∞ are indeterminate: they must not turn the bound into NaN
+    (an empty box to the evaluator) while solutions such as ``point`` exist."""
+    xp, yp = point
+    for args in _both_sizes(*z, *y, *x):
+        for fn in (inplace.mul_inverse, projections.mul_inverse):
+            lo, hi = fn(*args)
+            assert not np.any(np.isnan(lo)) and not np.any(np.isnan(hi))
+            assert np.all(lo <= xp) and np.all(xp <= hi)
+        zlo, zhi, ylo, yhi, xlo, xhi = args
+        nxlo, nxhi, nylo, nyhi = inplace.bwd_mul(zlo, zhi, xlo, xhi, ylo, yhi)
+        assert np.all((nxlo <= xp) & (xp <= nxhi) & (nylo <= yp) & (yp <= nyhi))
+
+
+def test_mul_projection_of_an_empty_operand_stays_empty():
+    for args in _both_sizes(np.nan, np.nan, 1.0, np.inf, 1.0, 2.0):
         lo, hi = inplace.mul_inverse(*args)
         assert np.all(~(lo <= hi))

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .projections import _mul_inverse_zero
+from .projections import _fix_indeterminate, _mul_inverse_zero
 from .rounding import down_inplace, up_inplace
 
 __all__ = [
@@ -154,6 +154,10 @@ def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
     np.maximum(lo, xlo, out=lo)
     up_(hi)
     np.minimum(hi, xhi, out=hi)
+    with np.errstate(over="ignore", invalid="ignore"):
+        indeterminate = np.isnan(np.sum(lo) + np.sum(hi))  # a corner ∞/∞, or an empty operand
+    if indeterminate:
+        _fix_indeterminate(lo, hi, zlo, zhi, ylo, yhi, xlo, xhi)
     y0 = ylo <= 0.0
     y0 &= yhi >= 0.0
     if y0.any():

@@ -101,15 +101,43 @@ def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
     out_lo = np.maximum(xlo, down(qlo))
     out_hi = np.minimum(xhi, up(qhi))
     y0 = (ylo <= 0.0) & (yhi >= 0.0)
-    if not np.any(y0):
+    with np.errstate(over="ignore", invalid="ignore"):
+        indeterminate = np.isnan(np.sum(out_lo) + np.sum(out_hi))
+    if not indeterminate and not np.any(y0):
         return out_lo, out_hi
     out_lo = np.array(out_lo, copy=True).reshape(-1)
     out_hi = np.array(out_hi, copy=True).reshape(-1)
+    if indeterminate:
+        _fix_indeterminate(out_lo, out_hi, zlo, zhi, ylo, yhi, xlo, xhi)
     k = np.flatnonzero(y0)
     glo, ghi = _mul_inverse_zero(*(np.ravel(a)[k] for a in (zlo, zhi, ylo, yhi, xlo, xhi)))
     out_lo[k] = glo
     out_hi[k] = ghi
     return out_lo.reshape(shape), out_hi.reshape(shape)
+
+
+def _fix_indeterminate(lo, hi, zlo, zhi, ylo, yhi, xlo, xhi) -> None:
+    """Redo, in place, the entries of ``lo, hi`` (flat views) where a corner quotient is ``∞/∞``.
+
+    With ``0 ∉ [y]`` the quotient set ``[z]/[y]`` is the hull of its corner *limits*; a
+    corner ``±∞/±∞`` has no single limit, but the two corners next to it (a finite bound
+    over ``∞``, and ``∞`` over a finite bound) bound every quotient near it, so it can be
+    left out: ``fmin``/``fmax`` skip it.  ``np.minimum`` would make the bound NaN, which the
+    evaluator reads as an *empty* box: a lost solution.  Entries with a NaN operand (an
+    empty interval) stay NaN.  (Entries with ``0 ∈ [y]`` are redone by the caller anyway.)
+    """
+    k = np.flatnonzero(np.isnan(lo) | np.isnan(hi))
+    z0, z1, y0, y1, x0, x1 = (np.take(a, k) for a in (zlo, zhi, ylo, yhi, xlo, xhi))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        q = (z0 / y0, z0 / y1, z1 / y0, z1 / y1)
+        qlo = np.fmin(np.fmin(q[0], q[1]), np.fmin(q[2], q[3]))
+        qhi = np.fmax(np.fmax(q[0], q[1]), np.fmax(q[2], q[3]))
+        nlo = np.maximum(x0, down(qlo))
+        nhi = np.minimum(x1, up(qhi))
+    operand_nan = np.isnan(z0) | np.isnan(z1) | np.isnan(y0) | np.isnan(y1)
+    operand_nan |= np.isnan(x0) | np.isnan(x1)
+    np.put(lo, k, np.where(operand_nan, np.take(lo, k), nlo))
+    np.put(hi, k, np.where(operand_nan, np.take(hi, k), nhi))
 
 
 def _mul_inverse_zero(zlo, zhi, ylo, yhi, xlo, xhi):

@@ -12,13 +12,19 @@ axis: logical and/or and max/min are exact, do not depend on the order of the op
 ``np.maximum``/``np.minimum`` propagate NaN like ``np.max``/``np.min``.  (Sums are not
 offered, except counts of true values, which are exact integers: a different order of
 floating-point additions rounds differently.)
+
+:func:`to_front` serves sums along an *inner* axis: numpy sums along any axis but the
+last one sequentially (``s = a_0; s += a_1; ...``; pairwise summation is used only along
+the contiguous last axis), and so does ``np.sum(to_front(a, axis), axis=0)``: the same
+additions in the same order, hence the same bits, ~3x faster for ``(L, m, n)`` with small
+``n``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["all_last", "any_last", "count_last", "max_last", "min_last"]
+__all__ = ["all_last", "any_last", "count_last", "max_last", "min_last", "to_front"]
 
 #: below this many elements numpy's own reduction is as fast (no copy needed)
 _SMALL = 512
@@ -56,3 +62,14 @@ def max_last(a: np.ndarray) -> np.ndarray:
 def min_last(a: np.ndarray) -> np.ndarray:
     """``np.min(a, axis=-1)`` (NaN propagates)."""
     return _reduce_last(np.minimum, a)
+
+
+def to_front(a: np.ndarray, axis: int) -> np.ndarray:
+    """A C-contiguous copy of ``a`` with ``axis`` moved to the front.
+
+    ``np.sum(to_front(a, axis), axis=0)`` equals ``np.sum(a, axis=axis)`` bit for bit when
+    ``axis`` is not the last axis (both add sequentially along it, see the module doc).
+    """
+    if axis in (-1, a.ndim - 1):
+        raise ValueError("to_front: the last axis is summed pairwise by numpy; sum it in place")
+    return np.ascontiguousarray(np.moveaxis(a, axis, 0))
