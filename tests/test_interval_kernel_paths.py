@@ -16,7 +16,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 from strategies import finite, interval_and_point
 
-from certsolve.interval import inplace, projections
+from certsolve.interval import inplace, projections, rounding
 from certsolve.interval.reductions import (
     all_last,
     any_last,
@@ -164,3 +164,15 @@ def test_mul_projection_of_an_empty_operand_stays_empty():
     for args in _both_sizes(np.nan, np.nan, 1.0, np.inf, 1.0, 2.0):
         lo, hi = inplace.mul_inverse(*args)
         assert np.all(~(lo <= hi))
+
+
+@pytest.mark.parametrize("shape", [(3, 7), (9, 7), (10, 7), (40, 16)])
+def test_a_column_rounds_as_inside_its_array(shape):
+    """``up/down(x, size=A.size)`` on a column of ``A`` equals that column of ``up/down(A)``
+    (Hansen–Sengupta updates one column of its midpoint-radius form at a time)."""
+    rng = np.random.default_rng(shape[0])
+    a = rng.standard_normal(shape) * 10.0 ** rng.integers(-300, 300, shape)
+    a[0, :] = [0.0, -0.0, np.inf, -np.inf, 5e-324, 1e-310, -1.0] + [2.0] * (shape[1] - 7)
+    for j in range(shape[1]):
+        for fn in (rounding.up, rounding.down):
+            assert np.array_equal(fn(a[:, j], size=a.size), fn(a)[:, j])

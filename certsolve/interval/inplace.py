@@ -16,6 +16,8 @@ evaluator's node arrays).  Differences from the general functions, all sound:
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from .projections import _fix_indeterminate, _mul_inverse_zero
@@ -39,24 +41,12 @@ __all__ = [
 _INF = np.inf
 
 
-def down_(x):
-    """Round ``x`` down in place (any operation)."""
-    return down_inplace(x)
-
-
-def up_(x):
-    """Round ``x`` up in place (any operation)."""
-    return up_inplace(x)
-
-
-def down_sum_(x):
-    """Round down in place a result of ``+`` or ``-`` (exact when zero or subnormal)."""
-    return down_inplace(x, exact_tiny=True)
-
-
-def up_sum_(x):
-    """Round up in place a result of ``+`` or ``-``."""
-    return up_inplace(x, exact_tiny=True)
+#: round ``x`` down / up in place (any operation)
+down_ = down_inplace
+up_ = up_inplace
+#: round down / up in place a result of ``+`` or ``-`` (exact when zero or subnormal)
+down_sum_ = partial(down_inplace, exact_tiny=True)
+up_sum_ = partial(up_inplace, exact_tiny=True)
 
 
 # -- forward, into preallocated rows -------------------------------------------------------------

@@ -257,8 +257,8 @@ def hansen_sengupta(lin: Linearization) -> tuple[np.ndarray, np.ndarray, np.ndar
         dlo = down(lo - c)
         dhi = up(hi - c)
         g = 1.0 + 2.0 * gamma(n + 4)
+        dc, dr = mr_from_bounds(dlo, dhi)  # (B, n); column i is updated after step i
         for i in range(n):
-            dc, dr = mr_from_bounds(dlo, dhi)  # (B, n)
             mc = lin.Mc[:, i, :].copy()
             mr = lin.Mr[:, i, :].copy()
             piv_c, piv_r = mc[:, i].copy(), mr[:, i].copy()
@@ -291,4 +291,5 @@ def hansen_sengupta(lin: Linearization) -> tuple[np.ndarray, np.ndarray, np.ndar
             hi[:, i] = new_hi
             dlo[:, i] = down(new_lo - c[:, i])
             dhi[:, i] = up(new_hi - c[:, i])
+            dc[:, i], dr[:, i] = mr_from_bounds(dlo[:, i], dhi[:, i], size=dlo.size)
     return lo, hi, empty
