@@ -20,7 +20,7 @@ from functools import partial
 
 import numpy as np
 
-from .projections import _fix_indeterminate, _mul_inverse_zero
+from .projections import _mul_inverse_zero
 from .rounding import down_inplace, up_inplace
 
 __all__ = [
@@ -127,27 +127,28 @@ def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
     """``[x] ∩ {t : ∃ y ∈ [y], t·y ∈ [z]}`` (hull), as :func:`.projections.mul_inverse`.
 
     2-D arrays of one shape.  Corner quotients for the whole batch; the entries with
-    ``0 ∈ [y]`` are recomputed on the compressed subset.
+    ``0 ∈ [y]`` are recomputed on the compressed subset.  The hull of the corners skips
+    NaN (``fmin``/``fmax``, the same bits as ``minimum``/``maximum`` otherwise): a corner
+    ``±∞/±∞`` has no single limit but its two neighbours bound every quotient near it, so
+    it can be left out, where a NaN bound would read as an empty box (a lost solution).
+    A NaN from an empty operand may be lost here; that operand's row still marks the box
+    empty (see the module doc).
     """
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         q1 = zlo / ylo
         q2 = zlo / yhi
         q3 = zhi / ylo
         q4 = zhi / yhi
-        hi = np.maximum(q1, q2)
-        np.maximum(hi, q3, out=hi)
-        np.maximum(hi, q4, out=hi)
-        lo = np.minimum(q1, q2, out=q1)
-        np.minimum(lo, q3, out=lo)
-        np.minimum(lo, q4, out=lo)
+        hi = np.fmax(q1, q2)
+        np.fmax(hi, q3, out=hi)
+        np.fmax(hi, q4, out=hi)
+        lo = np.fmin(q1, q2, out=q1)
+        np.fmin(lo, q3, out=lo)
+        np.fmin(lo, q4, out=lo)
     down_(lo)
     np.maximum(lo, xlo, out=lo)
     up_(hi)
     np.minimum(hi, xhi, out=hi)
-    with np.errstate(over="ignore", invalid="ignore"):
-        indeterminate = np.isnan(np.sum(lo) + np.sum(hi))  # a corner ∞/∞, or an empty operand
-    if indeterminate:
-        _fix_indeterminate(lo, hi, zlo, zhi, ylo, yhi, xlo, xhi)
     y0 = ylo <= 0.0
     y0 &= yhi >= 0.0
     if y0.any():
