@@ -8,6 +8,13 @@ the batch size, and each call works on ``(group size, B)`` arrays.  This is what
 pure-Python solver fast: the number of Python-level steps depends on the depth of the
 expressions, not on the number of nodes or boxes.
 
+The forward pass merges groups further (:func:`_schedule`): independent groups of one
+operation whose kernel is element by element and whose rounding does not depend on the
+array size (``+``, ``-``, ``*``, ``+ c``, negation) are evaluated together, whatever their
+level, in rows laid out so that each merged group is still one slice.  Every node gets the
+same bits as level by level; the backward pass keeps the level groups (in HC4 the order of
+the projections decides how much they contract).
+
 Value arrays have shape ``(n_nodes, B)``: row ``i`` holds node ``i`` (local numbering) for
 every box.  Variables occupy rows ``0 .. n_vars-1``, parameters the next ``n_params`` rows.
 
@@ -76,6 +83,38 @@ def _layers(idx: np.ndarray) -> tuple:
     return tuple(out)
 
 
+#: operations whose forward kernel works element by element with a rounding rule that does
+#: not depend on the array size (:mod:`certsolve.interval.inplace`, exact negation): groups of
+#: them may be merged without changing a single bit of the result
+_MERGEABLE = frozenset({"add", "sub", "mul", "cadd", "neg"})
+
+
+def _schedule(units: list[list[int]], graph: Graph) -> list[list[int]]:
+    """Forward order of the level groups ``units``, merging independent ones of one operation.
+
+    List scheduling: repeatedly take the first group whose children are all computed and,
+    if its operation is in :data:`_MERGEABLE`, every other ready group of that operation;
+    they are evaluated together (one set of numpy calls).  Nodes of one batch never depend
+    on each other, so each node gets exactly the value the level-by-level order gives it.
+    """
+    owner = {x: u for u, members in enumerate(units) for x in members}
+    deps = [{owner[a] for x in members for a in graph.args[x] if a in owner} for members in units]
+    done: set[int] = set()
+    remaining = list(range(len(units)))
+    batches = []
+    while remaining:
+        ready = [u for u in remaining if deps[u] <= done]
+        op = graph.op[units[ready[0]][0]]
+        if op in _MERGEABLE:
+            batch = [u for u in ready if graph.op[units[u][0]] == op]
+        else:
+            batch = ready[:1]
+        batches.append(batch)
+        done.update(batch)
+        remaining = [u for u in remaining if u not in done]
+    return batches
+
+
 class Program:
     """Batched evaluator for the sub-DAG of ``graph`` that computes ``outputs``."""
 
@@ -99,7 +138,14 @@ class Program:
             return (level[x], op, p if p is not None else 0)
 
         inner = sorted((x for x in needed if level[x] > 0), key=lambda x: (gkey(x), x))
-        order = list(range(n + npar)) + consts + inner
+        units: list[list[int]] = []  # the HC4 groups: runs of equal (level, op)
+        for x in inner:
+            if units and gkey(units[-1][0]) == gkey(x):
+                units[-1].append(x)
+            else:
+                units.append([x])
+        batches = _schedule(units, graph)
+        order = list(range(n + npar)) + consts + [x for bt in batches for u in bt for x in units[u]]
         local = {g: i for i, g in enumerate(order)}
         self.global_ids = np.array(order, dtype=np.int64)
         self.n_nodes = len(order)
@@ -110,14 +156,7 @@ class Program:
         self.const_mid = 0.5 * self.const_lo + 0.5 * self.const_hi
         self.outputs = np.array([local[o] for o in outputs], dtype=np.int64)
 
-        groups: list[Group] = []
-        i = n + npar + len(consts)
-        while i < len(order):
-            key = gkey(order[i])
-            j = i
-            while j < len(order) and gkey(order[j]) == key:
-                j += 1
-            members = order[i:j]
+        def group(members: list[int]) -> Group:
             op = graph.op[members[0]]
             a = np.array([local[graph.args[m][0]] for m in members], dtype=np.int64)
             b = None
@@ -133,11 +172,15 @@ class Program:
             unique = len(np.unique(kids)) == len(kids)
             la = () if unique else _layers(a)
             lb = () if unique or b is None else _layers(b)
-            groups.append(Group(op, i, j, a, b, param, unique, la, lb))
-            i = j
-        self.groups = groups
+            start = local[members[0]]
+            return Group(op, start, start + len(members), a, b, param, unique, la, lb)
+
+        #: backward (HC4) groups, by level: the order and grouping define what revise computes
+        self.groups = [group(members) for members in units]
+        #: forward groups: the same nodes, fewer numpy calls (see :func:`_schedule`)
+        self.fwd_groups = [group([x for u in bt for x in units[u]]) for bt in batches]
         # groups whose operation is not smooth everywhere (domain restriction, poles, kinks)
-        self._restricted = [g for g in groups if g.op in SMOOTH]
+        self._restricted = [g for g in self.fwd_groups if g.op in SMOOTH]
         self.n_levels = 1 + max([level[x] for x in needed], default=0)
 
     # -- evaluation ------------------------------------------------------------------------
@@ -161,7 +204,7 @@ class Program:
         LO[self.const_slice] = self.const_lo
         HI[self.const_slice] = self.const_hi
         with np.errstate(all="ignore"):
-            for g in self.groups:
+            for g in self.fwd_groups:
                 into = _FWD_INTO.get(g.op)
                 if into is not None:
                     b_lo = None if g.b is None else LO[g.b]
@@ -207,7 +250,7 @@ class Program:
             V[self.param_slice] = np.asarray(pv, dtype=float)[:, None]
         V[self.const_slice] = self.const_mid
         with np.errstate(all="ignore"):
-            for g in self.groups:
+            for g in self.fwd_groups:
                 V[g.start : g.stop] = _FLT[g.op](V[g.a], None if g.b is None else V[g.b], g.param)
         return V
 

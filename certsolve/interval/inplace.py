@@ -16,6 +16,8 @@ evaluator's node arrays).  Differences from the general functions, all sound:
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from .projections import _mul_inverse_zero
@@ -39,24 +41,12 @@ __all__ = [
 _INF = np.inf
 
 
-def down_(x):
-    """Round ``x`` down in place (any operation)."""
-    return down_inplace(x)
-
-
-def up_(x):
-    """Round ``x`` up in place (any operation)."""
-    return up_inplace(x)
-
-
-def down_sum_(x):
-    """Round down in place a result of ``+`` or ``-`` (exact when zero or subnormal)."""
-    return down_inplace(x, exact_tiny=True)
-
-
-def up_sum_(x):
-    """Round up in place a result of ``+`` or ``-``."""
-    return up_inplace(x, exact_tiny=True)
+#: round ``x`` down / up in place (any operation)
+down_ = down_inplace
+up_ = up_inplace
+#: round down / up in place a result of ``+`` or ``-`` (exact when zero or subnormal)
+down_sum_ = partial(down_inplace, exact_tiny=True)
+up_sum_ = partial(up_inplace, exact_tiny=True)
 
 
 # -- forward, into preallocated rows -------------------------------------------------------------
@@ -137,19 +127,24 @@ def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
     """``[x] ∩ {t : ∃ y ∈ [y], t·y ∈ [z]}`` (hull), as :func:`.projections.mul_inverse`.
 
     2-D arrays of one shape.  Corner quotients for the whole batch; the entries with
-    ``0 ∈ [y]`` are recomputed on the compressed subset.
+    ``0 ∈ [y]`` are recomputed on the compressed subset.  The hull of the corners skips
+    NaN (``fmin``/``fmax``, the same bits as ``minimum``/``maximum`` otherwise): a corner
+    ``±∞/±∞`` has no single limit but its two neighbours bound every quotient near it, so
+    it can be left out, where a NaN bound would read as an empty box (a lost solution).
+    A NaN from an empty operand may be lost here; that operand's row still marks the box
+    empty (see the module doc).
     """
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         q1 = zlo / ylo
         q2 = zlo / yhi
         q3 = zhi / ylo
         q4 = zhi / yhi
-        hi = np.maximum(q1, q2)
-        np.maximum(hi, q3, out=hi)
-        np.maximum(hi, q4, out=hi)
-        lo = np.minimum(q1, q2, out=q1)
-        np.minimum(lo, q3, out=lo)
-        np.minimum(lo, q4, out=lo)
+        hi = np.fmax(q1, q2)
+        np.fmax(hi, q3, out=hi)
+        np.fmax(hi, q4, out=hi)
+        lo = np.fmin(q1, q2, out=q1)
+        np.fmin(lo, q3, out=lo)
+        np.fmin(lo, q4, out=lo)
     down_(lo)
     np.maximum(lo, xlo, out=lo)
     up_(hi)
@@ -157,8 +152,10 @@ def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
     y0 = ylo <= 0.0
     y0 &= yhi >= 0.0
     if y0.any():
-        k = np.nonzero(y0)
-        lo[k], hi[k] = _mul_inverse_zero(zlo[k], zhi[k], ylo[k], yhi[k], xlo[k], xhi[k])
+        k = np.flatnonzero(y0)
+        glo, ghi = _mul_inverse_zero(*(np.take(a, k) for a in (zlo, zhi, ylo, yhi, xlo, xhi)))
+        np.put(lo, k, glo)
+        np.put(hi, k, ghi)
     return lo, hi
 
 

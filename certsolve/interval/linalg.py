@@ -36,11 +36,14 @@ def gamma(n: int) -> float:
     return float(up(np.float64(nu / (1.0 - nu) * (1.0 + 4 * _U))))
 
 
-def mr_from_bounds(lo, hi):
-    """Midpoint-radius form ``(c, r)`` enclosing ``[lo, hi]``: ``[c - r, c + r] ⊇ [lo, hi]``."""
+def mr_from_bounds(lo, hi, size: int | None = None):
+    """Midpoint-radius form ``(c, r)`` enclosing ``[lo, hi]``: ``[c - r, c + r] ⊇ [lo, hi]``.
+
+    ``size``: round as inside an array of that many elements (:func:`.rounding.up`).
+    """
     with np.errstate(invalid="ignore", over="ignore"):
         c = 0.5 * lo + 0.5 * hi
-        r = np.maximum(up(hi - c), up(c - lo))
+        r = np.maximum(up(hi - c, size), up(c - lo, size))
     return c, r
 
 

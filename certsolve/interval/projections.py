@@ -101,10 +101,14 @@ def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
     out_lo = np.maximum(xlo, down(qlo))
     out_hi = np.minimum(xhi, up(qhi))
     y0 = (ylo <= 0.0) & (yhi >= 0.0)
-    if not np.any(y0):
+    with np.errstate(over="ignore", invalid="ignore"):
+        indeterminate = np.isnan(np.sum(out_lo) + np.sum(out_hi))
+    if not indeterminate and not np.any(y0):
         return out_lo, out_hi
     out_lo = np.array(out_lo, copy=True).reshape(-1)
     out_hi = np.array(out_hi, copy=True).reshape(-1)
+    if indeterminate:
+        _fix_indeterminate(out_lo, out_hi, zlo, zhi, ylo, yhi, xlo, xhi)
     k = np.flatnonzero(y0)
     glo, ghi = _mul_inverse_zero(*(np.ravel(a)[k] for a in (zlo, zhi, ylo, yhi, xlo, xhi)))
     out_lo[k] = glo
@@ -112,24 +116,59 @@ def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
     return out_lo.reshape(shape), out_hi.reshape(shape)
 
 
+def _fix_indeterminate(lo, hi, zlo, zhi, ylo, yhi, xlo, xhi) -> None:
+    """Redo, in place, the entries of ``lo, hi`` (flat views) where a corner quotient is ``∞/∞``.
+
+    With ``0 ∉ [y]`` the quotient set ``[z]/[y]`` is the hull of its corner *limits*; a
+    corner ``±∞/±∞`` has no single limit, but the two corners next to it (a finite bound
+    over ``∞``, and ``∞`` over a finite bound) bound every quotient near it, so it can be
+    left out: ``fmin``/``fmax`` skip it.  ``np.minimum`` would make the bound NaN, which the
+    evaluator reads as an *empty* box: a lost solution.  Entries with a NaN operand (an
+    empty interval) stay NaN.  (Entries with ``0 ∈ [y]`` are redone by the caller anyway.)
+    """
+    k = np.flatnonzero(np.isnan(lo) | np.isnan(hi))
+    z0, z1, y0, y1, x0, x1 = (np.take(a, k) for a in (zlo, zhi, ylo, yhi, xlo, xhi))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        q = (z0 / y0, z0 / y1, z1 / y0, z1 / y1)
+        qlo = np.fmin(np.fmin(q[0], q[1]), np.fmin(q[2], q[3]))
+        qhi = np.fmax(np.fmax(q[0], q[1]), np.fmax(q[2], q[3]))
+        nlo = np.maximum(x0, down(qlo))
+        nhi = np.minimum(x1, up(qhi))
+    operand_nan = np.isnan(z0) | np.isnan(z1) | np.isnan(y0) | np.isnan(y1)
+    operand_nan |= np.isnan(x0) | np.isnan(x1)
+    np.put(lo, k, np.where(operand_nan, np.take(lo, k), nlo))
+    np.put(hi, k, np.where(operand_nan, np.take(hi, k), nhi))
+
+
 def _mul_inverse_zero(zlo, zhi, ylo, yhi, xlo, xhi):
-    """:func:`mul_inverse` where ``0 ∈ [y]`` (1-D arrays)."""
+    """:func:`mul_inverse` where ``0 ∈ [y]`` (1-D arrays).
+
+    With ``0 ∉ [z]`` the quotient set is two half-lines, both bounded by a quotient of the
+    same endpoint ``e`` of ``[z]`` nearest 0 (``e = z̲`` when ``z > 0``, ``z̄`` when ``z < 0``):
+
+    * ``y ∈ (0, ȳ]``: ``[e/ȳ, ∞)`` if ``z > 0``, ``(-∞, e/ȳ]`` if ``z < 0``;
+    * ``y ∈ [y̲, 0)``: ``(-∞, e/y̲]`` if ``z > 0``, ``[e/y̲, ∞)`` if ``z < 0``.
+
+    Each half-line is met with ``[x]`` (the infinite end leaves that bound of ``[x]``), then
+    the hull of the non-empty meets is taken; ``0 ∈ [z]`` gives ``[x]`` (take ``y = 0``).
+    """
     z0 = (zlo <= 0.0) & (zhi >= 0.0)
     zpos = zlo > 0.0
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        # y in (0, yhi]: z>0 -> [zlo/yhi, inf);  z<0 -> (-inf, zhi/yhi]
-        has_p = yhi > 0.0
-        p_lo = np.where(zpos, down(zlo / yhi), -_INF)
-        p_hi = np.where(zpos, _INF, up(zhi / yhi))
-        p_lo = np.where(has_p, p_lo, _INF)
-        p_hi = np.where(has_p, p_hi, -_INF)
-        # y in [ylo, 0): z>0 -> (-inf, zlo/ylo];  z<0 -> [zhi/ylo, inf)
-        has_n = ylo < 0.0
-        n_lo = np.where(zpos, -_INF, down(zhi / ylo))
-        n_hi = np.where(zpos, up(zlo / ylo), _INF)
-        n_lo = np.where(has_n, n_lo, _INF)
-        n_hi = np.where(has_n, n_hi, -_INF)
-    glo, ghi = _hull_of_meets(xlo, xhi, p_lo, p_hi, n_lo, n_hi)
+        e = np.where(zpos, zlo, zhi)
+        qp = e / yhi
+        qn = e / ylo
+        # meet of [x] with the y > 0 half-line (a) and with the y < 0 one (b)
+        alo = np.where(zpos, np.maximum(xlo, down(qp)), xlo)
+        ahi = np.where(zpos, xhi, np.minimum(xhi, up(qp)))
+        blo = np.where(zpos, xlo, np.maximum(xlo, down(qn)))
+        bhi = np.where(zpos, np.minimum(xhi, up(qn)), xhi)
+    a_ok = alo <= ahi
+    a_ok &= yhi > 0.0
+    b_ok = blo <= bhi
+    b_ok &= ylo < 0.0
+    glo = np.where(a_ok, np.where(b_ok, np.minimum(alo, blo), alo), np.where(b_ok, blo, _INF))
+    ghi = np.where(a_ok, np.where(b_ok, np.maximum(ahi, bhi), ahi), np.where(b_ok, bhi, -_INF))
     return np.where(z0, xlo, glo), np.where(z0, xhi, ghi)
 
 

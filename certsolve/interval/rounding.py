@@ -54,7 +54,7 @@ def _margin(x, tiny: bool = True) -> np.ndarray:
     return a
 
 
-def up(x):
+def up(x, size: int | None = None):
     """An upper bound, as a float, of any real that rounds to ``x`` (elementwise).
 
     Small arrays use ``nextafter``.  Large ones use ``x + (|x|·2^-52 + 2^-1074)``, ~9x
@@ -63,17 +63,20 @@ def up(x):
     rounded sum is at least the next float after ``x``; the ``2^-1074`` term covers 0 and
     subnormals.  The ``|x|`` term is capped so that ``-inf`` (an overflowed negative value)
     becomes ``-max_float`` as with ``nextafter``; NaN stays NaN.
+
+    ``size`` chooses the rule as for an array of that many elements: a column updated on
+    its own then rounds exactly as it would inside its whole array.
     """
-    if np.size(x) < _SMALL:
+    if (np.size(x) if size is None else size) < _SMALL:
         return np.nextafter(x, _POS_INF)
     a = _margin(x)
     a += x
     return np.maximum(a, -_MAX, out=a)
 
 
-def down(x):
+def down(x, size: int | None = None):
     """A lower bound, as a float, of any real that rounds to ``x`` (mirror of :func:`up`)."""
-    if np.size(x) < _SMALL:
+    if (np.size(x) if size is None else size) < _SMALL:
         return np.nextafter(x, _NEG_INF)
     a = _margin(x)
     np.subtract(x, a, out=a)

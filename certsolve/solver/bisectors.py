@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..interval.core import split_point, splittable_width
+from ..interval.reductions import max_last, to_front
 
 __all__ = ["SmearSumRelative", "LargestFirst", "Prioritized", "split"]
 
@@ -58,7 +59,7 @@ def smear_scores(lo, hi, jlo, jhi, eps: float = 0.0, mask=None) -> np.ndarray:
         smear = mag * w[:, None, :]
         rows = np.sum(smear, axis=2, keepdims=True)
         rel = np.where(rows > 0, smear / rows, 0.0)
-        score = np.sum(rel, axis=1)
+        score = np.sum(to_front(rel, 1), axis=0)  # = np.sum(rel, axis=1), faster
     score = np.where(np.isfinite(score), score, 0.0)
     allowed = w > eps if mask is None else (w > eps) & mask
     return np.where(allowed, score, -1.0)
@@ -75,7 +76,7 @@ class SmearSumRelative:
         score = smear_scores(lo, hi, jlo, jhi, eps, mask)
         best = np.argmax(score, axis=1)
         # no information (all zero, or infinite Jacobian): widest allowed variable
-        stuck = np.max(score, axis=1) <= 0.0
+        stuck = max_last(score) <= 0.0
         if np.any(stuck):
             wa = np.where(allowed[stuck], w[stuck], -1.0)
             best[stuck] = np.argmax(wa, axis=1)
@@ -104,7 +105,7 @@ class Prioritized:
         prim = self.primary if mask is None else self.primary & mask
         sec = self.secondary if mask is None else self.secondary & mask
         best = self._smear.choose(lo, hi, jlo, jhi, eps, prim)
-        wp = np.max(np.where(prim & (w > eps), w, 0.0), axis=1)
+        wp = max_last(np.where(prim & (w > eps), w, 0.0))
         ws = np.where(sec & (w > eps), w, -1.0)
         js = np.argmax(ws, axis=1)
         big = self.alpha * ws[np.arange(w.shape[0]), js] > wp

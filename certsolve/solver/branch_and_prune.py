@@ -37,6 +37,7 @@ from ..expr.compiled import CompiledSystem
 from ..expr.node import to_string
 from ..expr.system import System
 from ..interval.core import splittable_width
+from ..interval.reductions import all_last
 from .bisectors import SmearSumRelative, split
 from .buffer import BoxStack
 from .certify import Certifier, SolutionSet, box_difference
@@ -313,7 +314,7 @@ class Solver:
         wid = splittable_width(lo2, hi2)  # 0 where no float is left inside
         if self.bisect_mask is not None:
             wid = wid[:, self.bisect_mask]
-        small = np.all(wid <= self.eps, axis=1)
+        small = all_last(wid <= self.eps)
         for k in np.flatnonzero(small):
             state.undecided.append(Undecided(lo2[k].copy(), hi2[k].copy(), "eps"))
         big = ~small

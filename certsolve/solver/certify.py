@@ -23,6 +23,7 @@ import numpy as np
 
 from ..expr.compiled import CompiledSystem
 from ..interval.core import is_subset
+from ..interval.reductions import all_last, any_last, count_last
 from .newton import batched_solve, krawczyk, linearize
 
 __all__ = ["Certifier", "SolutionSet", "box_difference"]
@@ -115,14 +116,14 @@ class SolutionSet:
         none = np.empty((0, n))
         if not len(self.kind) or B == 0:
             return np.ones(B, dtype=bool), none, none
-        ge = lo[:, None, :] >= self._ulo[None]
-        le = hi[:, None, :] <= self._uhi[None]
-        inside = np.all(ge & le, axis=2)
+        cover = lo[:, None, :] >= self._ulo[None]
+        cover &= hi[:, None, :] <= self._uhi[None]
+        inside = all_last(cover)
         keep = ~np.any(inside, axis=1)
-        overlap = np.all(
-            (lo[:, None, :] < self._uhi[None]) & (hi[:, None, :] > self._ulo[None]), axis=2
-        )
-        uncovered = np.sum(~(ge & le), axis=2)  # directions where U does not cover the box
+        meet = lo[:, None, :] < self._uhi[None]
+        meet &= hi[:, None, :] > self._ulo[None]
+        overlap = all_last(meet)
+        uncovered = n - count_last(cover)  # directions where U does not cover the box
         clip = keep[:, None] & overlap & (uncovered == 1)
         if not np.any(clip):
             return keep, none, none
@@ -187,12 +188,12 @@ class Certifier:
             with np.errstate(all="ignore"):
                 step = -np.where(ok[:, None], step, 0.0)
                 xn = x[idx] + step
-            good = ok & np.all(np.isfinite(xn), axis=1)
+            good = ok & all_last(np.isfinite(xn))
             if lo is not None:
-                good &= np.all((xn >= far_lo[idx]) & (xn <= far_hi[idx]), axis=1)
+                good &= all_last((xn >= far_lo[idx]) & (xn <= far_hi[idx]))
             x[idx[good]] = xn[good]
             alive[idx[~good]] = False
-            small = np.all(np.abs(step) <= 1e-12 * (1.0 + np.abs(xn)), axis=1) & good
+            small = all_last(np.abs(step) <= 1e-12 * (1.0 + np.abs(xn))) & good
             conv[idx[small]] = True
         return x, conv & alive
 
@@ -210,7 +211,7 @@ class Certifier:
         x, conv = self.newton_point(c, lo, hi)
         w = hi - lo
         slack = 0.25 * w + 1e-9 * (1.0 + np.abs(x))  # degenerate boxes: rounding slack
-        near = conv & np.all((x >= lo - slack) & (x <= hi + slack), axis=1)
+        near = conv & all_last((x >= lo - slack) & (x <= hi + slack))
         todo = np.flatnonzero(near)
         if todo.size == 0:
             return empty
@@ -269,7 +270,7 @@ class Certifier:
             F = f.shape[1]
             lin = linearize(self.csys, clo.reshape(S * F, -1), chi.reshape(S * F, -1))
             ok = krawczyk(lin)[2].reshape(S, F)
-            ok &= np.all((clo <= elo[:, None, :]) & (chi >= ehi[:, None, :]), axis=2)
+            ok &= all_last((clo <= elo[:, None, :]) & (chi >= ehi[:, None, :]))
             return clo, chi, ok
 
         grid = 10.0 ** -np.arange(0.5, 9.5, 0.5)
@@ -309,7 +310,7 @@ class Certifier:
             nlo = np.where(use, np.fmax(lo, klo), lo)
             nhi = np.where(use, np.fmin(hi, khi), hi)
             # the solution is in both; a numerically empty meet would be a bug: keep old box
-            bad = np.any(nlo > nhi, axis=1)
+            bad = any_last(nlo > nhi)
             lo = np.where(bad[:, None], lo, nlo)
             hi = np.where(bad[:, None], hi, nhi)
         return lo, hi

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..expr.compiled import CompiledSystem
 from ..interval.core import midpoint
+from ..interval.reductions import all_last
 from .newton import (
     Linearization,
     hansen_sengupta,
@@ -80,7 +81,7 @@ class NewtonStep:
         lin = self.lin
         d = np.einsum("bii->bi", lin.Mc)
         r = np.einsum("bii->bi", lin.Mr)
-        return lin.ok & np.all(np.abs(d) > r, axis=1)
+        return lin.ok & all_last(np.abs(d) > r)
 
 
 class IntervalNewton:

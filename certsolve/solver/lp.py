@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..interval.reductions import all_last, any_last, max_last
+
 __all__ = ["LPBatch", "dual_active_set"]
 
 
@@ -92,7 +94,7 @@ def dual_active_set(
             V[np.arange(act.size)[:, None], W[act]] = -np.inf
             t = np.argmax(V, axis=1)
             vmax = V[np.arange(act.size), t]
-            conv = vmax <= tol * (1.0 + np.max(np.abs(x[act]), axis=1))
+            conv = vmax <= tol * (1.0 + max_last(np.abs(x[act])))
             done[act[conv]] = True
             run, t = act[~conv], t[~conv]
             if run.size == 0:
@@ -101,10 +103,10 @@ def dual_active_set(
             Ni = Ninv[run]
             alpha = np.einsum("lij,li->lj", Ni, gs)  # g_t = Σ_k α_k g_{W_k}
             lr = lam[run]
-            pos = alpha > 1e-12 * np.max(np.abs(alpha), axis=1, keepdims=True)
+            pos = alpha > 1e-12 * max_last(np.abs(alpha))[:, None]
             ratio = np.where(pos, lr / np.where(pos, alpha, 1.0), np.inf)
             k = np.argmin(ratio, axis=1)
-            farkas = ~np.any(pos, axis=1)
+            farkas = ~any_last(pos)
             if np.any(farkas):  # every α_k <= 0: infeasible
                 fr = run[farkas]
                 rows = np.arange(fr.size)
@@ -135,7 +137,7 @@ def dual_active_set(
             Ni -= col[:, :, None] * (alpha / ak[:, None])[:, None, :]
             Ninv[run] = Ni
             xr = np.einsum("lij,lj->li", Ni, bf[(box[run] * M)[:, None] + Wr])
-            bad = ~np.all(np.isfinite(xr), axis=1)
+            bad = ~all_last(np.isfinite(xr))
             x[run] = np.where(bad[:, None], x[run], xr)
             done[run[bad]] = True
     feasible = np.flatnonzero(~infeasible)

@@ -34,6 +34,7 @@ from ..expr.compiled import CompiledSystem
 from ..interval import arith
 from ..interval.core import midpoint
 from ..interval.linalg import gamma, mr_from_bounds, mr_matmul
+from ..interval.reductions import all_last
 from ..interval.rounding import down, up
 
 __all__ = [
@@ -99,7 +100,7 @@ def batched_solve(A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]
             except np.linalg.LinAlgError:
                 pass
     x[finite] = xf
-    return x, np.all(np.isfinite(x), axis=1)
+    return x, all_last(np.isfinite(x))
 
 
 @dataclass
@@ -138,13 +139,13 @@ def linearization_from_bounds(lo, hi, c, flo, fhi, jlo, jhi, defined=None) -> Li
         defined = np.ones(lo.shape[0], dtype=bool)
     Jc, Jr = mr_from_bounds(jlo, jhi)
     Y, ok = batched_inverse(Jc)
-    ok &= defined & np.all(np.isfinite(flo) & np.isfinite(fhi), axis=1)
+    ok &= defined & all_last(np.isfinite(flo) & np.isfinite(fhi))
     Ys = np.where(ok[:, None, None], Y, 0.0)
     with np.errstate(all="ignore"):
         Mc, Mr = mr_matmul(Ys, None, Jc, Jr)
         fc, fr = mr_from_bounds(flo, fhi)
         bc, br = mr_matmul(Ys, None, fc[:, :, None], fr[:, :, None])
-    ok &= np.all(np.isfinite(Mr), axis=(1, 2)) & np.all(np.isfinite(br[:, :, 0]), axis=1)
+    ok &= np.all(np.isfinite(Mr), axis=(1, 2)) & all_last(np.isfinite(br[:, :, 0]))
     return Linearization(lo, hi, c, jlo, jhi, Y, ok, Mc, Mr, bc[:, :, 0], br[:, :, 0])
 
 
@@ -166,7 +167,7 @@ def krawczyk(lin: Linearization) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         rr = up(lin.br + v)
         klo = down(down(centre) - rr)
         khi = up(up(centre) + rr)
-    proven = lin.ok & np.all((klo > lin.lo) & (khi < lin.hi), axis=1)
+    proven = lin.ok & all_last((klo > lin.lo) & (khi < lin.hi))
     return klo, khi, proven
 
 
@@ -256,8 +257,8 @@ def hansen_sengupta(lin: Linearization) -> tuple[np.ndarray, np.ndarray, np.ndar
         dlo = down(lo - c)
         dhi = up(hi - c)
         g = 1.0 + 2.0 * gamma(n + 4)
+        dc, dr = mr_from_bounds(dlo, dhi)  # (B, n); column i is updated after step i
         for i in range(n):
-            dc, dr = mr_from_bounds(dlo, dhi)  # (B, n)
             mc = lin.Mc[:, i, :].copy()
             mr = lin.Mr[:, i, :].copy()
             piv_c, piv_r = mc[:, i].copy(), mr[:, i].copy()
@@ -290,4 +291,5 @@ def hansen_sengupta(lin: Linearization) -> tuple[np.ndarray, np.ndarray, np.ndar
             hi[:, i] = new_hi
             dlo[:, i] = down(new_lo - c[:, i])
             dhi[:, i] = up(new_hi - c[:, i])
+            dc[:, i], dr[:, i] = mr_from_bounds(dlo[:, i], dhi[:, i], size=dlo.size)
     return lo, hi, empty

@@ -1,0 +1,129 @@
+"""Kernel micro-benchmarks: the solver's hot loops on fixed batches of boxes, CPU time.
+
+    python benchmarks/kernel_bench.py [--batch 256,1024] [--runs 5] [--calls 20] [systems...]
+
+For each system (``katsura-6``, ``eco-7`` from ``examples/systems``, ``T-16``: the MARIONET-T
+forward-kinematics system at tau <= 60 N, u = 2) and batch size ``B``: random boxes inside the
+search domain (seeded; widths 1/64 of the domain, so that many straddle zeros), then the
+median over ``--runs`` runs of the CPU time (``time.process_time``) of ``--calls`` calls of
+
+* ``forward``  -- interval values of every node of the HC4 program,
+* ``hc4``      -- one HC4-revise pass (forward + backward projections),
+* ``fj``       -- ``f`` and the Jacobian with the domain check,
+* ``columns``  -- ``f`` and the first Newton group's Jacobian columns (FK: mixed Jacobian),
+* ``newton``   -- the interval Newton contractor (linearisation, Krawczyk, Hansen–Sengupta),
+* ``relax``    -- the polytope-hull contractor (X-Taylor rows + batched dual LPs).
+
+Printed per call in milliseconds and per box in microseconds.  The same boxes are used for
+every run, so two checkouts can be compared (run each on an idle machine, or interleave).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _minibex(name: str):
+    from certsolve.expr.compiled import CompiledSystem
+    from certsolve.expr.minibex import load_minibex
+
+    system = load_minibex(ROOT / "examples" / "systems" / f"{name}.mbx")
+    return CompiledSystem(system), np.asarray(system.domain, dtype=float), None
+
+
+def _t16():
+    from certsolve.kinematics import FKSolver, with_tau_max
+    from certsolve.robot import Robot
+
+    robot = with_tau_max(Robot.load(str(ROOT / "examples" / "robots" / "marionet-t.json")), 60.0)
+    fk = FKSolver(robot)
+    fk._prepare(np.full(robot.m, 2.0))
+    dom = np.asarray(fk.csys.system.domain, dtype=float)
+    return fk.csys, dom, fk.solver.newton.groups
+
+
+SYSTEMS = {"katsura-6": lambda: _minibex("katsura-6"), "eco-7": lambda: _minibex("eco-7")}
+SYSTEMS["T-16"] = _t16
+
+
+def boxes(dom: np.ndarray, B: int, seed: int = 0):
+    """``B`` random boxes of width 1/64 of the (bounded) domain, inside it."""
+    rng = np.random.default_rng(seed)
+    lo_d, hi_d = dom[:, 0], dom[:, 1]
+    w = (hi_d - lo_d) / 64.0
+    lo = lo_d + rng.random((B, dom.shape[0])) * (hi_d - lo_d - w)
+    return lo, lo + w
+
+
+def kernels(csys, groups):
+    """name -> function(lo, hi) running one kernel call."""
+    from certsolve.solver.contractors import IntervalNewton
+    from certsolve.solver.relaxation import PolytopeHull
+
+    p = csys.hc4
+    cols = np.flatnonzero(groups[0]) if groups else np.arange(csys.n)
+    newton = IntervalNewton(csys, groups)
+    relax = PolytopeHull(csys)
+    return {
+        "forward": lambda lo, hi: p.eval_interval(lo, hi, csys.param_lo, csys.param_hi),
+        "hc4": csys.hc4_revise,
+        "fj": lambda lo, hi: csys.eval_fj(lo, hi, check_domain=True),
+        "columns": lambda lo, hi: csys.eval_fj_columns(lo, hi, cols),
+        "newton": newton.contract,
+        "relax": relax.contract,
+    }
+
+
+def cpu_per_call(fn, lo, hi, calls: int, runs: int) -> float:
+    """Median over ``runs`` of the CPU seconds of one call (``calls`` calls per run)."""
+    fn(lo, hi)  # warm-up: compiled column programs, caches
+    times = []
+    for _ in range(runs):
+        c = time.process_time()
+        for _ in range(calls):
+            fn(lo, hi)
+        times.append((time.process_time() - c) / calls)
+    return statistics.median(times)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("systems", nargs="*", help=f"default: {', '.join(SYSTEMS)}")
+    ap.add_argument("--batch", default="256,1024", help="batch sizes, comma-separated")
+    ap.add_argument("--runs", type=int, default=5, help="runs per median (>= 3)")
+    ap.add_argument("--calls", type=int, default=20, help="calls per run")
+    ap.add_argument("--kernels", default="", help="comma-separated subset of the kernels")
+    args = ap.parse_args()
+    if args.runs < 3:
+        sys.exit("--runs must be at least 3 (medians)")
+    names = args.systems or list(SYSTEMS)
+    print(
+        f"# {platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}, "
+        f"numpy {np.__version__}; CPU time, median of {args.runs} runs x {args.calls} calls"
+    )
+    print(f"{'system':<10} {'kernel':<8} {'B':>5} {'ms/call':>9} {'us/box':>8}")
+    for name in names:
+        csys, dom, groups = SYSTEMS[name]()
+        ks = kernels(csys, groups)
+        if args.kernels:
+            ks = {k: v for k, v in ks.items() if k in args.kernels.split(",")}
+        for B in (int(b) for b in args.batch.split(",")):
+            lo, hi = boxes(dom, B)
+            for kname, fn in ks.items():
+                t = cpu_per_call(fn, lo, hi, args.calls, args.runs)
+                row = f"{name:<10} {kname:<8} {B:>5} {t * 1e3:>9.3f} {t / B * 1e6:>8.2f}"
+                print(row, flush=True)
+
+
+if __name__ == "__main__":
+    main()
