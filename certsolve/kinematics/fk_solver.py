@@ -249,15 +249,12 @@ class FKSolver:
         x = 0.5 * np.asarray(lo) + 0.5 * np.asarray(hi) if point is None else np.asarray(point)
         f = self.form
         r = self.robot
-        d, m = r.dim, r.m
+        m = r.m
         rho = x[-m:].copy()
         if f.kind in ("points", "frame"):
-            k = f.n_points
             P = f.points_from(x)
             points = f.L @ P
             pos, R = rotation_from_points(f, P)
-            if x.size == k * d:  # reduced formulation: lengths from the points
-                rho = np.linalg.norm(r.A - points, axis=1)
         else:
             pos, R = pose_from_angles(f, x)
             points = pos + r.B @ R.T
