@@ -22,8 +22,8 @@ import os
 import time
 from typing import Any
 
-from .executors import TaskExecutor, TaskPool
 from .search import Step, run_task
+from .workers import TaskExecutor, TaskPool
 
 __all__ = ["DaskExecutor", "import_distributed"]
 
