@@ -26,6 +26,7 @@ pickle, so batches can run on worker processes or a Dask cluster (:mod:`.executo
 
 from __future__ import annotations
 
+import copy
 import pickle
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -110,6 +111,8 @@ class Solver:
         self.max_pending = int(max_pending)
         self.csys = system if isinstance(system, CompiledSystem) else CompiledSystem(system)
         self.system = self.csys.system
+        #: the box searched by :meth:`solve` (the system's; see :meth:`on_domain`)
+        self.domain = self.system.domain
         self.n = self.csys.n
         self.eps = float(eps)
         self.batch_size = int(batch_size)
@@ -147,8 +150,12 @@ class Solver:
         cancel: Any = None,
         boxes: tuple[np.ndarray, np.ndarray] | None = None,
         workers: int | None = None,
+        domain: np.ndarray | None = None,
     ) -> SolveResult:
         """Run the search over the whole domain, or over ``boxes`` ``(lo, hi)`` if given.
+
+        ``domain`` ``(n, 2)`` replaces the system's domain for this search only (solutions
+        touching its boundary are reported as ``boundary``; :meth:`on_domain`).
 
         ``executor``: where batches run (``None``: here; a number of local processes,
         ``"auto"``, a ``distributed.Client`` ... see :func:`.executors.resolve_executor`);
@@ -157,8 +164,20 @@ class Solver:
         or ``cancel.is_set()`` cancels it.  The status is ``complete`` when nothing is
         pending, else the limit that stopped the search (:class:`.SearchStatus`).
         """
+        if domain is not None:
+            return self.on_domain(domain).solve(
+                timeout=timeout,
+                max_boxes=max_boxes,
+                progress=progress,
+                executor=executor,
+                verify=verify,
+                max_solutions=max_solutions,
+                cancel=cancel,
+                boxes=boxes,
+                workers=workers,
+            )
         if boxes is None:
-            dom = self.system.domain
+            dom = self.domain
             boxes = (dom[:, 0][None].copy(), dom[:, 1][None].copy())
         run = run_search(
             self,
@@ -174,6 +193,21 @@ class Solver:
 
             verify_solutions(self.csys, result.solutions)
         return result
+
+    def on_domain(self, domain) -> Solver:
+        """This solver searching ``domain`` ``(n, 2)`` instead of the system's.
+
+        A shallow copy (the compiled system and the contractors are shared, nothing of this
+        solver or its system changes); it is also the step that travels to the workers.
+        """
+        dom = np.asarray(domain, dtype=np.float64)
+        if dom.shape != (self.n, 2):
+            raise ValueError(f"domain must have shape ({self.n}, 2), got {dom.shape}")
+        step = copy.copy(self)
+        step.domain = dom
+        step.certifier = copy.copy(self.certifier)
+        step.certifier.domain = dom
+        return step
 
     # -- the step of the search driver ------------------------------------------------------
     def start(self, known: bytes | None = None) -> SearchState:
@@ -334,7 +368,7 @@ class Solver:
         sols = [Solution(e0, e1, u0, u1) for e0, e1, u0, u1 in state.solutions.items("ok")]
         sols.sort(key=lambda s: tuple(s.midpoint))
         und = [(u.lo, u.hi, u.reason) for u in state.undecided]
-        dlo, dhi = self.system.domain[:, 0], self.system.domain[:, 1]
+        dlo, dhi = self.domain[:, 0], self.domain[:, 1]
         for e0, e1, _, _ in state.solutions.items("boundary"):
             und.append((np.maximum(e0, dlo), np.minimum(e1, dhi), "boundary"))
         for e0, e1, _, _ in state.solutions.items("constraint"):
