@@ -25,7 +25,7 @@ from .ik_result import (
     no_certificate,
     unique_in_box,
 )
-from .ik_search import search_controls
+from .ik_search import Verdict, search_controls
 from .ik_tension import margin_of
 
 __all__ = ["ik_algorithm1"]
@@ -67,14 +67,14 @@ def ik_algorithm1(
         "search_time": out.time,
         "parametric_wires": [j + 1 for j in out.params],
     }
-    if out.verdict == "unknown":
+    if out.verdict == Verdict.UNKNOWN:
         details["stopped_by"] = str(out.status)
     messages: list[str] = []
     where = "the strokes" if u_last is None else f"the {window:g} cm window around u_last"
     u = tau = margin = res = None
     cert = no_certificate()
     violations: list[Violation] = []
-    if out.verdict == "certified":
+    if out.verdict == Verdict.CERTIFIED:
         u = out.u
         tau, _ = tension_mr(robot, enc, u)
         margin = margin_of(tau, robot.tau_min, robot.tau_max)
@@ -84,7 +84,7 @@ def ik_algorithm1(
         cert = unique_in_box(u, F, S, out.box_lo[S], out.box_hi[S], out.enc_lo[S], out.enc_hi[S])
         violations = limit_violations(robot, tau, u)
         status = IKStatus.LIMITS_VIOLATED if violations else IKStatus.OK
-    elif out.verdict == "infeasible":
+    elif out.verdict == Verdict.INFEASIBLE:
         status = IKStatus.INFEASIBLE
         messages.append(
             f"proved: no control vector in {where} holds the platform at this pose with "

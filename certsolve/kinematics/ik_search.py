@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from enum import StrEnum
 
 import numpy as np
 import scipy.linalg
@@ -59,6 +60,7 @@ from .ik_enclose import (
 )
 
 __all__ = [
+    "Verdict",
     "ControlSearch",
     "SearchOutcome",
     "control_point",
@@ -153,6 +155,15 @@ def contract(pc: Preconditioner, lo, hi, sweeps: int = 8):
     return lo, hi, empty
 
 
+class Verdict(StrEnum):
+    """What Algorithm 1 established (:attr:`SearchOutcome.verdict`)."""
+
+    CERTIFIED = "certified"  # a solution, proven
+    INFEASIBLE = "infeasible"  # proven: no solution in the box
+    UNDECIDED = "undecided"  # searched completely; only boxes narrower than eps remain
+    UNKNOWN = "unknown"  # a limit stopped the search first
+
+
 @dataclass(kw_only=True)
 class SearchOutcome:
     """Algorithm 1's answer.  ``status`` is the search's (:class:`SearchStatus`: it ends
@@ -171,15 +182,15 @@ class SearchOutcome:
     time: float = 0.0
 
     @property
-    def verdict(self) -> str:
+    def verdict(self) -> Verdict:
         """``certified``; ``infeasible`` (proven: no solution in the box); ``undecided``
         (searched completely, only boxes narrower than eps remain); or ``unknown`` (a
         limit stopped the search first)."""
         if self.u is not None:
-            return "certified"
+            return Verdict.CERTIFIED
         if self.status != SearchStatus.COMPLETE:
-            return "unknown"
-        return "undecided" if self.undecided else "infeasible"
+            return Verdict.UNKNOWN
+        return Verdict.UNDECIDED if self.undecided else Verdict.INFEASIBLE
 
 
 def _certify(robot, enc, pc, sq, lo, hi, ulo, uhi, box_radius):

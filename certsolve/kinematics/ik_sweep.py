@@ -57,6 +57,14 @@ __all__ = ["PointStatus", "SweepPoint", "SweepProgress", "IKSweepResult", "ik_sw
 MAX_POINTS = 100_000
 
 
+class SweepStatus(StrEnum):
+    """How a sweep ended (:class:`IKSweepResult`)."""
+
+    COMPLETE = "complete"
+    TIMEOUT = "timeout"
+    STOPPED = "stopped"
+
+
 class PointStatus(StrEnum):
     """What is known about one point of a sweep (module docstring)."""
 
@@ -129,7 +137,7 @@ class IKSweepResult:
     stop: float
     count: int
     points: list[SweepPoint]
-    status: str  # complete | timeout | stopped
+    status: SweepStatus
     time: float  # seconds
 
     @property
@@ -169,7 +177,7 @@ class IKSweepResult:
             "start": float(self.start),
             "stop": float(self.stop),
             "count": int(self.count),
-            "status": self.status,
+            "status": str(self.status),
             "counts": self.counts,
             "points": [p.to_dict() for p in self.points],
             "time": float(self.time),
@@ -260,10 +268,10 @@ def ik_sweep(
     values = np.linspace(float(start), float(stop), int(count))
     points: list[SweepPoint] = []
     done: list[tuple[float, np.ndarray]] = []  # (value, u) of the solved points
-    status = "complete"
+    status = SweepStatus.COMPLETE
     for value in values.tolist():
         if timeout is not None and time.perf_counter() - t0 > timeout:
-            status = "timeout"
+            status = SweepStatus.TIMEOUT
             break
         pred = _predict(done, value)
         guess = pred if pred is not None else u_start
@@ -281,7 +289,7 @@ def ik_sweep(
                 elapsed=time.perf_counter() - t0,
             )
             if progress(info) is False:
-                status = "stopped" if len(points) < count else "complete"
+                status = SweepStatus.STOPPED if len(points) < count else SweepStatus.COMPLETE
                 break
     return IKSweepResult(
         robot=robot.name,
