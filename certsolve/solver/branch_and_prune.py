@@ -319,8 +319,8 @@ class Solver:
         if self.bisect_mask is not None:
             wid = wid[:, self.bisect_mask]
         small = np.all(wid <= self.eps, axis=1)
-        for k in np.flatnonzero(small):
-            state.undecided.append(Undecided(lo2[k].copy(), hi2[k].copy(), "eps"))
+        for i in np.flatnonzero(small):
+            state.undecided.append(Undecided(lo2[i].copy(), hi2[i].copy(), "eps"))
         big = ~small
         if np.any(big):
             lo3, hi3 = lo2[big], hi2[big]
@@ -346,8 +346,8 @@ class Solver:
             [state.solutions.find(elo[k], ehi[k], ulo[k], uhi[k]) < 0 for k in range(len(elo))],
             dtype=bool,
         )
-        for k in np.flatnonzero(~new):  # known solution: keep its unicity box for pruning
-            state.solutions.add(elo[k], ehi[k], ulo[k], uhi[k], "alias")
+        for j in np.flatnonzero(~new):  # known solution: keep its unicity box for pruning
+            state.solutions.add(elo[j], ehi[j], ulo[j], uhi[j], "alias")
             state.stats.duplicates += 1
         if not np.any(new):
             return

@@ -152,6 +152,7 @@ class DaskExecutor(TaskExecutor):
     ):
         super().__init__(warmup=warmup, **options)
         import_distributed()
+        self.address: str | None
         if isinstance(cluster, str):
             self.address, self.client = cluster, None
         else:

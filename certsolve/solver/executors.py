@@ -119,6 +119,7 @@ class _ProcessPool(TaskPool):
         return fut
 
     def _restart(self) -> None:
+        assert self._pool is not None
         self._pool.shutdown(wait=False, cancel_futures=True)
         self._generation += 1
         self._restarts += 1

@@ -145,6 +145,7 @@ class TaskExecutor(ABC):
                 search.stats.resubmitted += 1
                 retry.append((lo, hi, attempt + 1))
                 continue
+            assert result is not None  # a task ends with a result or an error
             search.absorb(lo.shape[0], result)
             search.report()
             pool.refresh()
