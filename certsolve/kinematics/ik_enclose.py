@@ -35,7 +35,6 @@ re-exported here); :class:`SquareSystem` adds a structured variant that exploits
 from __future__ import annotations
 
 import math
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,7 +53,6 @@ __all__ = [
     "residual_mr",
     "jacobian_mr",
     "krawczyk_mr",
-    "box_around",
     "SquareSystem",
     "is_elastic",
 ]
@@ -87,11 +85,10 @@ class _Consts:
     per_free: dict  # SquareSystem constants per set of free wires
 
 
-_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
 def _consts(robot: Robot) -> _Consts:
-    c = _CACHE.get(robot)
+    """The robot's constants for the bounds of this module, computed once per robot and kept
+    with it (:attr:`Robot.derived`)."""
+    c = robot.derived.get(__name__)
     if c is None:
         F = [float(robot.mass) * float(g) for g in robot.gravity]
         eF = [2.0 * U * abs(f) for f in F]
@@ -122,7 +119,7 @@ def _consts(robot: Robot) -> _Consts:
             wg_const,
             {},
         )
-        _CACHE[robot] = c
+        robot.derived[__name__] = c
     return c
 
 
@@ -315,11 +312,6 @@ def jacobian_mr(enc: PoseEnclosure, cols, dc, dr):
     Jc = Hs * dc
     Jr = np.abs(Hs) * dr + eHs * (np.abs(dc) + dr) + (2.0 * U) * np.abs(Jc)
     return Jc, Jr * SAFE + UNDERFLOW
-
-
-def box_around(c, rad):
-    """``[c - rad, c + rad]`` rounded outward (contains ``c``)."""
-    return np.nextafter(c - rad, -np.inf), np.nextafter(c + rad, np.inf)
 
 
 class SquareSystem:
