@@ -37,8 +37,9 @@ from certsolve.solver.search import Search, run_task
 def t16_60():
     robot = with_tau_max(Robot.load("examples/robots/marionet-t.json"), 60.0)
     fk = FKSolver(robot)
-    fk._prepare(np.full(7, 2.0))
-    return fk.solver
+    u = np.full(7, 2.0)
+    fk._prepare(u)  # u as the system's parameters
+    return fk.solver.on_domain(fk.search_box(u))
 
 
 def katsura6():
@@ -49,7 +50,7 @@ CASES = {"t16-60": t16_60, "katsura-6": katsura6}
 
 
 def domain(step):
-    dom = step.system.domain
+    dom = step.domain
     return dom[:, 0][None].copy(), dom[:, 1][None].copy()
 
 

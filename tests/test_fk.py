@@ -42,11 +42,12 @@ def matching(result, robot, pose, tol=1e-6):
     return [s for s in result.solutions if np.max(np.abs(s.platform_points - target)) <= tol]
 
 
-def local_boxes(fk, robot, pose, radius):
-    """The FK search box restricted to chosen points within ``radius`` cm of the pose."""
+def local_boxes(fk, robot, pose, radius, u):
+    """The FK search box for ``u`` restricted to chosen points within ``radius`` cm of the
+    pose."""
     form = fk.form
     c = form.coordinates_of(pose.position + form.Q @ pose.rotation.T)
-    dom = fk.csys.system.domain
+    dom = fk.search_box(u)
     lo, hi = dom[:, 0].copy(), dom[:, 1].copy()
     k = c.size
     lo[:k] = np.maximum(lo[:k], c - radius)
@@ -118,8 +119,7 @@ def test_round_trip_in_a_local_box(name, params, formulation, radius):
     pose = Pose.from_params(robot.dof, params)
     u = ik_u(robot, pose)
     fk = FKSolver(robot, formulation)
-    fk._prepare(u)
-    res = fk.solve(u, boxes=local_boxes(fk, robot, pose, radius), timeout=120)
+    res = fk.solve(u, boxes=local_boxes(fk, robot, pose, radius, u), timeout=120)
     assert res.status == "complete"
     assert len(matching(res, robot, pose)) == 1
 
@@ -131,8 +131,7 @@ def test_almost_planar13_fk_then_ik_round_trip():
     fk = FKSolver(robot)
     assert fk.formulation == "frame-almost-planar-13"
     guess = Pose.from_params(6, (90, 60, -1, 0, 0, 0))
-    fk._prepare(u)
-    res = fk.solve(u, boxes=local_boxes(fk, robot, guess, 4.0), timeout=120)
+    res = fk.solve(u, boxes=local_boxes(fk, robot, guess, 4.0, u), timeout=120)
     assert res.status == "complete" and len(res.solutions) == 1
     s = res.solutions[0]
     back = inverse_kinematics(robot, Pose(s.position, s.rotation), method="tension")
@@ -162,14 +161,12 @@ def test_general19_never_reports_a_mirror_image():
     pose = Pose.from_params(6, (111, 58, 107, 0, 0, 0))
     u = ik_u(robot, pose)
     fk = FKSolver(robot, "general-19")
-    fk._prepare(u)
-    box = local_boxes(fk, robot, pose, 0.5)
+    box = local_boxes(fk, robot, pose, 0.5, u)
     found = fk.solve(u, boxes=box, timeout=120)
     assert found.status == "complete"
     assert len(matching(found, robot, pose)) == 1
 
     fkm = FKSolver(mirror, "general-19")
-    fkm._prepare(u)
     # same world points: the chosen points of the mirror robot sit where the original's are
     assert np.allclose(fkm.form.L, fk.form.L)
     res = fkm.solve(u, boxes=box, timeout=120)
@@ -315,3 +312,20 @@ def test_cli_fk_json_and_errors():
     assert bad.returncode == 2
     assert "--u: expected 4 values (one per wire), got 2" in bad.stderr
     assert "Traceback" not in bad.stderr
+
+
+def test_solve_searches_the_box_for_u_and_leaves_the_system_alone():
+    """The search domain depends on ``u`` (eq. 7); it is passed to the search, and the
+    compiled system's own domain (shared by every solve) stays as built."""
+    robot = with_tau_max(load("planar"), 60.0)
+    u = np.array([0.8, 1.8, -2.5, -3.6])
+    fk = FKSolver(robot)
+    built = fk.csys.system.domain.copy()
+    box = fk.search_box(u)
+    assert not np.array_equal(box, built)  # otherwise this test proves nothing
+    res = fk.solve(u)
+    assert np.array_equal(fk.csys.system.domain, built)
+    assert res.status == "complete" and len(res.solutions) == 2
+    for s in res.solutions:
+        lo, hi = np.array(s.box).T
+        assert np.all(lo >= box[:, 0]) and np.all(hi <= box[:, 1])

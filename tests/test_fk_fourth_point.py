@@ -59,8 +59,7 @@ def test_search_finds_the_same_poses_without_them(name, monkeypatch):
         if not on:
             monkeypatch.setattr(fk_systems, "_fourth_point_constraints", lambda *a: [])
         fk = FKSolver(robot, name)
-        fk._prepare(u)
-        res = fk.solve(u, boxes=local_boxes(fk, robot, pose, 1.0), timeout=120)
+        res = fk.solve(u, boxes=local_boxes(fk, robot, pose, 1.0, u), timeout=120)
         assert res.status == "complete"
         assert len(matching(res, robot, pose)) == 1
         found.append(np.array(sorted(s.position.tolist() for s in res.solutions)))

@@ -369,3 +369,31 @@ def test_two_dimensional_null_space():
     for r in (t, a1, a2):
         assert forward_residual(robot, pose, r.u)[0] < 1e-9
     assert inverse_kinematics(robot, [111, 58, 107, 0, 20, 0], "alg1").status == "infeasible"
+
+
+def test_limit_violations_lists_every_limit_once_in_wire_order():
+    """One limit check for tensions, strokes and windows: each value beyond a limit by more
+    than the tolerance is listed with its excess; values at the limit are not."""
+    from certsolve.kinematics.ik_result import LIMIT_TOL, limit_violations, window_violations
+
+    robot = load("marionet")
+    tau = 0.5 * (robot.tau_min + robot.tau_max)
+    u = 0.5 * (robot.u_min + robot.u_max)
+    assert limit_violations(robot, tau, u) == []
+    tau[2] = robot.tau_max[2] + 1.0
+    tau[0] = robot.tau_min[0] - 2.0
+    tau[4] = robot.tau_max[4] + 0.5 * LIMIT_TOL  # within the tolerance
+    u[1] = robot.u_min[1] - 3.0
+    u[5] = np.nan
+    got = [(v.wire, v.quantity, v.bound, v.excess) for v in limit_violations(robot, tau, u)]
+    assert got == [
+        (1, "tau", "min", pytest.approx(2.0)),
+        (2, "u", "min", pytest.approx(3.0)),
+        (3, "tau", "max", pytest.approx(1.0)),
+        (6, "u", "max", np.inf),
+    ]
+    u_last = np.zeros(robot.m)
+    moved = np.zeros(robot.m)
+    moved[3], moved[0] = 0.2, -0.3
+    got = [(v.wire, v.bound) for v in window_violations(moved, u_last, 0.4)]
+    assert got == [(1, "min")]  # wire 4 is 0.2 from u_last: on the window's edge

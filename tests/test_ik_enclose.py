@@ -2,7 +2,7 @@
 
 For random poses and controls, the exact value of every quantity (computed by mpmath from
 the exact binary inputs) must lie within the floating-point value ± its error bound; the
-Krawczyk tests must agree with the solver's :func:`krawczyk_box`, prove boxes that contain
+Krawczyk tests must agree with the solver's :func:`krawczyk`, prove boxes that contain
 the exact solution and fail on boxes that exclude it.
 """
 
@@ -23,7 +23,7 @@ from certsolve.kinematics.ik_enclose import (
     tension_mr,
 )
 from certsolve.robot import Pose, Robot
-from certsolve.solver.newton import krawczyk_box
+from certsolve.solver.newton import krawczyk, linearization_from_bounds
 
 mp = mpmath.mp
 ROBOTS = ["marionet", "marionet-t", "almost-planar", "planar", "krut-4"]
@@ -205,15 +205,16 @@ def test_krawczyk_variants_agree_and_fail_off_solution(name):
             xlo, xhi, fc, fr, flo, fhi, Jc, Jr = _krawczyk_inputs(robot, enc, S, u, rad)
             a = sq.krawczyk(u, np.full((1, S.size), rad))[4][0]
             b = krawczyk_mr(u[:, S], xlo, xhi, fc, fr, Jc, Jr)[2][0]
-            c = krawczyk_box(
+            lin = linearization_from_bounds(
                 xlo,
                 xhi,
+                u[:, S],
                 flo,
                 fhi,
                 np.nextafter(Jc - Jr, -np.inf),
                 np.nextafter(Jc + Jr, np.inf),
-                c=u[:, S],
-            )[2][0]
+            )
+            c = krawczyk(lin)[2][0]
             assert a == b == c == expect, (shift, a, b, c)
 
 

@@ -117,7 +117,9 @@ class CompiledSystem:
             for i in range(n):
                 for j in range(n):
                     if mask[i, j]:
-                        jac.append(self.graph.derivative(self.eq_roots[i], j))
+                        d = self.graph.derivative(self.eq_roots[i], j)
+                        assert d is not None  # mask is the Jacobian's structure
+                        jac.append(d)
             prog = Program(self.graph, self.eq_roots + jac)
             progs[cols] = (prog, np.flatnonzero(mask.ravel()))
         return progs[cols]

@@ -21,6 +21,7 @@ Boxes containing such a non-smooth point are not certified anyway
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import cast
 
 import numpy as np
 
@@ -194,7 +195,7 @@ class Graph:
         return self._make(op, args, param)
 
     def _fold(self, op: str, args: tuple[int, ...], param) -> int:
-        vals = [np.float64(v) for a in args for v in self.param[a]]
+        vals: list[np.float64 | None] = [np.float64(v) for a in args for v in self.param[a]]
         if len(vals) == 2:
             vals += [None, None]
         with np.errstate(all="ignore"):
@@ -278,12 +279,14 @@ class Graph:
             if da is None:
                 return db if op == "add" else N("neg", (db,))
             return N(op, (da, db))
+        # a unary node depends on x_k through its argument, so da is set from here on
+        du = cast(int, da)
         if op == "neg":
-            return N("neg", (da,))
+            return N("neg", (du,))
         if op == "cadd":
             return da
         if op == "cmul":
-            return N("cmul", (da,), p)
+            return N("cmul", (du,), p)
         a = args[0]
         if op == "mul":
             b = args[1]
@@ -305,11 +308,11 @@ class Graph:
         if op == "pow":
             return N("cmul", (mul(N("pow", (a,), p - 1), da),), float(p))
         if op == "sqrt":
-            return N("div", (da, N("cmul", (x,), 2.0)))
+            return N("div", (du, N("cmul", (x,), 2.0)))
         if op == "exp":
             return mul(x, da)
         if op == "log":
-            return N("div", (da, a))
+            return N("div", (du, a))
         if op == "sin":
             return mul(N("cos", (a,)), da)
         if op == "cos":

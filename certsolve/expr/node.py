@@ -11,6 +11,7 @@ decimal like ``0.1``, which no binary float equals, can be enclosed exactly
 from __future__ import annotations
 
 from numbers import Real
+from typing import SupportsInt, cast
 
 __all__ = [
     "Expr",
@@ -262,8 +263,8 @@ def max_(x, y) -> Expr:
 
 
 def pow(x, n) -> Expr:  # noqa: A001 - mirrors the Minibex name
-    if isinstance(n, Real) and float(n) == int(n):
-        n = int(n)
+    if isinstance(n, Real) and float(n) == int(cast(SupportsInt, n)):
+        n = int(cast(SupportsInt, n))
         if n == 2:
             return sqr(x)
         return Expr("pow", (Expr.wrap(x),), n)

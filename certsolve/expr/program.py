@@ -162,6 +162,7 @@ class Program:
             b = None
             if len(graph.args[members[0]]) == 2:
                 b = np.array([local[graph.args[m][1]] for m in members], dtype=np.int64)
+            param: np.ndarray | int | None
             if op in ("cadd", "cmul"):
                 param = np.array([graph.param[m] for m in members], dtype=np.float64)[:, None]
             elif op == "pow":

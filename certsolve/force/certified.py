@@ -93,7 +93,7 @@ class CertifiedWorkspace:
 
     @property
     def complete(self) -> bool:
-        return self.status == "complete"
+        return self.status == SearchStatus.COMPLETE
 
     def to_dict(self, boxes: bool = True) -> dict:
         total = self.total_measure

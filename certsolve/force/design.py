@@ -70,6 +70,16 @@ class BoxClass(StrEnum):
     PENDING = "pending"
 
 
+class DesignStatus(StrEnum):
+    """How a design search ended: ``complete`` (every parameter box classified), or what
+    stopped it (``timeout``, ``max_boxes``; ``stopped``: the progress callback)."""
+
+    COMPLETE = "complete"
+    TIMEOUT = "timeout"
+    MAX_BOXES = "max_boxes"
+    STOPPED = "stopped"
+
+
 @dataclass(kw_only=True)
 class DesignProgress:
     """Passed to the ``progress`` callback after every batch."""
@@ -113,7 +123,7 @@ class DesignResult:
     pending: np.ndarray
     best: int | None
     best_robot: dict | None
-    status: str  # complete | timeout | stopped | max_boxes
+    status: DesignStatus
     pairs: int  # (parameter box, pose box) pairs evaluated (every run of a resumed search)
     parameter_boxes: int  # parameter boxes examined
     time: float  # seconds of this run
@@ -130,7 +140,7 @@ class DesignResult:
 
     @property
     def complete(self) -> bool:
-        return self.status == "complete"
+        return self.status == DesignStatus.COMPLETE
 
     @property
     def best_box(self) -> np.ndarray | None:
@@ -159,7 +169,7 @@ class DesignResult:
             "min_force": self.min_force,
             "eps": self.eps,
             "workspace_eps": self.workspace_eps,
-            "status": self.status,
+            "status": str(self.status),
             "complete": self.complete,
             "counts": {str(c): int(len(getattr(self, str(c)))) for c in BoxClass},
             "shares": {str(c): self.share(c) for c in BoxClass},
@@ -312,7 +322,7 @@ def design(
     q_lo = W[None, :, 0].copy()
     q_hi = W[None, :, 1].copy()
     pairs = 0
-    status = "complete"
+    status = DesignStatus.COMPLETE
     resumed_from = None
     if checkpoint is not None:
         about = (
@@ -350,10 +360,10 @@ def design(
 
     while len(q_pid):
         if timeout is not None and time.perf_counter() - t0 > timeout:
-            status = "timeout"
+            status = DesignStatus.TIMEOUT
             break
         if max_boxes is not None and pairs - pairs0 >= max_boxes:
-            status = "max_boxes"
+            status = DesignStatus.MAX_BOXES
             break
         pid, lo, hi = q_pid[:batch], q_lo[:batch], q_hi[:batch]
         q_pid, q_lo, q_hi = q_pid[batch:], q_lo[batch:], q_hi[batch:]
@@ -399,7 +409,7 @@ def design(
         if progress is not None:
             info = _progress(boxes, theta, pairs, len(q_pid), t0)
             if progress(info) is False:
-                status = "stopped" if len(q_pid) else status
+                status = DesignStatus.STOPPED if len(q_pid) else status
                 break
 
     if checkpoint is not None:

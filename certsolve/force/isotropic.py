@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from enum import StrEnum
 from itertools import combinations
 from math import comb
 
@@ -79,10 +80,25 @@ __all__ = [
     "OUTSIDE",
     "DEGENERATE",
     "STATUS_NAMES",
+    "IsotropicStatus",
 ]
 
 INSIDE, OUTSIDE, DEGENERATE = 0, 1, 2
-STATUS_NAMES = {INSIDE: "inside", OUTSIDE: "outside", DEGENERATE: "degenerate"}
+
+
+class IsotropicStatus(StrEnum):
+    """Where the pose is (module docstring); the int8 codes above name the same cases."""
+
+    INSIDE = "inside"
+    OUTSIDE = "outside"
+    DEGENERATE = "degenerate"
+
+
+STATUS_NAMES = {
+    INSIDE: IsotropicStatus.INSIDE,
+    OUTSIDE: IsotropicStatus.OUTSIDE,
+    DEGENERATE: IsotropicStatus.DEGENERATE,
+}
 
 
 def _ratio(num: np.ndarray, den: np.ndarray) -> np.ndarray:
@@ -274,7 +290,7 @@ class IsotropicForceResult:
     dof: int
     pose: list[float]
     isotropic_force: float | None
-    status: str
+    status: IsotropicStatus
     centre: np.ndarray  # bias point x0 = -w_ext,f in force space
     required_moment: np.ndarray | None  # μ = -w_ext,m (None for dof 2)
     external_wrench: np.ndarray
@@ -290,7 +306,7 @@ class IsotropicForceResult:
 
     @property
     def inside(self) -> bool:
-        return self.status == "inside"
+        return self.status == IsotropicStatus.INSIDE
 
     def to_dict(self) -> dict:
         def lst(a):
@@ -301,7 +317,7 @@ class IsotropicForceResult:
             "dof": self.dof,
             "pose": [float(t) for t in self.pose],
             "isotropic_force": self.isotropic_force,
-            "status": self.status,
+            "status": str(self.status),
             "inside": self.inside,
             "feasible": self.feasible,
             "centre": lst(self.centre),
@@ -368,7 +384,7 @@ def isotropic_force(
     moment = -w_ext[nf:] if robot.dof != 2 else None
     notes: list[str] = []
     poly_full = None
-    status = "inside"
+    status = IsotropicStatus.INSIDE
     value: float | None
     direction = None
     feasible = None
@@ -382,11 +398,11 @@ def isotropic_force(
         value, k = section_index(poly_full.normals, poly_full.offsets, w_ext, nf)
         nk = poly_full.normals[k, :nf]
         direction = -nk / np.linalg.norm(nk) if np.linalg.norm(nk) > 0 else None
-        status = "inside" if value >= 0 else "outside"
+        status = IsotropicStatus.INSIDE if value >= 0 else IsotropicStatus.OUTSIDE
         feasible = value >= 0
     except FlatPolytopeError as exc:
         notes.append(str(exc))
-        status = "degenerate"
+        status = IsotropicStatus.DEGENERATE
         tens = max_margin_tensions(H, w_ext, robot.tau_min, robot.tau_max)
         feasible = bool(tens.feasible)
         value = 0.0 if feasible else None
@@ -394,7 +410,7 @@ def isotropic_force(
     section_check = None
     if robot.dof == 2:
         poly = poly_full
-    elif section and status != "degenerate":
+    elif section and status != IsotropicStatus.DEGENERATE:
         try:
             poly = force_section(H, robot.tau_min, robot.tau_max, moment, nf)
             section_check = poly.signed_distance(centre)

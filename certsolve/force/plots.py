@@ -331,7 +331,7 @@ def plot_design(res: DesignResult, path=None, axes=(0, 1), at=None, title=None):
         if k > 2:
             where = ", ".join(f"{res.names[m]} = {at[m]:.4g}" for m in others)
             title += f"\nsection at {where}"
-        if res.status != "complete":
+        if not res.complete:
             title += f" [{res.status}]"
     ax.set_title(title, fontsize=9)
     ax.legend(

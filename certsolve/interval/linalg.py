@@ -13,20 +13,60 @@ terms are sums of non-negative products computed in round-to-nearest; each is at
 factor ``1 + gamma_{n+2}`` below its exact value, so we multiply the total radius by
 ``1 + 2 gamma_{n+4}`` and add a small absolute term for underflow.  The resulting
 ``[c - r, c + r]`` is a proven enclosure of every product of members.
+
+**Krawczyk.**  The one Krawczyk kernel of the package lives here too (the solver's Newton
+contractor, the IK certificates and tracking all call it; :mod:`certsolve.solver.verify`
+keeps its own mpmath version on purpose, as a second opinion).  For a box ``X``, a point
+``c`` in it, ``f(c)`` enclosed by ``fc ± fr`` and ``J(X)`` by ``Jc ± Jr``, the midpoint
+inverse ``Y ≈ Jc^-1`` (any ``Y`` is sound) gives::
+
+    K(X) = c - Y f(c) + (I - Y J(X)) (X - c)
+
+which contains every zero of ``f`` in ``X``; ``K(X) ⊂ int X`` proves that ``X`` holds
+*exactly one* zero (Krawczyk 1969; Neumaier 1990, Thm 5.1.8).  With ``M = Y J ∈ Mc ± Mr``
+and ``b = Y f(c) ∈ bc ± br`` (:func:`precondition`, built on :func:`mr_matmul`)::
+
+    (I - M)(X - c) ⊆ [-v, v],  v = (|I - Mc| + Mr) r,  r = max(hi - c, c - lo)
+
+and ``K(X) ⊆ (c - bc) ± (br + v)`` (:func:`krawczyk_image`).  These bounds are computed in
+round-to-nearest: ``|I - Mc|`` is exact off the diagonal and has one rounding on it (factor
+``1 + 4u``), ``r`` one rounding (``1 + 4u``), the sums and the product ``|I - M| r`` at
+most ``n + 4`` relative roundings (factor ``1 + 2 γ_{n+4}``), ``c - bc`` one rounding
+(``2u |c - bc|``), then one ``nextafter`` outward.  Everything is batched over stacks of
+boxes: ``(B, n)`` vectors and ``(B, n, n)`` (or shared ``(n, n)``) matrices; a NaN or an
+infinity anywhere makes the test fail, never succeed.
 """
 
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 
 import numpy as np
 
+from .reductions import all_last
 from .rounding import up
 
-__all__ = ["gamma", "mr_from_bounds", "mr_to_bounds", "mr_matmul", "point_matmul_interval"]
+__all__ = [
+    "U",
+    "UNDERFLOW",
+    "gamma",
+    "mr_from_bounds",
+    "mr_to_bounds",
+    "mr_matmul",
+    "point_matmul_interval",
+    "batched_inverse",
+    "Preconditioned",
+    "precondition",
+    "krawczyk_magnitude",
+    "krawczyk_image",
+    "krawczyk_mr",
+]
 
-_U = 2.0**-53
-_UNDERFLOW = 2.0**-1000  # per-summand underflow allowance (<< any meaningful width)
+U = 2.0**-53  # unit roundoff of binary64, round to nearest
+UNDERFLOW = 2.0**-1000  # per-summand underflow allowance (<< any meaningful width)
+_U = U
+_UNDERFLOW = UNDERFLOW
 
 
 @functools.lru_cache(maxsize=256)
@@ -79,3 +119,101 @@ def point_matmul_interval(a, blo, bhi):
     bc, br = mr_from_bounds(blo, bhi)
     c, r = mr_matmul(a, None, bc, br)
     return mr_to_bounds(c, r)
+
+
+def batched_inverse(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Approximate inverses of a stack of matrices ``(B, n, n)`` and a mask of usable ones.
+
+    Singular or non-finite matrices get a NaN inverse and ``ok = False``: no preconditioner,
+    no contraction, no proof (sound).  Only float work; rigour comes from the bounds that use
+    the result (any ``Y`` is sound).
+    """
+    finite = np.all(np.isfinite(A), axis=(-2, -1))
+    Y = np.full_like(A, np.nan)
+    if not np.any(finite):
+        return Y, finite
+    Af = A[finite]
+    try:
+        with np.errstate(all="ignore"):
+            Yf = np.linalg.inv(Af)
+    except np.linalg.LinAlgError:
+        Yf = np.full_like(Af, np.nan)
+        for k in range(Af.shape[0]):  # rare: some exactly singular matrix in the batch
+            try:
+                Yf[k] = np.linalg.inv(Af[k])
+            except np.linalg.LinAlgError:
+                pass
+    Y[finite] = Yf
+    ok = np.all(np.isfinite(Y), axis=(-2, -1))
+    return Y, ok
+
+
+@dataclass(kw_only=True)
+class Preconditioned:
+    """A midpoint-inverse preconditioning of ``J`` and ``f(c)`` for a stack of boxes.
+
+    ``Y`` approximates ``(mid J)^-1`` (NaN where unusable); ``M = Y J ∈ Mc ± Mr`` and
+    ``b = Y f(c) ∈ bc ± br`` rigorously; ``ok`` marks boxes where ``Y`` exists and every
+    bound is finite (the others are set to zero preconditioner and must not be trusted).
+    """
+
+    Y: np.ndarray  # (B, n, n)
+    ok: np.ndarray  # (B,)
+    Mc: np.ndarray  # (B, n, n)
+    Mr: np.ndarray
+    bc: np.ndarray  # (B, n)
+    br: np.ndarray
+
+
+def precondition(Jc, Jr, fc, fr) -> Preconditioned:
+    """Midpoint inverse preconditioning of ``J ∈ Jc ± Jr`` ``(B, n, n)`` and ``f ∈ fc ± fr``
+    ``(B, n)``: ``Y = Jc^-1``, ``Y J`` and ``Y f`` enclosed with :func:`mr_matmul`."""
+    Y, ok = batched_inverse(Jc)
+    ok = ok & all_last(np.isfinite(fc) & np.isfinite(fr))
+    Ys = np.where(ok[..., None, None], Y, 0.0)
+    with np.errstate(all="ignore"):
+        Mc, Mr = mr_matmul(Ys, None, Jc, Jr)
+        bc, br = mr_matmul(Ys, None, fc[..., None], fr[..., None])
+    bc, br = bc[..., 0], br[..., 0]
+    ok &= np.all(np.isfinite(Mr), axis=(-2, -1)) & all_last(np.isfinite(br))
+    return Preconditioned(Y=Y, ok=ok, Mc=Mc, Mr=Mr, bc=bc, br=br)
+
+
+def krawczyk_magnitude(Mc, Mr):
+    """Upper bound of ``|I - M|`` for ``M ∈ Mc ± Mr`` (``(..., n, n)``; see module docstring)."""
+    n = Mc.shape[-1]
+    with np.errstate(invalid="ignore", over="ignore"):
+        return np.abs(np.eye(n) - Mc) * (1.0 + 4.0 * U) + Mr
+
+
+def krawczyk_image(c, lo, hi, mag, bc, br):
+    """The Krawczyk operator ``K(X)`` and the mask ``K(X) ⊂ int X`` for a stack of boxes.
+
+    ``X = [lo, hi]`` and ``c ∈ X`` are ``(..., n)``; ``mag`` bounds ``|I - Y J(X)|``
+    (:func:`krawczyk_magnitude`, ``(..., n, n)`` or one shared ``(n, n)``) and ``bc ± br``
+    encloses ``Y f(c)``.  ``c`` need not be the midpoint.  Returns ``(klo, khi, proven)``;
+    ``proven[k]`` means box ``k`` holds exactly one zero, inside ``[klo, khi]``.
+    """
+    n = c.shape[-1]
+    with np.errstate(invalid="ignore", over="ignore"):
+        r = np.maximum(hi - c, c - lo) * (1.0 + 4.0 * U)
+        v = (mag @ r[..., None])[..., 0]
+        ce = c - bc
+        rr = (1.0 + 2.0 * gamma(n + 4)) * (br + v) + (2.0 * U) * np.abs(ce) + (n + 2) * UNDERFLOW
+        klo = np.nextafter(ce - rr, -np.inf)
+        khi = np.nextafter(ce + rr, np.inf)
+    proven = all_last((klo > lo) & (khi < hi))
+    return klo, khi, proven
+
+
+def krawczyk_mr(c, lo, hi, fc, fr, Jc, Jr):
+    """Krawczyk test from midpoint-radius enclosures, batched: ``(klo, khi, proven)``.
+
+    ``c ∈ X = [lo, hi]`` ``(B, n)``; ``fc ± fr`` encloses ``f(c)`` and ``Jc ± Jr`` the
+    Jacobian over the hull of ``X`` and ``c``.  Boxes whose preconditioner is unusable are
+    never proven.
+    """
+    c = np.asarray(c, dtype=float)
+    pre = precondition(Jc, Jr, fc, fr)
+    klo, khi, proven = krawczyk_image(c, lo, hi, krawczyk_magnitude(pre.Mc, pre.Mr), pre.bc, pre.br)
+    return klo, khi, proven & pre.ok

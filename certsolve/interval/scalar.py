@@ -84,7 +84,8 @@ class Interval:
         return Interval(-self.hi, -self.lo)
 
     def __pow__(self, n: int):
-        return self._wrap(arith.pow_int(*self._b(), int(n)))
+        lo, hi = self._b()
+        return self._wrap(arith.pow_int(lo, hi, int(n)))
 
     def sqr(self):
         return self._wrap(arith.sqr(*self._b()))

@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from ..extras import require
+from ..solver.search import SearchStatus
 from .service import NoResult, NoSuchJob
 from .store import JobStore
 
@@ -138,7 +139,7 @@ def _fk_pose(d: dict[str, Any]):
 def _search_note(result: dict[str, Any]) -> str:
     """What a search result leaves open, or "" when it is complete."""
     parts = []
-    if result.get("status") != "complete":
+    if result.get("status") != SearchStatus.COMPLETE:
         parts.append(f"search {result.get('status')}")
     for key in ("undecided", "pending"):
         n = (result.get("truncated") or {}).get(key, len(result.get(key) or []))

@@ -1,8 +1,10 @@
 """Kinematics of wire-driven robots with elastic wires (Merlet 2007).
 
-* :mod:`.ik`, :mod:`.ik_tension`, :mod:`.ik_enclose`, :mod:`.ik_search` -- inverse
-  kinematics: tension-first, Algorithm 1 (interval search, first certified solution),
-  Algorithm 2 (fixed wire, Newton, Krawczyk certificate)
+* :mod:`.ik` -- inverse kinematics (:func:`inverse_kinematics` dispatches): tension first
+  (:mod:`.ik_first`, tensions by :mod:`.ik_tension`), Algorithm 1 (:mod:`.ik_alg1`, the
+  interval search :mod:`.ik_search`: first certified solution), Algorithm 2
+  (:mod:`.ik_alg2`: fixed wire, Newton, Krawczyk certificate, bounds in :mod:`.ik_enclose`);
+  results in :mod:`.ik_result`, input checks in :mod:`.ik_inputs`
 * :mod:`.fk_systems` -- the forward-kinematics equation systems (10/13/16/19 equations,
   pose parameters), built from a robot file
 * :mod:`.fk`         -- all-solutions forward kinematics (:func:`forward_kinematics`)

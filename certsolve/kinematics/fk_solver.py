@@ -174,7 +174,14 @@ class FKSolver:
     def formulation(self) -> str:
         return self.form.name
 
-    def _prepare(self, u) -> tuple[np.ndarray, bool]:
+    def search_box(self, u) -> np.ndarray:
+        """The FK search domain ``(n, 2)`` for control ``u`` (eq. 7: wire lengths allowed by
+        the tension limits; the system's own domain is left as it is)."""
+        return search_domain(self.form, np.asarray(u, dtype=float).ravel())[0]
+
+    def _prepare(self, u) -> tuple[np.ndarray, np.ndarray, bool]:
+        """Checked ``u``, set as the system's parameters; the search domain for it and
+        whether it is non-empty."""
         u = np.asarray(u, dtype=float).ravel()
         if u.shape != (self.robot.m,):
             raise ValueError(f"u: expected {self.robot.m} values (one per wire), got {u.size}")
@@ -182,7 +189,6 @@ class FKSolver:
             raise ValueError("u: values must be finite")
         self.csys.set_parameters(self.form.parameters_for(u))
         dom, ok = search_domain(self.form, u)
-        self.csys.system.domain = dom
         bis = self.solver.bisector
         if isinstance(bis, Prioritized) and self.robot.dim == 3:
             # narrow wire-length ranges (low tension limits) pin the platform position once
@@ -192,7 +198,7 @@ class FKSolver:
             rho = np.array([v.startswith("rho") for v in self.form.system.variables])
             width = float(np.mean(dom[rho, 1] - dom[rho, 0])) if rho.any() else 0.0
             bis.alpha = float(np.clip(width / 25.0, 0.25, 0.75))
-        return u, ok
+        return u, dom, ok
 
     def solve(
         self,
@@ -215,7 +221,7 @@ class FKSolver:
         :meth:`.Solver.solve` (the fingerprint covers ``u``: the system's parameters and
         domain).
         """
-        u, ok = self._prepare(u)
+        u, dom, ok = self._prepare(u)
         notes = []
         for i in (
             np.flatnonzero(u < self.robot.u_min).tolist()
@@ -240,6 +246,7 @@ class FKSolver:
             cancel=cancel,
             workers=workers,
             checkpoint=checkpoint,
+            domain=dom,
         )
         sols = [self.decode(s.lo, s.hi, u, s) for s in res.solutions]
         return FKResult(self.robot.name, self.formulation, u, res.status, sols, res, notes=notes)
@@ -253,15 +260,12 @@ class FKSolver:
         x = 0.5 * np.asarray(lo) + 0.5 * np.asarray(hi) if point is None else np.asarray(point)
         f = self.form
         r = self.robot
-        d, m = r.dim, r.m
+        m = r.m
         rho = x[-m:].copy()
         if f.kind in ("points", "frame"):
-            k = f.n_points
             P = f.points_from(x)
             points = f.L @ P
             pos, R = rotation_from_points(f, P)
-            if x.size == k * d:  # reduced formulation: lengths from the points
-                rho = np.linalg.norm(r.A - points, axis=1)
         else:
             pos, R = pose_from_angles(f, x)
             points = pos + r.B @ R.T

@@ -37,6 +37,20 @@ Formulations (sizes for MARIONET's 7 wires):
   boxes than the paper's variables (see ``benchmarks/fk_bench.py``).
 * ``pose``: position and Z-Y-X Euler angles of the platform + ρ (6 + m unknowns), the
   classical parameterisation, for comparison.
+* ``points``: the paper's 3-point system for a planar platform (attachments and centre of
+  mass coplanar) with more than three distinct attachment points, which is what ``auto``
+  puts in the platform frame for such a robot; on the T-platform and the almost-planar
+  robot it is the same system as ``T-16`` / ``almost-planar-13``, node for node.  It is
+  there for comparison: ``frame`` needs 4-5x fewer boxes (τ <= 10 N, u = 0: T-16 6117 vs
+  1479 boxes, almost-planar 24392 vs 4703).
+
+One builder (:func:`_platform_formulation`) writes the physics of every point formulation
+once; the coordinates are its parameter (:class:`_Points`: the paper's world coordinates,
+moments about the domain centre; :class:`_Frame`: ``P_1`` and edge vectors, moments about
+``P_1``).  A ``reduced`` variant that eliminated ρ (``ρ_i = |A_i - B_i|``, 6-12 unknowns)
+was removed: on the bundled robots it never won (τ <= 10 N and 60 N, u as in
+``tests/test_fk_frame.py``: 1.6-4.6x the boxes of the paper's system, 15-24x those of
+``frame``, 1.4-3.7x the paper system's CPU time).
 
 Search domain: every platform point lies in the robot's ``domain`` box (the non-chosen
 attachments through checked constraints), and ``ρ_i`` in the range allowed by the tension
@@ -52,7 +66,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..expr import Constraint, System, const, cos, esum, param, sin, sqr, sqrt, var
+from ..expr import Constraint, System, const, cos, esum, param, sin, sqr, var
 from ..expr.node import Expr
 from ..robot.geometry import rotation_2d, rotation_zyx
 from ..robot.model import Robot
@@ -66,7 +80,6 @@ FORMULATIONS = (
     "almost-planar-13",
     "planar-10",
     "points",
-    "reduced",
     "frame",
     "pose",
 )
@@ -272,7 +285,7 @@ def _lin(coefs: np.ndarray, P: list[list[Expr]], c: int) -> Expr:
     return esum(float(coefs[j]) * P[j][c] for j in nz)
 
 
-# -- the point formulations --------------------------------------------------------------------
+# -- redundant moments of the point formulations ----------------------------------------------
 
 
 def _eliminating_moments(robot, B, G, L, w, P, d):
@@ -285,9 +298,7 @@ def _eliminating_moments(robot, B, G, L, w, P, d):
     Returns a list of expressions (each = 0 at every equilibrium).
     """
     W = [float(v) for v in robot.weight]
-    groups: dict[tuple, list[int]] = {}
-    for i in range(robot.m):
-        groups.setdefault(tuple(L[i]), []).append(i)
+    groups = _wire_groups(L)
     keys = list(groups)
     out = []
 
@@ -330,43 +341,15 @@ def _eliminating_moments(robot, B, G, L, w, P, d):
     return out
 
 
-def _points_formulation(
-    robot: Robot, name: str, k: int, redundant_moments: bool = True, reduced: bool = False
-) -> FKFormulation:
-    robot.require_elastic("forward kinematics")
-    d = robot.dim
-    pts, _ = robot.attachment_groups()
-    candidates = pts
-    if k > pts.shape[0]:
-        raise ValueError(
-            f"{name} needs {k} distinct attachment points, the robot has {pts.shape[0]}"
-        )
-    sel = _choose_points(candidates, k)
-    Q = candidates[sel]
-    L = _snap_rows(_affine_coordinates(Q, robot.B), robot)
-    lG = _affine_coordinates(Q, robot.com[None])[0]
-    axes = "xyz"[:d]
-    P = [[var(f"{a}{j + 1}") for a in axes] for j in range(k)]
-    dom = robot.domain
-    O = dom.mean(axis=1)
+def _absolute_forces_and_moments(robot: Robot, B, G, w, O) -> list[Expr]:
+    """Equilibrium (eq. 3) with platform points in world coordinates, moments about ``O``.
 
-    eqs: list[Expr] = []
-    B = [[_lin(L[i], P, c) for c in range(d)] for i in range(robot.m)]
-    if reduced:  # ρ_i = |A_i - B_i| eliminated: coordinates are the only unknowns
-        rho = [
-            sqrt(esum(sqr(B[i][c] - float(robot.A[i, c])) for c in range(d)))
-            for i in range(robot.m)
-        ]
-    else:
-        rho = [var(f"rho{i + 1}") for i in range(robot.m)]
-        for i in range(robot.m):  # lengths
-            eqs.append(esum(sqr(B[i][c] - float(robot.A[i, c])) for c in range(d)) - sqr(rho[i]))
-    for a, b in itertools.combinations(range(k), 2):  # rigidity
-        dab = float(np.sum((Q[a] - Q[b]) ** 2))
-        eqs.append(esum(sqr(P[a][c] - P[b][c]) for c in range(d)) - dab)
-    w = _wire_weights(robot, rho)
+    Forces ``Σ_i w_i (A_i - B_i) + m g``; moments ``Σ_i w_i (B_i - O) × (A_i - O) + (G - O)
+    × m g`` (one component in the plane).  Shared by the point and pose parameterisations.
+    """
+    d = robot.dim
     W = robot.weight
-    G = [_lin(lG, P, c) for c in range(d)]
+    eqs: list[Expr] = []
     for c in range(d):  # forces
         terms = [w[i] * (float(robot.A[i, c]) - B[i][c]) for i in range(robot.m)]
         if W[c] != 0.0:
@@ -374,15 +357,14 @@ def _points_formulation(
         eqs.append(esum(terms))
     rel = [[B[i][c] - float(O[c]) for c in range(d)] for i in range(robot.m)]
     arel = robot.A - O
-    g_rel = [G[c] - float(O[c]) for c in range(d)]
     if d == 3:
-        mom_terms = [[] for _ in range(3)]
+        mom_terms: list[list[Expr]] = [[] for _ in range(3)]
         for i in range(robot.m):
             m_i = _cross(rel[i], [float(v) for v in arel[i]])
             for c in range(3):
                 mom_terms[c].append(w[i] * m_i[c])
         if np.any(W != 0.0):
-            mg = _cross(g_rel, [float(v) for v in W])
+            mg = _cross([G[c] - float(O[c]) for c in range(3)], [float(v) for v in W])
             for c in range(3):
                 mom_terms[c].append(mg[c])
         eqs.extend(esum(t) for t in mom_terms)
@@ -392,84 +374,212 @@ def _points_formulation(
             for i in range(robot.m)
         ]
         eqs.append(esum(terms))
+    return eqs
 
-    constraints: list[Constraint] = []
-    # orientation: the signed area / volume of the chosen points keeps its sign
-    if k == d + 1:
-        E = [[P[j][c] - P[0][c] for c in range(d)] for j in range(1, k)]
-        Eq = Q[1:] - Q[0]
-        if d == 3:
-            cr = _cross(E[1], E[2])
-            signed = esum(E[0][c] * cr[c] for c in range(3))
-        else:
-            signed = E[0][0] * E[1][1] - E[0][1] * E[1][0]
-        s0 = float(np.linalg.det(Eq))
-        constraints.append(Constraint(signed, s0, s0, redundant=True))
-        constraints.append(
-            Constraint(signed, 0.0, np.inf) if s0 > 0 else Constraint(signed, -np.inf, 0.0)
+
+class _Points:
+    """Coordinates: the chosen points ``P_1..P_k`` in world coordinates (the paper's systems).
+
+    Moments about the domain centre; every chosen point is a variable bounded by the domain.
+    """
+
+    kind = "points"
+
+    def __init__(self, robot: Robot, Q, L, lG):
+        d = robot.dim
+        self.robot, self.Q, self.L, self.lG = robot, Q, L, lG
+        axes = "xyz"[:d]
+        self.P = [[var(f"{a}{j + 1}") for a in axes] for j in range(Q.shape[0])]
+        self.B = [[_lin(L[i], self.P, c) for c in range(d)] for i in range(robot.m)]
+        self.G = [_lin(lG, self.P, c) for c in range(d)]
+        self.names = [f"{a}{j + 1}" for j in range(Q.shape[0]) for a in axes]
+        self.rows = [robot.domain] * Q.shape[0]
+        self.bounded = {tuple(np.eye(Q.shape[0])[j]) for j in range(Q.shape[0])}
+
+    def offset(self, i: int, c: int) -> Expr:
+        """Component ``c`` of ``B_i - A_i``."""
+        return self.B[i][c] - float(self.robot.A[i, c])
+
+    def edge_sq(self, a: int, b: int) -> Expr:
+        d = self.robot.dim
+        return esum(sqr(self.P[a][c] - self.P[b][c]) for c in range(d))
+
+    def edges(self) -> list[list[Expr]]:
+        """``E_j = P_j - P_1``, ``j = 2..k``."""
+        d = self.robot.dim
+        return [[self.P[j][c] - self.P[0][c] for c in range(d)] for j in range(1, len(self.P))]
+
+    def point(self, coefs) -> list[Expr]:
+        return [_lin(coefs, self.P, c) for c in range(self.robot.dim)]
+
+    def equilibrium(self, w) -> list[Expr]:
+        return _absolute_forces_and_moments(
+            self.robot, self.B, self.G, w, self.robot.domain.mean(axis=1)
         )
-        if d == 3 and k == 4:
-            constraints += _fourth_point_constraints(Q, E[0], E[1], E[2])
-    # other platform points (attachments, centre of mass) inside the domain
-    extra = [L[i] for i in range(robot.m)] + [lG]
-    seen = {tuple(np.eye(k)[j]) for j in range(k)}
-    for coefs in extra:
-        key = tuple(np.round(coefs, 15))
-        if key in seen:
-            continue
-        seen.add(key)
-        for c in range(d):
-            constraints.append(Constraint(_lin(coefs, P, c), float(dom[c, 0]), float(dom[c, 1])))
-    if redundant_moments:
-        for e in _eliminating_moments(robot, B, G, L, w, P, d):
-            constraints.append(Constraint(e, 0.0, 0.0, redundant=True))
-    # wires sharing an attachment: the difference of their length equations is linear
-    groups: dict[tuple, list[int]] = {}
-    for i in range(robot.m):
-        groups.setdefault(tuple(L[i]), []).append(i)
-    for members in [] if reduced else groups.values():
-        for a, b in zip(members, members[1:]):
-            Aa, Ab = robot.A[a], robot.A[b]
-            lhs = esum(2.0 * float(Aa[c] - Ab[c]) * B[a][c] for c in range(d))
-            const_term = float(np.dot(Aa, Aa) - np.dot(Ab, Ab))
-            constraints.append(
-                Constraint(sqr(rho[a]) - sqr(rho[b]) + lhs - const_term, 0.0, 0.0, redundant=True)
-            )
 
-    names = [f"{a}{j + 1}" for j in range(k) for a in axes]
-    if reduced:
-        # the tension limits become constraints on the lengths (eq. 7), with u as parameter
+    def redundant_moments(self, w, groups, option) -> list[Expr]:
+        if not option:
+            return []
+        return _eliminating_moments(self.robot, self.B, self.G, self.L, w, self.P, self.robot.dim)
+
+
+class _Frame:
+    """Coordinates: the reference point ``P_1`` and the edge vectors ``E_j = P_j - P_1``.
+
+    A linear change of variables of :class:`_Points` (same equations, same solutions):
+    translation lives in ``P_1`` and rotation in the short ``E_j``; the rigidity equations
+    ``|E_j|² = d²`` have no repeated variable, and the moments are taken about ``P_1``,
+    whose levers ``B_i - P_1 = Σ l_ij E_j`` are platform-sized (and zero for the wires
+    attached at ``P_1``).  ``None`` stands for an exact 0 (no node is built for it).
+    """
+
+    kind = "frame"
+
+    def __init__(self, robot: Robot, Q, L, lG):
+        d = robot.dim
+        k = Q.shape[0]
+        self.robot, self.Q, self.L, self.lG = robot, Q, L, lG
+        axes = "xyz"[:d]
+        self.C = [var(f"{a}1") for a in axes]
+        self.E = [None] + [[var(f"e{a}{j + 1}") for a in axes] for j in range(1, k)]
+        self.b = [self.rel(L[i]) for i in range(robot.m)]
+        self.g = self.rel(lG)
+        self.B = [[_add0(self.C[c], self.b[i][c]) for c in range(d)] for i in range(robot.m)]
+        self.names = [f"{a}1" for a in axes]
+        dom = robot.domain
+        self.rows = [dom]
+        for j in range(1, k):
+            self.names += [f"e{a}{j + 1}" for a in axes]
+            dj = float(np.linalg.norm(Q[j] - Q[0]))
+            span = dom[:, 1] - dom[:, 0]
+            # |E_j| = d_j bounds each component; widened so that a solution with an edge
+            # parallel to an axis is not on the boundary of the search box
+            r = np.minimum(1.0625 * dj + 1e-3, span)
+            self.rows.append(np.stack([-r, r], axis=1))
+        self.bounded = {tuple(np.eye(k)[0])}
+
+    def rel(self, coefs):
+        """``Σ_j coefs_j P_j - P_1`` (affine coefs) as ``Σ_{j>=2} coefs_j E_j``; None = 0."""
+        k, E = self.Q.shape[0], self.E
+        nz = [j for j in range(1, k) if abs(coefs[j]) > 1e-14]
+        out = []
+        for c in range(self.robot.dim):
+            if not nz:
+                out.append(None)
+            elif len(nz) == 1 and coefs[nz[0]] == 1.0:
+                out.append(E[nz[0]][c])
+            else:
+                out.append(esum(float(coefs[j]) * E[j][c] for j in nz))
+        return out
+
+    def offset(self, i: int, c: int) -> Expr:
+        """Component ``c`` of ``B_i - A_i = (P_1 - A_i) + b_i``."""
+        return _add0(self.C[c] - float(self.robot.A[i, c]), self.b[i][c])
+
+    def edge_sq(self, a: int, b: int) -> Expr:
+        d, E = self.robot.dim, self.E
+        if a == 0:
+            return esum(sqr(E[b][c]) for c in range(d))
+        return esum(sqr(E[a][c] - E[b][c]) for c in range(d))
+
+    def edges(self) -> list[list[Expr]]:
+        return self.E[1:]
+
+    def point(self, coefs) -> list[Expr]:
+        p = self.rel(coefs)
+        return [_add0(self.C[c], p[c]) for c in range(self.robot.dim)]
+
+    def moments_about(self, w, pref, skip):
+        """Moment of all forces about ``P_1 + rel(pref)``, wires in ``skip`` left out."""
+        robot, C, b = self.robot, self.C, self.b
+        d = robot.dim
+        W = [float(v) for v in robot.weight]
+        p = self.rel(pref)
+        comps: list[list[Expr]] = [[] for _ in range(3 if d == 3 else 1)]
         for i in range(robot.m):
-            c = robot.V[i] + robot.K[i] * param(f"u{i + 1}")
-            lo_t = float(robot.k[i] * robot.L0[i] / (robot.k[i] - robot.tau_min[i]))
-            hi_t = float(robot.k[i] * robot.L0[i] / (robot.k[i] - robot.tau_max[i]))
-            constraints.append(Constraint(rho[i] + c, lo_t, hi_t))
-        domain = np.tile(dom, (k, 1))
-    else:
-        names += [f"rho{i + 1}" for i in range(robot.m)]
-        domain = _with_rho(
-            np.vstack([np.tile(dom, (k, 1)), np.zeros((robot.m, 2))]),
-            robot,
-            np.zeros(robot.m),
-            d,
-            k,
-        )
-    system = _system(robot, names, domain, eqs, constraints, name)
-    return FKFormulation(
-        name, robot, system, "points", Q=Q, L=L, lG=lG, info={"points": [int(i) for i in sel]}
-    )
+            if i in skip:
+                continue
+            lever = [_sub0(b[i][c], p[c]) for c in range(d)]
+            arm = [_sub0(float(robot.A[i, c]) - C[c], p[c]) for c in range(d)]
+            for c, mc in enumerate(_cross0(lever, arm)):
+                if mc is not None:
+                    comps[c].append(w[i] * mc)
+        if any(v != 0.0 for v in W):
+            gl = [_sub0(self.g[c], p[c]) for c in range(d)]
+            for c, mc in enumerate(_cross0(gl, [const(v) for v in W])):
+                if mc is not None:
+                    comps[c].append(mc)
+        return comps
+
+    def equilibrium(self, w) -> list[Expr]:
+        """Forces ``Σ w_i ((A_i - P_1) - b_i) + m g``, moments about ``P_1``."""
+        robot, C, b = self.robot, self.C, self.b
+        W = [float(v) for v in robot.weight]
+        eqs: list[Expr] = []
+        for c in range(robot.dim):
+            terms = [w[i] * _sub0(float(robot.A[i, c]) - C[c], b[i][c]) for i in range(robot.m)]
+            if W[c] != 0.0:
+                terms.append(const(W[c]))
+            eqs.append(esum(terms))
+        k = self.Q.shape[0]
+        ref_wires = set(_wire_groups(self.L).get(tuple(np.eye(k)[0]), []))
+        for comp in self.moments_about(w, np.eye(k)[0], ref_wires):
+            eqs.append(esum(comp) if comp else const(0.0))
+        return eqs
+
+    def redundant_moments(self, w, groups, option) -> list[Expr]:
+        """Moments about other attachment points (``"points"``, when they drop at least a
+        quarter of the wires: one wire of seven was measured useless) and about lines
+        through two of them (``"lines"``)."""
+        if option is True:
+            option = ("points", "lines")
+        if not option:
+            return []
+        robot, k = self.robot, self.Q.shape[0]
+        ref_key = tuple(np.eye(k)[0])
+        keys = list(groups)
+        out: list[Expr] = []
+        for kp in keys:
+            if kp != ref_key and "points" in option and 4 * len(groups[kp]) >= robot.m:
+                for comp in self.moments_about(w, np.array(kp), set(groups[kp])):
+                    if comp:
+                        out.append(esum(comp))
+            if robot.dim != 3 or "lines" not in option:
+                continue
+            for kq in keys:
+                if kq <= kp:
+                    continue
+                skip = set(groups[kp]) | set(groups[kq])
+                comps = self.moments_about(w, np.array(kp), skip)
+                ax = self.rel(np.array(kq) - np.array(kp) + np.eye(k)[0])
+                terms = [esum(comps[c]) * ax[c] for c in range(3) if comps[c] and ax[c] is not None]
+                if terms:
+                    out.append(esum(terms))
+        return out
 
 
-def _frame_formulation(robot: Robot, name: str, k: int, redundant_moments=("points",)):
-    """The point formulation in a *platform frame*: ``P_1`` and edge vectors ``E_j``.
+def _wire_groups(L: np.ndarray) -> dict[tuple, list[int]]:
+    """Wires by attachment point (rows are snapped: equal rows <=> same point)."""
+    groups: dict[tuple, list[int]] = {}
+    for i in range(L.shape[0]):
+        groups.setdefault(tuple(L[i]), []).append(i)
+    return groups
 
-    The unknowns are the reference point ``P_1`` (the chosen point carrying the most
-    wires) and the vectors ``E_j = P_j - P_1`` (``j = 2..k``), then the wire lengths: a
-    linear change of variables of the paper's system (same equation count, same
-    solutions).  Translation lives in ``P_1`` and rotation in the short ``E_j``, so boxes
-    separate the two; the rigidity equations ``|E_j|² = d²`` have no repeated variable,
-    and the moments are taken about ``P_1``, whose levers ``B_i - P_1 = Σ l_ij E_j`` are
-    platform-sized (and zero for the wires attached at ``P_1``).
+
+def _platform_formulation(
+    robot: Robot,
+    name: str,
+    k: int,
+    *,
+    frame: bool = False,
+    redundant_moments: bool | tuple[str, ...] = True,
+) -> FKFormulation:
+    """The FK system on ``k`` chosen platform points (module docstring), in the paper's point
+    coordinates (:class:`_Points`) or the platform frame (:class:`_Frame`, ``frame=True``).
+
+    The physics is written once: lengths, rigidity, equilibrium, the orientation of the
+    chosen points, every platform point in the domain, redundant moments and the linear
+    differences of wires sharing an attachment.
     """
     robot.require_elastic("forward kinematics")
     d = robot.dim
@@ -479,166 +589,78 @@ def _frame_formulation(robot: Robot, name: str, k: int, redundant_moments=("poin
             f"{name} needs {k} distinct attachment points, the robot has {pts.shape[0]}"
         )
     sel = _choose_points(pts, k)
-    counts = [int(np.sum(gidx == j)) for j in sel]
-    r0 = int(np.argmax(counts))
-    sel = [sel[r0]] + [s for i, s in enumerate(sel) if i != r0]
+    if frame:  # the reference point P_1 carries the most wires
+        counts = [int(np.sum(gidx == j)) for j in sel]
+        r0 = int(np.argmax(counts))
+        sel = [sel[r0]] + [s for i, s in enumerate(sel) if i != r0]
     Q = pts[sel]
     L = _snap_rows(_affine_coordinates(Q, robot.B), robot)
     lG = _affine_coordinates(Q, robot.com[None])[0]
-    axes = "xyz"[:d]
-    C = [var(f"{a}1") for a in axes]
-    E = [None] + [[var(f"e{a}{j + 1}") for a in axes] for j in range(1, k)]
-    dom = robot.domain
+    co: _Points | _Frame = (_Frame if frame else _Points)(robot, Q, L, lG)
     A = robot.A
+    dom = robot.domain
 
-    def rel(coefs):
-        """``Σ_j coefs_j P_j - P_1`` (affine coefs) as ``Σ_{j>=2} coefs_j E_j``; None = 0."""
-        nz = [j for j in range(1, k) if abs(coefs[j]) > 1e-14]
-        out = []
-        for c in range(d):
-            if not nz:
-                out.append(None)
-            elif len(nz) == 1 and coefs[nz[0]] == 1.0:
-                out.append(E[nz[0]][c])
-            else:
-                out.append(esum(float(coefs[j]) * E[j][c] for j in nz))
-        return out
-
-    b = [rel(L[i]) for i in range(robot.m)]
-    g = rel(lG)
-    Bw = [[_add0(C[c], b[i][c]) for c in range(d)] for i in range(robot.m)]
     rho = [var(f"rho{i + 1}") for i in range(robot.m)]
     eqs: list[Expr] = []
-    for i in range(robot.m):  # lengths: |(C - A_i) + b_i|² = ρ_i²
-        eqs.append(esum(sqr(_add0(C[c] - float(A[i, c]), b[i][c])) for c in range(d)) - sqr(rho[i]))
-    for a, bb in itertools.combinations(range(k), 2):  # rigidity
-        dab = float(np.sum((Q[a] - Q[bb]) ** 2))
-        if a == 0:
-            eqs.append(esum(sqr(E[bb][c]) for c in range(d)) - dab)
-        else:
-            eqs.append(esum(sqr(E[a][c] - E[bb][c]) for c in range(d)) - dab)
+    for i in range(robot.m):  # lengths
+        eqs.append(esum(sqr(co.offset(i, c)) for c in range(d)) - sqr(rho[i]))
+    for a, b in itertools.combinations(range(k), 2):  # rigidity
+        eqs.append(co.edge_sq(a, b) - float(np.sum((Q[a] - Q[b]) ** 2)))
     w = _wire_weights(robot, rho)
-    W = [float(v) for v in robot.weight]
-    for c in range(d):  # forces: Σ w_i ((A_i - C) - b_i) + W = 0
-        terms = [w[i] * _sub0(float(A[i, c]) - C[c], b[i][c]) for i in range(robot.m)]
-        if W[c] != 0.0:
-            terms.append(const(W[c]))
-        eqs.append(esum(terms))
-
-    def moments_about(pref, skip):
-        """Moment of all forces about ``P_1 + rel(pref)``, wires in ``skip`` left out."""
-        p = rel(pref)
-        comps = [[] for _ in range(3 if d == 3 else 1)]
-        for i in range(robot.m):
-            if i in skip:
-                continue
-            lever = [_sub0(b[i][c], p[c]) for c in range(d)]
-            arm = [_sub0(float(A[i, c]) - C[c], p[c]) for c in range(d)]
-            for c, mc in enumerate(_cross0(lever, arm)):
-                if mc is not None:
-                    comps[c].append(w[i] * mc)
-        if any(v != 0.0 for v in W):
-            gl = [_sub0(g[c], p[c]) for c in range(d)]
-            for c, mc in enumerate(_cross0(gl, [const(v) for v in W])):
-                if mc is not None:
-                    comps[c].append(mc)
-        return comps
-
-    groups: dict[tuple, list[int]] = {}
-    for i in range(robot.m):  # rows are snapped: equal rows <=> same attachment point
-        groups.setdefault(tuple(L[i]), []).append(i)
-    ref_key = tuple(np.eye(k)[0])
-    ref_wires = set(groups.get(ref_key, []))
-    for comp in moments_about(np.eye(k)[0], ref_wires):  # moments about P_1
-        eqs.append(esum(comp) if comp else const(0.0))
+    eqs += co.equilibrium(w)
 
     constraints: list[Constraint] = []
-    if k == d + 1:  # orientation of the chosen points
+    if k == d + 1:  # orientation: the signed area / volume of the chosen points keeps its sign
+        E = co.edges()
         if d == 3:
-            cr = _cross(E[2], E[3])
-            signed = esum(E[1][c] * cr[c] for c in range(3))
+            cr = _cross(E[1], E[2])
+            signed = esum(E[0][c] * cr[c] for c in range(3))
         else:
-            signed = E[1][0] * E[2][1] - E[1][1] * E[2][0]
+            signed = E[0][0] * E[1][1] - E[0][1] * E[1][0]
         s0 = float(np.linalg.det(Q[1:] - Q[0]))
         constraints.append(Constraint(signed, s0, s0, redundant=True))
         constraints.append(
             Constraint(signed, 0.0, np.inf) if s0 > 0 else Constraint(signed, -np.inf, 0.0)
         )
         if d == 3 and k == 4:
-            constraints += _fourth_point_constraints(Q, E[1], E[2], E[3])
+            constraints += _fourth_point_constraints(Q, E[0], E[1], E[2])
+    # every platform point (chosen points, attachments, centre of mass) inside the domain
     extra = [np.eye(k)[j] for j in range(1, k)] + [L[i] for i in range(robot.m)] + [lG]
-    seen = {ref_key}
-    for coefs in extra:  # every platform point inside the domain
+    seen = set(co.bounded)
+    for coefs in extra:
         key = tuple(coefs)
         if key in seen:
             continue
         seen.add(key)
-        p = rel(coefs)
+        p = co.point(coefs)
         for c in range(d):
-            constraints.append(Constraint(_add0(C[c], p[c]), float(dom[c, 0]), float(dom[c, 1])))
-    if redundant_moments is True:
-        redundant_moments = ("points", "lines")
-    if redundant_moments:
-        keys = list(groups)
-        for kp in keys:
-            # about another attachment point: worth its cost when it drops a good share
-            # of the wires (general platform: one wire of seven, measured useless)
-            if kp != ref_key and "points" in redundant_moments and 4 * len(groups[kp]) >= robot.m:
-                for comp in moments_about(np.array(kp), set(groups[kp])):
-                    if comp:
-                        constraints.append(Constraint(esum(comp), 0.0, 0.0, redundant=True))
-            if d != 3 or "lines" not in redundant_moments:
-                continue
-            for kq in keys:
-                if kq <= kp:
-                    continue
-                skip = set(groups[kp]) | set(groups[kq])
-                comps = moments_about(np.array(kp), skip)
-                ax = rel(np.array(kq) - np.array(kp) + np.eye(k)[0])
-                terms = [esum(comps[c]) * ax[c] for c in range(3) if comps[c] and ax[c] is not None]
-                if terms:
-                    constraints.append(Constraint(esum(terms), 0.0, 0.0, redundant=True))
-    for members in groups.values():  # wires sharing an attachment: linear difference
-        for a, bb in zip(members, members[1:]):
-            Aa, Ab = A[a], A[bb]
-            lhs = esum(2.0 * float(Aa[c] - Ab[c]) * Bw[a][c] for c in range(d))
+            constraints.append(Constraint(p[c], float(dom[c, 0]), float(dom[c, 1])))
+    groups = _wire_groups(L)
+    for e in co.redundant_moments(w, groups, redundant_moments):
+        constraints.append(Constraint(e, 0.0, 0.0, redundant=True))
+    for members in groups.values():
+        # wires sharing an attachment: the difference of their length equations is linear
+        for a, b in zip(members, members[1:]):
+            Aa, Ab = A[a], A[b]
+            lhs = esum(2.0 * float(Aa[c] - Ab[c]) * co.B[a][c] for c in range(d))
             const_term = float(np.dot(Aa, Aa) - np.dot(Ab, Ab))
             constraints.append(
-                Constraint(sqr(rho[a]) - sqr(rho[bb]) + lhs - const_term, 0.0, 0.0, redundant=True)
+                Constraint(sqr(rho[a]) - sqr(rho[b]) + lhs - const_term, 0.0, 0.0, redundant=True)
             )
 
-    names = [f"{a}1" for a in axes]
-    rows = [dom]
-    for j in range(1, k):
-        names += [f"e{a}{j + 1}" for a in axes]
-        dj = float(np.linalg.norm(Q[j] - Q[0]))
-        span = dom[:, 1] - dom[:, 0]
-        # |E_j| = d_j bounds each component; widened so that a solution with an edge
-        # parallel to an axis is not on the boundary of the search box
-        r = np.minimum(1.0625 * dj + 1e-3, span)
-        rows.append(np.stack([-r, r], axis=1))
-    names += [f"rho{i + 1}" for i in range(robot.m)]
-    domain = _with_rho(np.vstack(rows + [np.zeros((robot.m, 2))]), robot, np.zeros(robot.m), d, k)
+    names = list(co.names) + [f"rho{i + 1}" for i in range(robot.m)]
+    rows = np.vstack(co.rows + [np.zeros((robot.m, 2))])
+    domain = _with_rho(rows, robot, np.zeros(robot.m), d, k)
     system = _system(robot, names, domain, eqs, constraints, name)
-    return FKFormulation(
-        name,
-        robot,
-        system,
-        "frame",
-        Q=Q,
-        L=L,
-        lG=lG,
-        info={
-            "points": [int(i) for i in sel],
-            # lengths + forces in (P_1, ρ): a square sub-system, well conditioned for a
-            # whole box of orientations (partial Newton, see FKSolver)
-            "translation": {
-                "equations": list(range(robot.m))
-                + [robot.m + k * (k - 1) // 2 + c for c in range(d)],
-                "variables": list(range(d)) + list(range(k * d, k * d + robot.m)),
-            },
-        },
-    )
+    info: dict = {"points": [int(i) for i in sel]}
+    if frame:
+        # lengths + forces in (P_1, ρ): a square sub-system, well conditioned for a whole
+        # box of orientations (partial Newton, see FKSolver)
+        info["translation"] = {
+            "equations": list(range(robot.m)) + [robot.m + k * (k - 1) // 2 + c for c in range(d)],
+            "variables": list(range(d)) + list(range(k * d, k * d + robot.m)),
+        }
+    return FKFormulation(name, robot, system, co.kind, Q=Q, L=L, lG=lG, info=info)
 
 
 def _system(robot: Robot, names, domain, eqs, constraints, name: str) -> System:
@@ -717,33 +739,7 @@ def _pose_formulation(robot: Robot) -> FKFormulation:
         for i in range(robot.m)
     ]
     w = _wire_weights(robot, rho)
-    W = robot.weight
-    O = dom.mean(axis=1)
-    for c in range(d):
-        terms = [w[i] * (float(robot.A[i, c]) - B[i][c]) for i in range(robot.m)]
-        if W[c] != 0.0:
-            terms.append(const(float(W[c])))
-        eqs.append(esum(terms))
-    rel = [[B[i][c] - float(O[c]) for c in range(d)] for i in range(robot.m)]
-    arel = robot.A - O
-    if d == 3:
-        mom = [[], [], []]
-        for i in range(robot.m):
-            m_i = _cross(rel[i], [float(v) for v in arel[i]])
-            for c in range(3):
-                mom[c].append(w[i] * m_i[c])
-        if np.any(W != 0.0):
-            mg = _cross([G[c] - float(O[c]) for c in range(3)], [float(v) for v in W])
-            for c in range(3):
-                mom[c].append(mg[c])
-        eqs.extend(esum(t) for t in mom)
-    else:
-        eqs.append(
-            esum(
-                w[i] * (rel[i][0] * float(arel[i, 1]) - rel[i][1] * float(arel[i, 0]))
-                for i in range(robot.m)
-            )
-        )
+    eqs += _absolute_forces_and_moments(robot, B, G, w, dom.mean(axis=1))
     constraints = []
     for i in range(robot.m):
         for c in range(d):
@@ -769,26 +765,24 @@ def build_formulation(robot: Robot, name: str = "auto") -> FKFormulation:
     if name == "frame":
         base = choose_formulation(robot)
         k = 4 if base == "general-19" else 3
-        return _frame_formulation(robot, f"frame-{base}", k)
-    if name == "reduced":
-        base = choose_formulation(robot)
-        k = 4 if base == "general-19" else 3
-        return _points_formulation(robot, f"reduced-{base}", k, reduced=True)
+        return _platform_formulation(
+            robot, f"frame-{base}", k, frame=True, redundant_moments=("points",)
+        )
     if name == "planar-10":
         if robot.dof != 3:
             raise ValueError("planar-10 is for planar robots (dof 3)")
-        return _points_formulation(robot, name, 3)
+        return _platform_formulation(robot, name, 3)
     if robot.dof != 6:
         raise ValueError(f"{name} is for spatial robots (dof 6)")
     if name == "general-19":
-        return _points_formulation(robot, name, 4)
+        return _platform_formulation(robot, name, 4)
     pts, _ = robot.attachment_groups()
     if not _is_coplanar(np.vstack([pts, robot.com[None]])):
         raise ValueError(
             f"{name} needs a planar platform (attachments and centre of mass "
             "coplanar); use general-19"
         )
-    return _points_formulation(robot, name, 3)
+    return _platform_formulation(robot, name, 3)
 
 
 def rotation_from_points(form: FKFormulation, P: np.ndarray):

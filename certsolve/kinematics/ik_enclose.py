@@ -26,20 +26,20 @@ component-wise bounds.
 
 Why not :mod:`certsolve.interval`?  The same proofs with endpoint interval operations cost
 30-70 µs per operation on small arrays (``errstate``, ``nextafter``, NaN handling) and the
-whole Algorithm 2 should fit in 0.5 ms; here an operation is one numpy call.  The Krawczyk
-test (:func:`krawczyk_mr`) uses the bounds of :func:`certsolve.solver.newton.krawczyk`
-(tests check that they agree) without its per-call overhead (0.26-0.45 ms for one 6x6 box
-on this 2-core machine, more than the whole Algorithm 2 budget).
+whole Algorithm 2 should fit in 0.5 ms; here an operation is one numpy call.  The generic
+Krawczyk test is the package's one kernel (:func:`certsolve.interval.linalg.krawczyk_mr`,
+re-exported here); :class:`SquareSystem` adds a structured variant that exploits
+``J = H_S diag(τ')`` (tests check that they agree).
 """
 
 from __future__ import annotations
 
 import math
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..interval.linalg import UNDERFLOW, U, gamma, krawczyk_mr
 from ..robot.model import Robot
 
 __all__ = [
@@ -53,21 +53,13 @@ __all__ = [
     "residual_mr",
     "jacobian_mr",
     "krawczyk_mr",
-    "box_around",
     "SquareSystem",
     "is_elastic",
 ]
 
-_U = 2.0**-53
 SAFE = 1.0 + 2.0**-20
-_TINY = 2.0**-1000  # underflow allowance, far below any meaningful width
 
-
-def _gamma(n: int) -> float:
-    return n * _U / (1.0 - n * _U)
-
-
-_G3 = _gamma(3)
+_G3 = gamma(3)
 _I1 = [1, 2, 0]
 _I2 = [2, 0, 1]
 
@@ -93,21 +85,20 @@ class _Consts:
     per_free: dict  # SquareSystem constants per set of free wires
 
 
-_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
 def _consts(robot: Robot) -> _Consts:
-    c = _CACHE.get(robot)
+    """The robot's constants for the bounds of this module, computed once per robot and kept
+    with it (:attr:`Robot.derived`)."""
+    c = robot.derived.get(__name__)
     if c is None:
         F = [float(robot.mass) * float(g) for g in robot.gravity]
-        eF = [2.0 * _U * abs(f) for f in F]
+        eF = [2.0 * U * abs(f) for f in F]
         com = [float(x) for x in robot.com]
         w = robot.wrench_dim
         wg_const = None
         if robot.dof == 2 or not any(com) or not any(F):
             wg_const = (
                 np.array(F + [0.0] * (w - len(F))),
-                np.array(eF + [0.0] * (w - len(F))) * SAFE + _TINY,
+                np.array(eF + [0.0] * (w - len(F))) * SAFE + UNDERFLOW,
             )
         c = _Consts(
             robot.dof,
@@ -115,7 +106,7 @@ def _consts(robot: Robot) -> _Consts:
             robot.is_elastic,
             robot.A,
             robot.B,
-            np.sqrt(np.sum(robot.B * robot.B, axis=1)) * (1.0 + 8 * _U),
+            np.sqrt(np.sum(robot.B * robot.B, axis=1)) * (1.0 + 8 * U),
             robot.k,
             robot.K,
             robot.V,
@@ -128,7 +119,7 @@ def _consts(robot: Robot) -> _Consts:
             wg_const,
             {},
         )
-        _CACHE[robot] = c
+        robot.derived[__name__] = c
     return c
 
 
@@ -173,9 +164,9 @@ def _xprod(a, ea, b, eb, i, j):
     err = (
         abs(a[i]) * eb[j] + abs(b[j]) * ea[i] + ea[i] * eb[j]
         + abs(a[j]) * eb[i] + abs(b[i]) * ea[j] + ea[j] * eb[i]
-        + 3.0 * _U * (abs(p) + abs(q))
+        + 3.0 * U * (abs(p) + abs(q))
     )  # fmt: skip
-    return p - q, err * SAFE + _TINY
+    return p - q, err * SAFE + UNDERFLOW
 
 
 def _gravity(cs: _Consts, R):
@@ -200,13 +191,13 @@ def _gravity(cs: _Consts, R):
 
 
 _REPS = {6: [3, 3], 3: [2, 1]}
-_C_RHO = 10.0 * _U * SAFE
-_C_BETA = 8.0 * _U * SAFE
-_C_N1 = 14.0 * _U * SAFE * (1 + 6 * _U)
-_C_N2 = 16.0 * _U * SAFE * (1 + 6 * _U)
-_C_N3 = 2.0 * _U * SAFE
-_C_M1 = (1.0 + 4 * _U) * SAFE
-_C_M2 = 6.0 * _U * SAFE
+_C_RHO = 10.0 * U * SAFE
+_C_BETA = 8.0 * U * SAFE
+_C_N1 = 14.0 * U * SAFE * (1 + 6 * U)
+_C_N2 = 16.0 * U * SAFE * (1 + 6 * U)
+_C_N3 = 2.0 * U * SAFE
+_C_M1 = (1.0 + 4 * U) * SAFE
+_C_M2 = 6.0 * U * SAFE
 
 
 def enclose_pose(robot: Robot, position, rotation, bounds: bool = True) -> PoseEnclosure:
@@ -228,7 +219,7 @@ def enclose_pose(robot: Robot, position, rotation, bounds: bool = True) -> PoseE
     W = rho + cs.V
     if not bounds:
         return PoseEnclosure(rho, None, Ht, None, wg, None, W, None)
-    Rf = math.sqrt(sum(x * x for x in R.ravel().tolist())) * (1.0 + 8 * _U)
+    Rf = math.sqrt(sum(x * x for x in R.ravel().tolist())) * (1.0 + 8 * U)
     beta = cs.Bnorm * Rf
     erho = _C_RHO * rho + _C_BETA * beta
     rlo = rho - erho
@@ -241,7 +232,7 @@ def enclose_pose(robot: Robot, position, rotation, bounds: bool = True) -> PoseE
     else:
         em = beta * (_C_M1 * en + _C_M2)
         Ht_err = np.repeat(np.stack([en, em], axis=1), _REPS[dof], axis=1)
-    eW = erho * (1.0 + 4 * _U) + (2.0 * _U * SAFE) * W
+    eW = erho * (1.0 + 4 * U) + (2.0 * U * SAFE) * W
     return PoseEnclosure(rho, erho, Ht, Ht_err, wg, ewg, W, eW, valid)
 
 
@@ -250,7 +241,7 @@ def _length_mr(cs: _Consts, enc: PoseEnclosure, u):
     """``L = ρ + V + K u`` (eq. 2) with its error bound; ``u`` broadcasts over wires."""
     Ku = cs.K * u
     L = enc.W + Ku
-    eL = enc.W_err + (2.0 * _U * SAFE) * (np.abs(Ku) + np.abs(L))
+    eL = enc.W_err + (2.0 * U * SAFE) * (np.abs(Ku) + np.abs(L))
     return L, eL
 
 
@@ -264,7 +255,7 @@ def tension_mr(robot: Robot, enc: PoseEnclosure, u):
     L, eL = _length_mr(cs, enc, u)
     tau = cs.k * (L - cs.L0) / L
     Llo = L - eL
-    e = (cs.kL0 * (1.0 + 4 * _U) * SAFE) * eL / (Llo * L) + (2.0 * _G3 * SAFE) * np.abs(tau)
+    e = (cs.kL0 * (1.0 + 4 * U) * SAFE) * eL / (Llo * L) + (2.0 * _G3 * SAFE) * np.abs(tau)
     if not (Llo.min() > 0.0):
         e = np.where(Llo > 0.0, e, np.inf)
     return tau, e
@@ -285,14 +276,14 @@ def dtension_range(robot: Robot, enc: PoseEnclosure, ulo, uhi):
     cs = _consts(robot)
     Llo, elo = _length_mr(cs, enc, ulo)
     Lhi, ehi = _length_mr(cs, enc, uhi)
-    lmin = (Llo - elo) * (1.0 - 8.0 * _U)
-    lmax = (Lhi + ehi) * (1.0 + 8.0 * _U)
-    dhi = cs.kL0K / (lmin * lmin) * (1.0 + 16.0 * _U)
-    dlo = cs.kL0K / (lmax * lmax) * (1.0 - 16.0 * _U)
+    lmin = (Llo - elo) * (1.0 - 8.0 * U)
+    lmax = (Lhi + ehi) * (1.0 + 8.0 * U)
+    dhi = cs.kL0K / (lmin * lmin) * (1.0 + 16.0 * U)
+    dlo = cs.kL0K / (lmax * lmax) * (1.0 - 16.0 * U)
     if not (lmin.min() > 0.0):
         dhi = np.where(lmin > 0.0, dhi, np.inf)
     c = 0.5 * (dlo + dhi)
-    r = (0.5 * SAFE) * (dhi - dlo) + (4.0 * _U) * c
+    r = (0.5 * SAFE) * (dhi - dlo) + (4.0 * U) * c
     return c, r
 
 
@@ -303,10 +294,10 @@ def residual_mr(enc: PoseEnclosure, tau, tau_err):
     """
     Ht, eHt = enc.Ht, enc.Ht_err
     aHt = np.abs(Ht)
-    g = _gamma(Ht.shape[0] + 1)
+    g = gamma(Ht.shape[0] + 1)
     f = tau @ Ht + enc.wg
     e = np.abs(tau) @ (eHt + g * aHt) + tau_err @ (aHt + eHt) + (enc.wg_err + g * np.abs(enc.wg))
-    return f, e * SAFE + _TINY
+    return f, e * SAFE + UNDERFLOW
 
 
 def jacobian_mr(enc: PoseEnclosure, cols, dc, dr):
@@ -319,54 +310,8 @@ def jacobian_mr(enc: PoseEnclosure, cols, dc, dr):
     dc = np.asarray(dc)[..., None, :]
     dr = np.asarray(dr)[..., None, :]
     Jc = Hs * dc
-    Jr = np.abs(Hs) * dr + eHs * (np.abs(dc) + dr) + (2.0 * _U) * np.abs(Jc)
-    return Jc, Jr * SAFE + _TINY
-
-
-def krawczyk_mr(c, lo, hi, fc, fr, Jc, Jr):
-    """Batched Krawczyk existence-and-uniqueness test in midpoint-radius form.
-
-    Boxes ``X = [lo, hi]`` ``(B, n)`` with points ``c ∈ X``; ``fc ± fr`` encloses ``f(c)`` and
-    ``Jc ± Jr`` the Jacobian over ``X``.  With ``Y = (Jc)^-1`` (any matrix is sound)::
-
-        K(X) = c - Y f(c) + (I - Y J(X)) (X - c)
-
-    and ``K(X) ⊂ int X`` proves that ``X`` contains exactly one zero of ``f`` (Krawczyk 1969;
-    Neumaier 1990, Thm 5.1.8).  ``|I - Y J| <= |I - Y Jc| + |Y| Jr`` and the rounding of each
-    product is bounded by ``γ_n`` (as :func:`certsolve.solver.newton.krawczyk`).  Any NaN or
-    infinity (singular ``Jc``, undefined ``f``) makes the test fail.  Returns
-    ``(klo, khi, proven)``.
-    """
-    c = np.asarray(c, dtype=float)
-    B, n = c.shape
-    r = np.maximum(hi - c, c - lo) * (1.0 + 4.0 * _U)
-    try:
-        Y = np.linalg.inv(Jc)
-    except np.linalg.LinAlgError:
-        Y = np.full_like(Jc, np.nan)
-        for b in range(B):
-            try:
-                Y[b] = np.linalg.inv(Jc[b])
-            except np.linalg.LinAlgError:
-                pass
-    aY = np.abs(Y)
-    g = _gamma(n)
-    Mc = Y @ Jc
-    mag = np.abs(np.eye(n) - Mc) * (1.0 + 4.0 * _U) + aY @ (Jr + g * np.abs(Jc))
-    bc = (Y @ fc[:, :, None])[:, :, 0]
-    br = (aY @ (fr + g * np.abs(fc))[:, :, None])[:, :, 0]
-    v = (mag @ r[:, :, None])[:, :, 0]
-    ce = c - bc
-    rr = (SAFE * (1.0 + _gamma(n + 2))) * (br + v) + (2.0 * _U) * np.abs(ce) + _TINY
-    klo = np.nextafter(ce - rr, -np.inf)
-    khi = np.nextafter(ce + rr, np.inf)
-    proven = np.all((klo > lo) & (khi < hi), axis=1)
-    return klo, khi, proven
-
-
-def box_around(c, rad):
-    """``[c - rad, c + rad]`` rounded outward (contains ``c``)."""
-    return np.nextafter(c - rad, -np.inf), np.nextafter(c + rad, np.inf)
+    Jr = np.abs(Hs) * dr + eHs * (np.abs(dc) + dr) + (2.0 * U) * np.abs(Jc)
+    return Jc, Jr * SAFE + UNDERFLOW
 
 
 class SquareSystem:
@@ -398,28 +343,25 @@ class SquareSystem:
         self.Gt = G.T
         aG = np.abs(G)
         self.aGt = aG.T
-        self.g = g = _gamma(n)
+        self.g = g = gamma(n)
         self.DeltaT = (
-            (
-                np.abs(G @ Hs - np.eye(n)) * (1.0 + 4.0 * _U)
-                + aG @ (g * np.abs(Hs) + enc.Ht_err[S].T)
-            )
+            (np.abs(G @ Hs - np.eye(n)) * (1.0 + 4.0 * U) + aG @ (g * np.abs(Hs) + enc.Ht_err[S].T))
             * SAFE
-            + _TINY
+            + UNDERFLOW
         ).T
         aHt = np.abs(enc.Ht)
-        gm = _gamma(enc.Ht.shape[0] + 2)
+        gm = gamma(enc.Ht.shape[0] + 2)
         self._A1 = enc.Ht_err + (gm * SAFE) * aHt
         self._A2 = (aHt + enc.Ht_err) * SAFE
-        self._c0 = enc.wg_err + (gm * SAFE) * np.abs(enc.wg) + _TINY
+        self._c0 = enc.wg_err + (gm * SAFE) * np.abs(enc.wg) + UNDERFLOW
         key = S.tobytes()
         per = cs.per_free.get(key)
         if per is None:
             per = (
-                cs.K[S] * (1.0 + 4.0 * _U),
-                cs.kL0K[S] * ((1.0 + 16.0 * _U) / (1.0 - 8.0 * _U) ** 2),
-                cs.kL0K[S] * ((1.0 - 16.0 * _U) / (1.0 + 8.0 * _U) ** 2),
-                cs.kL0 * ((1.0 + 4.0 * _U) * SAFE),
+                cs.K[S] * (1.0 + 4.0 * U),
+                cs.kL0K[S] * ((1.0 + 16.0 * U) / (1.0 - 8.0 * U) ** 2),
+                cs.kL0K[S] * ((1.0 - 16.0 * U) / (1.0 + 8.0 * U) ** 2),
+                cs.kL0 * ((1.0 + 4.0 * U) * SAFE),
                 cs.k[S],
                 cs.kL0[S] / cs.K[S],
                 1.0 / cs.K[S],
@@ -428,7 +370,7 @@ class SquareSystem:
         self._Kr, self._Chi, self._Clo, self._CkL0, self._kS, self._aS, self._iKS = per
         self._WS = enc.W[S]
         self._cs = cs
-        self._kq = SAFE * (1.0 + _gamma(n + 4))
+        self._kq = SAFE * (1.0 + gamma(n + 4))
 
     def controls(self, tau_S):
         """Eq. (5) for the free wires, in floating point (a candidate, no bound)."""
@@ -439,7 +381,7 @@ class SquareSystem:
         cs, enc = self._cs, self.enc
         Ku = cs.K * u
         L = enc.W + Ku
-        eL = enc.W_err + (2.0 * _U * SAFE) * (np.abs(Ku) + np.abs(L))
+        eL = enc.W_err + (2.0 * U * SAFE) * (np.abs(Ku) + np.abs(L))
         tau = cs.k * (L - cs.L0) / L
         Llo = L - eL
         etau = self._CkL0 * eL / (Llo * L) + (2.0 * _G3 * SAFE) * np.abs(tau)
@@ -467,7 +409,7 @@ class SquareSystem:
         uc = u[:, S]
         xlo = np.nextafter(uc - rad, -np.inf)
         xhi = np.nextafter(uc + rad, np.inf)
-        r = np.maximum(xhi - uc, uc - xlo) * (1.0 + 4.0 * _U)
+        r = np.maximum(xhi - uc, uc - xlo) * (1.0 + 4.0 * U)
         # τ' = k L0 K / L² over the box: L ∈ L(u_S) ± (eL + K r)
         Ls = L[:, S]
         eLs = eL[:, S] + self._Kr * r
@@ -478,13 +420,13 @@ class SquareSystem:
         if not (lo.min() > 0.0):
             dhi = np.where(lo > 0.0, dhi, np.inf)
         dc = 0.5 * (dlo + dhi)
-        dr = (0.5 * SAFE) * (dhi - dlo) + (4.0 * _U) * dc
+        dr = (0.5 * SAFE) * (dhi - dlo) + (4.0 * U) * dc
         # K(X) = c - Y f(c) + (I - Y J)(X - c) with Y = diag(1/dc) G:
         # |Y f(c) - bc| + |(I - Y J)(X - c)| <= q / dc + rounding
         q = (fr + self.g * np.abs(fc)) @ self.aGt + dr * r + ((dc + dr) * r) @ self.DeltaT
         bc = (fc @ self.Gt) / dc
         ce = uc - bc
-        rr = self._kq * (q / dc) + (4.0 * _U * SAFE) * (np.abs(uc) + np.abs(bc)) + _TINY
+        rr = self._kq * (q / dc) + (4.0 * U * SAFE) * (np.abs(uc) + np.abs(bc)) + UNDERFLOW
         klo = np.nextafter(ce - rr, -np.inf)
         khi = np.nextafter(ce + rr, np.inf)
         proven = ((klo > xlo) & (khi < xhi)).all(axis=1)

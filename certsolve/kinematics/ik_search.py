@@ -21,10 +21,10 @@ enclosed outward), a batch of boxes per numpy call:
    follow from the square linear system in ``τ`` (one solve, the limit of Newton's method in
    the ``τ`` coordinates) and eq. 5.  A small box around that point (radius ``box_radius``,
    default 1e-6 cm) goes through the Krawczyk test on the *square* system in ``u_S`` with
-   ``u_P`` fixed (:func:`.ik_enclose.krawczyk_mr`): ``K(X) ⊂ int X`` proves that exactly one
-   solution exists in ``X``, so ``(u_P, u_S*)`` is an exact solution of the under-constrained
-   system.  It counts only if the proven enclosure lies in the strokes/window and its
-   tensions provably within the limits.
+   ``u_P`` fixed (:meth:`.ik_enclose.SquareSystem.krawczyk`): ``K(X) ⊂ int X`` proves that
+   exactly one solution exists in ``X``, so ``(u_P, u_S*)`` is an exact solution of the
+   under-constrained system.  It counts only if the proven enclosure lies in the
+   strokes/window and its tensions provably within the limits.
 3. **bisect** boxes that were neither discarded nor certified (widest side relative to the
    domain), until a solution is certified, the buffer is empty (proof that no solution exists
    in ``U``), or a limit is hit.
@@ -41,11 +41,13 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from enum import StrEnum
 
 import numpy as np
 import scipy.linalg
 
 from ..interval import arith
+from ..interval.linalg import UNDERFLOW, U, gamma, mr_matmul
 from ..robot.model import Robot
 from ..solver.buffer import BoxStack
 from ..solver.search import Limits, SearchStatus, Tally, run_search
@@ -58,19 +60,13 @@ from .ik_enclose import (
 )
 
 __all__ = [
+    "Verdict",
     "ControlSearch",
     "SearchOutcome",
     "control_point",
     "preconditioner",
     "search_controls",
 ]
-
-_U = 2.0**-53
-_TINY = 2.0**-1000
-
-
-def _gamma(n: int) -> float:
-    return n * _U / (1.0 - n * _U)
 
 
 def control_point(robot: Robot, rho, tau, idx=slice(None)):
@@ -105,11 +101,8 @@ def preconditioner(enc: PoseEnclosure) -> Preconditioner:
     P = np.zeros((w, w))
     P[:rank] = np.linalg.solve(R1[:rank, :rank], Q[:, :rank].T)
     P[rank:] = Q[:, rank:].T
-    aP = np.abs(P)
-    Mc = P @ H
-    Mr = (aP @ enc.H_err + _gamma(w) * (aP @ np.abs(H))) * SAFE + _TINY
-    bc = P @ enc.wg
-    br = (aP @ enc.wg_err + _gamma(w) * (aP @ np.abs(enc.wg))) * SAFE + _TINY
+    Mc, Mr = mr_matmul(P, None, H, enc.H_err)
+    bc, br = mr_matmul(P, None, enc.wg, enc.wg_err)
     big = np.max(np.abs(Mc), axis=1, keepdims=True)
     usable = (np.abs(Mc) > 2.0 * Mr) & (np.abs(Mc) > 1e-10 * big)
     return Preconditioner(P, basis, params, rank, Mc, Mr, bc, br, usable)
@@ -127,25 +120,25 @@ def contract(pc: Preconditioner, lo, hi, sweeps: int = 8):
     Dlo = np.nextafter(Mc - Mr, -np.inf)[None]
     Dhi = np.nextafter(Mc + Mr, np.inf)[None]
     use = pc.usable[None]
-    gm = _gamma(m)
-    gm1 = _gamma(m + 1)
+    gm = gamma(m)
+    gm1 = gamma(m + 1)
     empty = np.zeros(lo.shape[0], dtype=bool)
     for _ in range(sweeps):
         Tc = 0.5 * lo + 0.5 * hi
-        Tr = np.maximum(hi - Tc, Tc - lo) * (1.0 + 4.0 * _U)
+        Tr = np.maximum(hi - Tc, Tc - lo) * (1.0 + 4.0 * U)
         aTc = np.abs(Tc)
         Pc = Mc[None] * Tc[:, None, :]  # (B, w, m)
         aPc = np.abs(Pc)
-        Pr = aMc[None] * Tr[:, None, :] + Mr[None] * (aTc + Tr)[:, None, :] + _U * aPc
+        Pr = aMc[None] * Tr[:, None, :] + Mr[None] * (aTc + Tr)[:, None, :] + U * aPc
         # full rows must contain 0
         Fc = Pc.sum(axis=2) + bc
-        Fr = (Pr.sum(axis=2) + br + gm1 * (aPc.sum(axis=2) + np.abs(bc))) * SAFE + _TINY
+        Fr = (Pr.sum(axis=2) + br + gm1 * (aPc.sum(axis=2) + np.abs(bc))) * SAFE + UNDERFLOW
         empty |= np.any(np.abs(Fc) > Fr, axis=1)
         # rows without variable j
         Sc = Pc @ mask  # (B, w, m)
         Sr = (Pr @ mask + gm * (aPc @ mask)) * SAFE
         Nc = -(bc[None, :, None] + Sc)
-        Nr = (br[None, :, None] + Sr + 2.0 * _U * np.abs(Nc)) * SAFE + _TINY
+        Nr = (br[None, :, None] + Sr + 2.0 * U * np.abs(Nc)) * SAFE + UNDERFLOW
         Nlo = np.nextafter(Nc - Nr, -np.inf)
         Nhi = np.nextafter(Nc + Nr, np.inf)
         qlo, qhi = arith.div(Nlo, Nhi, Dlo, Dhi)
@@ -160,6 +153,15 @@ def contract(pc: Preconditioner, lo, hi, sweeps: int = 8):
         if not np.any(w1 < 0.9 * w0):
             break
     return lo, hi, empty
+
+
+class Verdict(StrEnum):
+    """What Algorithm 1 established (:attr:`SearchOutcome.verdict`)."""
+
+    CERTIFIED = "certified"  # a solution, proven
+    INFEASIBLE = "infeasible"  # proven: no solution in the box
+    UNDECIDED = "undecided"  # searched completely; only boxes narrower than eps remain
+    UNKNOWN = "unknown"  # a limit stopped the search first
 
 
 @dataclass(kw_only=True)
@@ -180,15 +182,15 @@ class SearchOutcome:
     time: float = 0.0
 
     @property
-    def verdict(self) -> str:
+    def verdict(self) -> Verdict:
         """``certified``; ``infeasible`` (proven: no solution in the box); ``undecided``
         (searched completely, only boxes narrower than eps remain); or ``unknown`` (a
         limit stopped the search first)."""
         if self.u is not None:
-            return "certified"
+            return Verdict.CERTIFIED
         if self.status != SearchStatus.COMPLETE:
-            return "unknown"
-        return "undecided" if self.undecided else "infeasible"
+            return Verdict.UNKNOWN
+        return Verdict.UNDECIDED if self.undecided else Verdict.INFEASIBLE
 
 
 def _certify(robot, enc, pc, sq, lo, hi, ulo, uhi, box_radius):

@@ -24,7 +24,7 @@ Each point gets a status:
     control vector with this ``u_J`` exists, unique in the certificate's box;
 ``infeasible``
     a tension or a control of the (floating-point) solution is outside its limits by more
-    than :data:`~.ik.LIMIT_TOL`, or no control can produce the tension a wire needs
+    than :data:`~.ik_result.LIMIT_TOL`, or no control can produce the tension a wire needs
     (``τ ≥ k``); ``reason`` names the wire, the value and the limit;
 ``uncertified``
     Newton did not converge, the Krawczyk test failed, or a limit is met within rounding so
@@ -47,12 +47,22 @@ import numpy as np
 
 from ..robot.geometry import Pose
 from ..robot.model import Robot
-from .ik import Violation, _as_pose, _as_robot, _fl, _fl_list, ik_algorithm2
+from .ik_alg2 import ik_algorithm2
 from .ik_enclose import enclose_pose, tension_range
+from .ik_inputs import as_pose, as_robot
+from .ik_result import Violation, json_float, json_floats
 
 __all__ = ["PointStatus", "SweepPoint", "SweepProgress", "IKSweepResult", "ik_sweep"]
 
 MAX_POINTS = 100_000
+
+
+class SweepStatus(StrEnum):
+    """How a sweep ended (:class:`IKSweepResult`)."""
+
+    COMPLETE = "complete"
+    TIMEOUT = "timeout"
+    STOPPED = "stopped"
 
 
 class PointStatus(StrEnum):
@@ -80,17 +90,21 @@ class SweepPoint:
 
     def to_dict(self) -> dict:
         def box(b):
-            return None if b is None else [[_fl(a), _fl(c)] for a, c in zip(*b, strict=True)]
+            return (
+                None
+                if b is None
+                else [[json_float(a), json_float(c)] for a, c in zip(*b, strict=True)]
+            )
 
         return {
             "value": float(self.value),
-            "u": _fl_list(self.u),
-            "tau": _fl_list(self.tau),
+            "u": json_floats(self.u),
+            "tau": json_floats(self.tau),
             "status": str(self.status),
             "reason": self.reason,
             "enclosure": box(self.enclosure),
             "tension_bounds": box(self.tension_bounds),
-            "predicted": _fl_list(self.predicted),
+            "predicted": json_floats(self.predicted),
             "iterations": int(self.iterations),
             "violations": [v.to_dict() for v in self.violations],
         }
@@ -123,7 +137,7 @@ class IKSweepResult:
     stop: float
     count: int
     points: list[SweepPoint]
-    status: str  # complete | timeout | stopped
+    status: SweepStatus
     time: float  # seconds
 
     @property
@@ -163,7 +177,7 @@ class IKSweepResult:
             "start": float(self.start),
             "stop": float(self.stop),
             "count": int(self.count),
-            "status": self.status,
+            "status": str(self.status),
             "counts": self.counts,
             "points": [p.to_dict() for p in self.points],
             "time": float(self.time),
@@ -221,8 +235,8 @@ def ik_sweep(
     point with a :class:`SweepProgress`; returning ``False`` stops the sweep.
     """
     t0 = time.perf_counter()
-    robot = _as_robot(robot)
-    pose = _as_pose(robot, pose)
+    robot = as_robot(robot)
+    pose = as_pose(robot, pose)
     robot.require_elastic("an IK sweep")
     w = robot.wrench_dim
     if robot.m != w + 1:
@@ -254,10 +268,10 @@ def ik_sweep(
     values = np.linspace(float(start), float(stop), int(count))
     points: list[SweepPoint] = []
     done: list[tuple[float, np.ndarray]] = []  # (value, u) of the solved points
-    status = "complete"
+    status = SweepStatus.COMPLETE
     for value in values.tolist():
         if timeout is not None and time.perf_counter() - t0 > timeout:
-            status = "timeout"
+            status = SweepStatus.TIMEOUT
             break
         pred = _predict(done, value)
         guess = pred if pred is not None else u_start
@@ -275,7 +289,7 @@ def ik_sweep(
                 elapsed=time.perf_counter() - t0,
             )
             if progress(info) is False:
-                status = "stopped" if len(points) < count else "complete"
+                status = SweepStatus.STOPPED if len(points) < count else SweepStatus.COMPLETE
                 break
     return IKSweepResult(
         robot=robot.name,

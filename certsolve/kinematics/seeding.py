@@ -104,10 +104,10 @@ def seeded_forward_kinematics(
     fk = FKSolver(robot, formulation, eps=eps)
     if fk.form.kind not in ("points", "frame") or fk.form.n_points != 3:
         raise ValueError("planar seeding needs a 3-point formulation (almost-planar-13)")
-    u, ok = fk._prepare(u)
+    u, dom, ok = fk._prepare(u)
     if not ok:  # nothing to search: the plain solver says so
         return fk.solve(u)
-    dom = fk.csys.system.domain
+    step = fk.solver.on_domain(dom)  # the search box for u (the system's stays as built)
     k, d = 3, 3
     z_plane = float(robot.A[0, 2])
     seeds_lo, seeds_hi = [], []
@@ -135,7 +135,7 @@ def seeded_forward_kinematics(
         return Limits(timeout=left, max_boxes=max_boxes, max_solutions=max_solutions)
 
     run = run_search(
-        fk.solver,
+        step,
         np.array(seeds_lo).reshape(-1, n),
         np.array(seeds_hi).reshape(-1, n),
         limits=limits(),
@@ -149,7 +149,7 @@ def seeded_forward_kinematics(
     searched_rest = not seeded_only and run.status == SearchStatus.COMPLETE
     if searched_rest:
         run = run_search(
-            fk.solver,
+            step,
             rest_lo,
             rest_hi,
             limits=limits(),
@@ -164,7 +164,7 @@ def seeded_forward_kinematics(
         if not len(run.state.stack):
             status = SearchStatus.COMPLETE
         run = SearchRun(status=status, state=run.state, stats=run.stats)
-    res = fk.solver.result(run)
+    res = step.result(run)
     if verify:
         from ..solver.verify import verify_solutions  # mpmath: imported when asked
 

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -112,6 +114,29 @@ class Robot:
     def wrench_dim(self) -> int:
         """Rows of the wrench matrix: 6 (dof 6), 3 (dof 3), 2 (dof 2)."""
         return {6: 6, 3: 3, 2: 2}[self.dof]
+
+    @functools.cached_property
+    def derived(self) -> dict[str, Any]:
+        """Data that higher layers compute from this robot and keep with it, keyed by the
+        computing module's name (e.g. the IK's rounding-error constants,
+        :mod:`certsolve.kinematics.ik_enclose`).  The robot does not change, so they never
+        go stale; a modified copy (``dataclasses.replace``) starts empty."""
+        return {}
+
+    @functools.cached_property
+    def wire_splits(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+        """For each wire ``j`` (0-based): ``([j], the other wires)`` as read-only index arrays.
+
+        Computed once per robot object (IK Algorithm 2 fixes one wire at every call).
+        """
+        out = []
+        for j in range(self.m):
+            fixed = np.array([j])
+            free = np.array([i for i in range(self.m) if i != j])
+            fixed.flags.writeable = False
+            free.flags.writeable = False
+            out.append((fixed, free))
+        return tuple(out)
 
     @property
     def weight(self) -> np.ndarray:

@@ -26,6 +26,7 @@ pickle, so batches can run on worker processes or a Dask cluster (:mod:`.executo
 
 from __future__ import annotations
 
+import copy
 import pickle
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -113,6 +114,8 @@ class Solver:
         self.max_pending = int(max_pending)
         self.csys = system if isinstance(system, CompiledSystem) else CompiledSystem(system)
         self.system = self.csys.system
+        #: the box searched by :meth:`solve` (the system's; see :meth:`on_domain`)
+        self.domain = self.system.domain
         self.n = self.csys.n
         self.eps = float(eps)
         self.batch_size = int(batch_size)
@@ -151,8 +154,12 @@ class Solver:
         boxes: tuple[np.ndarray, np.ndarray] | None = None,
         workers: int | None = None,
         checkpoint: Checkpoint | None = None,
+        domain: np.ndarray | None = None,
     ) -> SolveResult:
         """Run the search over the whole domain, or over ``boxes`` ``(lo, hi)`` if given.
+
+        ``domain`` ``(n, 2)`` replaces the system's domain for this search only (solutions
+        touching its boundary are reported as ``boundary``; :meth:`on_domain`).
 
         ``executor``: where batches run (``None``: here; a number of local processes,
         ``"auto"``, a ``distributed.Client`` ... see :func:`.executors.resolve_executor`);
@@ -163,8 +170,21 @@ class Solver:
         ``checkpoint`` (:class:`.checkpoint.Checkpoint`): save the search as it goes and
         resume it from the last save (limits apply to each run).
         """
+        if domain is not None:
+            return self.on_domain(domain).solve(
+                timeout=timeout,
+                max_boxes=max_boxes,
+                progress=progress,
+                executor=executor,
+                verify=verify,
+                max_solutions=max_solutions,
+                cancel=cancel,
+                boxes=boxes,
+                workers=workers,
+                checkpoint=checkpoint,
+            )
         if boxes is None:
-            dom = self.system.domain
+            dom = self.domain
             boxes = (dom[:, 0][None].copy(), dom[:, 1][None].copy())
         run = run_search(
             self,
@@ -182,6 +202,21 @@ class Solver:
             verify_solutions(self.csys, result.solutions)
         return result
 
+    def on_domain(self, domain) -> Solver:
+        """This solver searching ``domain`` ``(n, 2)`` instead of the system's.
+
+        A shallow copy (the compiled system and the contractors are shared, nothing of this
+        solver or its system changes); it is also the step that travels to the workers.
+        """
+        dom = np.asarray(domain, dtype=np.float64)
+        if dom.shape != (self.n, 2):
+            raise ValueError(f"domain must have shape ({self.n}, 2), got {dom.shape}")
+        step = copy.copy(self)
+        step.domain = dom
+        step.certifier = copy.copy(self.certifier)
+        step.certifier.domain = dom
+        return step
+
     # -- the step of the search driver ------------------------------------------------------
     def fingerprint(self) -> str:
         """The problem and the settings that shape the answer, as text (for checkpoints,
@@ -191,7 +226,7 @@ class Solver:
         mask = None if self.bisect_mask is None else self.bisect_mask.tolist()
         parts = [
             "variables: " + ",".join(sysm.variables),
-            "domain: " + repr(sysm.domain.tolist()),
+            "domain: " + repr(self.domain.tolist()),
             *(f"eq: {to_string(e)}" for e in sysm.equations),
             *(
                 f"constraint: {to_string(k.expr)} in [{k.lo!r}, {k.hi!r}] {k.redundant}"
@@ -315,8 +350,8 @@ class Solver:
         if self.bisect_mask is not None:
             wid = wid[:, self.bisect_mask]
         small = all_last(wid <= self.eps)
-        for k in np.flatnonzero(small):
-            state.undecided.append(Undecided(lo2[k].copy(), hi2[k].copy(), "eps"))
+        for i in np.flatnonzero(small):
+            state.undecided.append(Undecided(lo2[i].copy(), hi2[i].copy(), "eps"))
         big = ~small
         if np.any(big):
             lo3, hi3 = lo2[big], hi2[big]
@@ -342,8 +377,8 @@ class Solver:
             [state.solutions.find(elo[k], ehi[k], ulo[k], uhi[k]) < 0 for k in range(len(elo))],
             dtype=bool,
         )
-        for k in np.flatnonzero(~new):  # known solution: keep its unicity box for pruning
-            state.solutions.add(elo[k], ehi[k], ulo[k], uhi[k], "alias")
+        for j in np.flatnonzero(~new):  # known solution: keep its unicity box for pruning
+            state.solutions.add(elo[j], ehi[j], ulo[j], uhi[j], "alias")
             state.stats.duplicates += 1
         if not np.any(new):
             return
@@ -364,7 +399,7 @@ class Solver:
         sols = [Solution(e0, e1, u0, u1) for e0, e1, u0, u1 in state.solutions.items("ok")]
         sols.sort(key=lambda s: tuple(s.midpoint))
         und = [(u.lo, u.hi, u.reason) for u in state.undecided]
-        dlo, dhi = self.system.domain[:, 0], self.system.domain[:, 1]
+        dlo, dhi = self.domain[:, 0], self.domain[:, 1]
         for e0, e1, _, _ in state.solutions.items("boundary"):
             und.append((np.maximum(e0, dlo), np.minimum(e1, dhi), "boundary"))
         for e0, e1, _, _ in state.solutions.items("constraint"):

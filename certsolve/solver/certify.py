@@ -157,6 +157,9 @@ class Certifier:
         tighten_steps: int = 4,
     ):
         self.csys = csys
+        #: the search domain (solutions touching its boundary are ``boundary``); a search
+        #: on another domain uses a copy with its own (:meth:`.Solver.on_domain`)
+        self.domain = csys.system.domain
         self.newton_iterations = newton_iterations
         self.scales = scales
         self.tighten_steps = tighten_steps
@@ -259,7 +262,7 @@ class Certifier:
         if S == 0:
             return ulo, uhi
         mid = 0.5 * elo + 0.5 * ehi
-        dom = self.csys.system.domain
+        dom = self.domain
         dw = dom[:, 1] - dom[:, 0]
         scale = np.where(np.isfinite(dw), dw, 1.0 + np.abs(mid))  # (S, n)
         urad = 0.5 * (uhi - ulo)
@@ -318,8 +321,7 @@ class Certifier:
     def classify(self, elo, ehi) -> list[str]:
         """``ok`` / ``boundary`` / ``constraint`` / ``rejected`` for proven existence boxes."""
         B = elo.shape[0]
-        dom = self.csys.system.domain  # read now: a compiled system may be re-used
-        dlo, dhi = dom[:, 0], dom[:, 1]
+        dlo, dhi = self.domain[:, 0], self.domain[:, 1]
         inside = np.all((elo >= dlo) & (ehi <= dhi), axis=1)
         outside = np.any((ehi < dlo) | (elo > dhi), axis=1)
         kinds = np.where(inside, "ok", np.where(outside, "rejected", "boundary")).astype(object)

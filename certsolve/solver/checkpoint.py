@@ -200,9 +200,9 @@ def decode(data: Any, arrays: list[np.ndarray]) -> Any:
         return list(zip(*cols, strict=True)) if cols else []
     if "$ld" in data:
         cls = _class_of(data["$ld"])
-        cols = {k: decode(v, arrays) for k, v in data["f"].items()}
-        rows = zip(*cols.values(), strict=True)
-        return [cls(**dict(zip(cols, row, strict=True))) for row in rows]
+        fields = {k: decode(v, arrays) for k, v in data["f"].items()}
+        rows = zip(*fields.values(), strict=True)
+        return [cls(**dict(zip(fields, row, strict=True))) for row in rows]
     raise CheckpointError("checkpoint: unreadable records")
 
 
@@ -381,7 +381,8 @@ def pack(fingerprint: str | None, what: str, records: Any) -> bytes:
     }
     buf = io.BytesIO()
     text = np.frombuffer(json.dumps(meta).encode(), dtype=np.uint8)
-    np.savez(buf, meta=text, **{f"a{i}": a for i, a in enumerate(arrays)})
+    named: dict[str, Any] = {f"a{i}": a for i, a in enumerate(arrays)}
+    np.savez(buf, meta=text, **named)
     return buf.getvalue()
 
 

@@ -22,8 +22,8 @@ import os
 import time
 from typing import Any
 
-from .executors import TaskExecutor, TaskPool
 from .search import Step, run_task
+from .workers import TaskExecutor, TaskPool
 
 __all__ = ["DaskExecutor", "import_distributed", "lost_errors"]
 
@@ -153,6 +153,7 @@ class DaskExecutor(TaskExecutor):
     ):
         super().__init__(warmup=warmup, **options)
         import_distributed()
+        self.address: str | None
         if isinstance(cluster, str):
             self.address, self.client = cluster, None
         else:

@@ -33,7 +33,15 @@ import numpy as np
 from ..expr.compiled import CompiledSystem
 from ..interval import arith
 from ..interval.core import midpoint
-from ..interval.linalg import gamma, mr_from_bounds, mr_matmul
+from ..interval.linalg import (
+    U,
+    batched_inverse,
+    gamma,
+    krawczyk_image,
+    krawczyk_magnitude,
+    mr_from_bounds,
+    precondition,
+)
 from ..interval.reductions import all_last
 from ..interval.rounding import down, up
 
@@ -42,40 +50,11 @@ __all__ = [
     "linearize",
     "linearization_from_bounds",
     "krawczyk",
-    "krawczyk_box",
     "KrawczykPoint",
     "hansen_sengupta",
     "batched_inverse",
     "batched_solve",
 ]
-
-_U = 2.0**-53
-
-
-def batched_inverse(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Approximate inverses of a stack of matrices and a mask of usable ones.
-
-    Singular or non-finite matrices get a NaN inverse and ``ok = False``; the caller skips
-    Newton for those boxes (no preconditioner, no contraction: sound).
-    """
-    finite = np.all(np.isfinite(A), axis=(1, 2))
-    Y = np.full_like(A, np.nan)
-    if not np.any(finite):
-        return Y, finite
-    Af = A[finite]
-    try:
-        with np.errstate(all="ignore"):
-            Yf = np.linalg.inv(Af)
-    except np.linalg.LinAlgError:
-        Yf = np.full_like(Af, np.nan)
-        for k in range(Af.shape[0]):  # rare: some exactly singular matrix in the batch
-            try:
-                Yf[k] = np.linalg.inv(Af[k])
-            except np.linalg.LinAlgError:
-                pass
-    Y[finite] = Yf
-    ok = np.all(np.isfinite(Y), axis=(1, 2))
-    return Y, ok
 
 
 def batched_solve(A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -138,107 +117,52 @@ def linearization_from_bounds(lo, hi, c, flo, fhi, jlo, jhi, defined=None) -> Li
     if defined is None:
         defined = np.ones(lo.shape[0], dtype=bool)
     Jc, Jr = mr_from_bounds(jlo, jhi)
-    Y, ok = batched_inverse(Jc)
-    ok &= defined & all_last(np.isfinite(flo) & np.isfinite(fhi))
-    Ys = np.where(ok[:, None, None], Y, 0.0)
-    with np.errstate(all="ignore"):
-        Mc, Mr = mr_matmul(Ys, None, Jc, Jr)
-        fc, fr = mr_from_bounds(flo, fhi)
-        bc, br = mr_matmul(Ys, None, fc[:, :, None], fr[:, :, None])
-    ok &= np.all(np.isfinite(Mr), axis=(1, 2)) & all_last(np.isfinite(br[:, :, 0]))
-    return Linearization(lo, hi, c, jlo, jhi, Y, ok, Mc, Mr, bc[:, :, 0], br[:, :, 0])
+    fc, fr = mr_from_bounds(flo, fhi)
+    pre = precondition(Jc, Jr, fc, fr)
+    ok = pre.ok & defined
+    return Linearization(lo, hi, c, jlo, jhi, pre.Y, ok, pre.Mc, pre.Mr, pre.bc, pre.br)
 
 
 def krawczyk(lin: Linearization) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Krawczyk operator ``K(X)`` for every box, and the mask ``K(X) ⊂ int X``.
 
-    ``(I - M)(X - c) ⊆ [-v, v]`` with ``v = |I - M| rad(X)``, where ``|I - M|`` is bounded
-    entrywise by ``|I - Mc| + Mr`` (the diagonal ``1 - Mc_ii`` is rounded, hence the
-    ``(1 + 4u)`` factor).  Returns ``(klo, khi, proven)``.
+    The kernel is :func:`certsolve.interval.linalg.krawczyk_image` (``(I - M)(X - c) ⊆
+    [-v, v]`` with ``v = (|I - Mc| + Mr) rad(X)``).  Returns ``(klo, khi, proven)``; boxes
+    whose linearisation is unusable are never proven.
     """
-    n = lin.c.shape[1]
-    with np.errstate(all="ignore"):
-        eye = np.eye(n)
-        mag = up(up(np.abs(eye - lin.Mc) * (1.0 + 4 * _U)) + lin.Mr)
-        rad = np.maximum(up(lin.hi - lin.c), up(lin.c - lin.lo))
-        v = np.einsum("bij,bj->bi", mag, rad)
-        v = up(v * (1.0 + 2.0 * gamma(n + 2)) + (n + 2) * 2.0**-1000)
-        centre = lin.c - lin.bc
-        rr = up(lin.br + v)
-        klo = down(down(centre) - rr)
-        khi = up(up(centre) + rr)
-    proven = lin.ok & all_last((klo > lin.lo) & (khi < lin.hi))
-    return klo, khi, proven
-
-
-def krawczyk_box(lo, hi, flo, fhi, jlo, jhi, c=None):
-    """Krawczyk test from raw enclosures: ``(klo, khi, proven)`` for a batch of boxes.
-
-    ``proven[k]`` means box ``k`` contains exactly one zero of ``f``, inside ``K(X)``.  Used by
-    callers that evaluate ``f`` and ``J`` with their own interval code (IK, tracking).
-    """
-    if c is None:
-        c = midpoint(lo, hi)
-    return krawczyk(linearization_from_bounds(lo, hi, c, flo, fhi, jlo, jhi))
+    mag = krawczyk_magnitude(lin.Mc, lin.Mr)
+    klo, khi, proven = krawczyk_image(lin.c, lin.lo, lin.hi, mag, lin.bc, lin.br)
+    return klo, khi, proven & lin.ok
 
 
 class KrawczykPoint:
     """Krawczyk tests for one centre ``c``, one ``f(c)`` and one Jacobian enclosure ``J``.
 
     ``K(X) = c - Y f(c) + (I - Y J)(X - c)``, with ``Y = mid(J)^-1``: ``Y``, ``Y f(c)`` and
-    ``|I - Y J|`` are computed once (with the same a priori rounding bounds as
-    :func:`krawczyk`), then :meth:`image` costs one matrix-vector product per box ``X``.
-    Valid for every box ``X`` such that ``J`` encloses the Jacobian over the hull of ``X``
-    and ``c``; ``X - c`` is enclosed by ``[-r, r]``, ``r`` the distance from ``c`` to the
-    farthest face, so ``c`` need not be the midpoint.  For real-time callers (tracking):
-    1-D / 2-D arrays, few numpy calls.
+    ``|I - Y J|`` are computed once (:func:`certsolve.interval.linalg.precondition`), then
+    :meth:`image` costs one matrix-vector product per box ``X``
+    (:func:`certsolve.interval.linalg.krawczyk_image`).  Valid for every box ``X`` such
+    that ``J`` encloses the Jacobian over the hull of ``X`` and ``c``; ``c`` need not be the
+    midpoint.  For real-time callers (tracking): 1-D / 2-D arrays.
     """
 
     def __init__(self, c, flo, fhi, jlo, jhi):
-        n = c.shape[0]
         self.c = c
-        self.ok = False
-        Jc = 0.5 * jlo + 0.5 * jhi
-        Jr = np.maximum(up(jhi - Jc), up(Jc - jlo))
-        try:
-            Y = np.linalg.inv(Jc)
-        except np.linalg.LinAlgError:
-            return
-        if not (
-            np.all(np.isfinite(Y))
-            and np.all(np.isfinite(Jr))
-            and np.all(np.isfinite(flo))
-            and np.all(np.isfinite(fhi))
-        ):
-            return
-        g = gamma(n + 4)
-        aY = np.abs(Y)
-        # M = Y J: midpoint Mc and radius Mr (a priori rounding bound of Y @ Jc included)
-        Mc = Y @ Jc
-        Mr = (aY @ (gamma(n) * np.abs(Jc) + Jr)) * (1.0 + 2.0 * g) + (n + 2) * 2.0**-1000
-        # b = Y f(c)
-        fc = 0.5 * flo + 0.5 * fhi
-        fr = np.maximum(up(fhi - fc), up(fc - flo))
-        bc = Y @ fc
-        br = (aY @ (gamma(n) * np.abs(fc) + fr)) * (1.0 + 2.0 * g) + (n + 2) * 2.0**-1000
-        self.mag = np.abs(np.eye(n) - Mc) * (1.0 + 4 * _U) + Mr
-        self.centre = c - bc
-        self.br = br
-        self.g2 = 1.0 + 2.0 * gamma(n + 2)
-        self.tiny = (n + 2) * 2.0**-1000
-        self.ok = True
+        Jc, Jr = mr_from_bounds(jlo, jhi)
+        fc, fr = mr_from_bounds(flo, fhi)
+        pre = precondition(Jc[None], Jr[None], fc[None], fr[None])
+        self.ok = bool(pre.ok[0])
+        if self.ok:
+            self.mag = krawczyk_magnitude(pre.Mc[0], pre.Mr[0])
+            self.bc = pre.bc[0]
+            self.br = pre.br[0]
 
     def image(self, lo, hi):
         """``(klo, khi, proven)``: ``K(X)`` and whether ``K(X) ⊂ int X``."""
         if not self.ok:
             return lo, hi, False
-        c = self.c
-        rad = np.maximum(up(hi - c), up(c - lo))
-        v = (self.mag @ rad) * self.g2 + self.tiny
-        rr = (self.br + v) * (1.0 + 4 * _U)
-        klo = down(down(self.centre) - rr)
-        khi = up(up(self.centre) + rr)
-        return klo, khi, bool(np.all((klo > lo) & (khi < hi)))
+        klo, khi, proven = krawczyk_image(self.c, lo, hi, self.mag, self.bc, self.br)
+        return klo, khi, bool(proven)
 
 
 def hansen_sengupta(lin: Linearization) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -276,7 +200,7 @@ def hansen_sengupta(lin: Linearization) -> tuple[np.ndarray, np.ndarray, np.ndar
             sr = sr * g + n * 2.0**-1000
             # numerator b_i + S
             tc = lin.bc[:, i] + sc
-            tr = up(up(lin.br[:, i] + sr) + np.abs(tc) * (2 * _U))
+            tr = up(up(lin.br[:, i] + sr) + np.abs(tc) * (2 * U))
             tlo = down(tc - tr)
             thi = up(tc + tr)
             plo = down(piv_c - piv_r)

@@ -144,7 +144,7 @@ class SolveResult:
 
     @property
     def pending(self) -> list[list[list[float]]]:
-        if self.pending_lo is None:
+        if self.pending_lo is None or self.pending_hi is None:
             return []
         return [_box_list(a, b) for a, b in zip(self.pending_lo, self.pending_hi, strict=True)]
 

@@ -435,6 +435,7 @@ def run_search(
     else:
         state, stats = previous.state, previous.stats
     if lo is not None and resumed is None:
+        assert hi is not None, "boxes: lo and hi together"
         state.stack.push(np.atleast_2d(lo), np.atleast_2d(hi))
     search = Search(
         step, state, limits, progress=progress, cancel=cancel, stats=stats, checkpoint=checkpoint

@@ -11,6 +11,8 @@ is confirmed inside the unicity box.
 
 from __future__ import annotations
 
+from typing import Any
+
 import mpmath
 
 from ..expr.compiled import CompiledSystem
@@ -80,7 +82,7 @@ def iv_eval(csys: CompiledSystem, nodes: list[int], lo, hi, ctx):
             val[v] = _ivl(ctx, p[0], p[1])
             continue
         a = val[args[0]]
-        b = val[args[1]] if len(args) == 2 else None
+        b: Any = val[args[1]] if len(args) == 2 else None  # mpmath interval (binary ops)
         if op == "add":
             r = a + b
         elif op == "sub":

@@ -46,6 +46,7 @@ class _Function:
 def _literal(tok: Token):
     """An exact ``Fraction`` (or, below the float range, the interval ``[0, 2^-1074]``)."""
     m = _LITERAL.match(tok.text)
+    assert m is not None  # the lexer only makes NUM tokens of this form
     whole, frac, exp = m.group(1), m.group(2), int(m.group(3) or 0)
     digits = (whole + frac).lstrip("0")
     if len(digits) > _MAX_DIGITS:
@@ -324,7 +325,7 @@ class _Parser:
             if isinstance(holder, Tensor):
                 if not isinstance(arg, Tensor) or len(arg.items) != len(holder.items):
                     fail(f"argument {pname!r} of {name} must be of shape {list(shape)}", at)
-                pairs = zip(holder.items, arg.items)
+                pairs = list(zip(holder.items, arg.items, strict=True))
             else:
                 if isinstance(arg, Tensor):
                     fail(f"argument {pname!r} of {name} must be a number, not {arg.describe()}", at)

@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import NoReturn
 
 import numpy as np
 
@@ -55,7 +56,7 @@ _MAX_BITS = 4096  # exact rationals larger than this become intervals
 _MAX = float(np.finfo(np.float64).max)
 
 
-def fail(message: str, at: Token):
+def fail(message: str, at: Token) -> NoReturn:
     raise MinibexError(message, at.line, at.col)
 
 
@@ -139,7 +140,7 @@ def _undefined(op: str, args, at: Token):
 def make(op: str, args: tuple, at: Token, param=None) -> Expr:
     """``Expr(op, args)``, evaluated at once when every argument is a constant."""
     if all(a.op == "const" for a in args):
-        vals = [np.float64(v) for a in args for v in a.param]
+        vals: list[np.float64 | None] = [np.float64(v) for a in args for v in a.param]
         if len(vals) == 2:
             vals += [None, None]
         with np.errstate(all="ignore"):

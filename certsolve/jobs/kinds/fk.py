@@ -50,11 +50,11 @@ __all__ = [
 
 
 # = certsolve.kinematics.fk_systems.FORMULATIONS (tested), by the dof they are written for
-FORMULATIONS = ("auto", "frame", "reduced", "pose")
+FORMULATIONS = ("auto", "frame", "pose")
 PLANAR_FORMULATIONS = ("planar-10",)
 SPATIAL_FORMULATIONS = ("general-19", "T-16", "almost-planar-13", "points")
 Formulation = Literal[
-    "auto", "frame", "reduced", "pose", "planar-10", "general-19", "T-16", "almost-planar-13",
+    "auto", "frame", "pose", "planar-10", "general-19", "T-16", "almost-planar-13",
     "points",
 ]  # fmt: skip
 

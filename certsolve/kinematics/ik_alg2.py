@@ -1,0 +1,324 @@
+"""Algorithm 2 of Merlet (2007): fix wire(s), solve the square system, certify it.
+
+Fix the control of ``m - w`` wires (default wire 1) from a mid-range tension (eq. 5), solve
+the square system ``H_S τ_S(u_S) + c = 0`` in the other controls (Newton in the ``τ``
+coordinates: one linear solve; or classical Newton in ``u`` with ``solve="newton"``), then
+prove with the Krawczyk test (:meth:`.ik_enclose.SquareSystem.krawczyk`) that a small box
+around the point holds exactly one solution.  Tension and stroke violations of the result
+are reported.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from ..robot.geometry import Pose
+from ..robot.model import Robot
+from .ik_enclose import PoseEnclosure, SquareSystem, enclose_pose, is_elastic
+from .ik_inputs import check_pose, controls, overdetermined_note, require_elastic, search_window
+from .ik_result import (
+    LIMIT_TOL,
+    IKResult,
+    IKStatus,
+    Violation,
+    limit_violations,
+    unique_in_box,
+    window_violations,
+)
+from .ik_search import control_point
+from .ik_tension import distribute_tensions
+
+__all__ = ["Alg2Options", "ik_algorithm2"]
+
+
+@dataclass(kw_only=True, frozen=True)
+class Alg2Options:
+    """The options of :func:`ik_algorithm2` (documented there), checked."""
+
+    fixed_wire: int | Sequence[int] = 1
+    tau_fixed: float | Sequence[float] | None = None
+    u_fixed: float | Sequence[float] | None = None
+    solve: str = "tau"
+    u_last: np.ndarray | None = None
+    window: float | None = None
+    box_radius: float = 1e-4
+    certify: bool = True
+
+
+def ik_algorithm2(
+    robot: Robot,
+    pose: Pose,
+    *,
+    fixed_wire: int | Sequence[int] = 1,
+    tau_fixed: float | Sequence[float] | None = None,
+    u_fixed: float | Sequence[float] | None = None,
+    solve: str = "tau",
+    u_last=None,
+    window: float | None = None,
+    box_radius: float = 1e-4,
+    certify: bool = True,
+) -> IKResult:
+    """Algorithm 2: fix wire(s), solve the square system, certify (module docstring).
+
+    ``fixed_wire``: 1-based wire(s) whose control is fixed (``m - w`` are needed; missing ones
+    are chosen by pivoted QR).  Their control comes from ``u_fixed`` if given, else from eq. 5
+    with ``tau_fixed`` (default: the middle of the wire's tension range).  ``solve="tau"``
+    solves in the tension coordinates (exact, one linear solve); ``"newton"`` runs Newton in
+    ``u`` from ``u_last`` (or the middle of the strokes).  ``window`` (cm, full width) with
+    ``u_last``: controls outside ``u_last ± window/2`` are reported.  ``box_radius`` (cm,
+    relative to ``1 + |u|``): half-width of the box proven to hold exactly one solution; a
+    second, 1e-10-wide box proven at the same time gives the tight enclosure.
+    """
+    t0 = time.perf_counter()
+    if not is_elastic(robot):
+        require_elastic(robot, "alg2")
+    if solve not in ("tau", "newton"):
+        raise ValueError(f"solve {solve!r}: expected tau or newton")
+    if not box_radius > 0:
+        raise ValueError("box_radius must be positive")
+    if u_last is not None:
+        _, _, u_last = search_window(robot, u_last, window)
+    opts = Alg2Options(
+        fixed_wire=fixed_wire,
+        tau_fixed=tau_fixed,
+        u_fixed=u_fixed,
+        solve=solve,
+        u_last=u_last,
+        window=window,
+        box_radius=box_radius,
+        certify=certify,
+    )
+    with np.errstate(all="ignore"):
+        return _alg2(robot, pose, opts, t0)
+
+
+def _fixed_wires(H, fixed_wire, count: int) -> list[int]:
+    """``count`` 0-based wires to fix: the requested ones, completed by pivoted QR."""
+    m = H.shape[1]
+    if fixed_wire is None:
+        given = [0]
+    elif isinstance(fixed_wire, (int, np.integer)):
+        given = [int(fixed_wire) - 1]
+    else:
+        given = [int(j) - 1 for j in fixed_wire]
+    for j in given:
+        if not 0 <= j < m:
+            raise ValueError(f"fixed wire {j + 1}: the robot has wires 1..{m}")
+    if len(set(given)) != len(given):
+        raise ValueError("fixed wires must be distinct")
+    if count <= 0:
+        return []
+    if len(given) > count:
+        raise ValueError(
+            f"{len(given)} fixed wires requested, but only {count} can be fixed "
+            f"({m} wires, {H.shape[0]} equations)"
+        )
+    if len(given) < count:
+        rest = [j for j in range(m) if j not in given]
+        _, _, piv = scipy.linalg.qr(H[:, rest], pivoting=True, mode="economic")
+        given += [rest[j] for j in piv[H.shape[0] :][: count - len(given)]]
+    return sorted(given)
+
+
+def _split_wires(robot: Robot, Ht, fixed_wire, count):
+    """(fixed, free) 0-based index arrays; one fixed wire reads :attr:`Robot.wire_splits`."""
+    m = Ht.shape[0]
+    if isinstance(fixed_wire, (int, np.integer)) and count == 1:
+        j = int(fixed_wire) - 1
+        if not 0 <= j < m:
+            raise ValueError(f"fixed wire {j + 1}: the robot has wires 1..{m}")
+        return robot.wire_splits[j]
+    F = _fixed_wires(Ht.T, fixed_wire, count)
+    return np.array(F, dtype=np.int64), np.array([j for j in range(m) if j not in F], np.int64)
+
+
+def _newton_u(robot, rho, H_S, c, S, u0, max_iter=30):
+    """Classical Newton on ``H_S τ_S(u_S) + c = 0``; Jacobian ``H_S diag(τ')``.
+
+    Returns ``(u, iterations, converged)``; a singular Jacobian or a wire length <= 0 along
+    the way stops it (not converged).
+    """
+    k, K, V, L0 = robot.k[S], robot.K[S], robot.V[S], robot.L0[S]
+    W = rho[S] + V
+    u = np.array(u0, dtype=float)
+    for it in range(1, max_iter + 1):
+        L = W + K * u
+        if not (L.min() > 0.0):
+            return u, it, False
+        tau = k * (L - L0) / L
+        f = H_S @ tau + c
+        J = H_S * (k * L0 * K / (L * L))
+        try:
+            step = np.linalg.solve(J, f)
+        except np.linalg.LinAlgError:
+            return u, it, False
+        u = u - step
+        if not np.isfinite(u).all():
+            return u, it, False
+        if (np.abs(step) <= 1e-13 * (1.0 + np.abs(u))).all():
+            return u, it, True
+    return u, max_iter, False
+
+
+def _fix_controls(robot: Robot, enc: PoseEnclosure, F, opts: Alg2Options):
+    """Controls ``u`` (fixed wires set, others 0) and ``c = w_g + H_F τ_F`` (eqs. 5, 6)."""
+    m = robot.m
+    Ht, wg = enc.Ht, enc.wg
+    u = np.zeros(m)
+    u_fixed, tau_fixed = opts.u_fixed, opts.tau_fixed
+    if F.size == 1 and (u_fixed is None or np.ndim(u_fixed) == 0) and np.ndim(tau_fixed) == 0:
+        # one fixed wire (MARIONET, planar): scalar arithmetic
+        j = int(F[0])
+        k, K, L0, W = float(robot.k[j]), float(robot.K[j]), float(robot.L0[j]), float(enc.W[j])
+        if u_fixed is not None:
+            uj = float(u_fixed)  # type: ignore[arg-type]
+        else:
+            tj = (
+                0.5 * (float(robot.tau_min[j]) + float(robot.tau_max[j]))
+                if tau_fixed is None
+                else float(tau_fixed)  # type: ignore[arg-type]
+            )
+            if not tj < k:
+                raise ValueError("tau_fixed must be below the wire constant k")
+            uj = k * L0 / (K * (k - tj)) - W / K
+        if not math.isfinite(uj):
+            raise ValueError("fixed controls must be finite")
+        u[j] = uj
+        Lj = W + K * uj
+        return u, wg + (k * (Lj - L0) / Lj) * Ht[j]
+    if not F.size:
+        return u, wg
+    if u_fixed is not None:
+        uf = np.broadcast_to(np.asarray(u_fixed, dtype=float), F.shape)
+    else:
+        tf = 0.5 * (robot.tau_min[F] + robot.tau_max[F]) if tau_fixed is None else tau_fixed
+        tf = np.broadcast_to(np.asarray(tf, dtype=float), F.shape)
+        if np.any(tf >= robot.k[F]):
+            raise ValueError("tau_fixed must be below the wire constant k")
+        uf = control_point(robot, enc.rho[F], tf, F)
+    if not np.all(np.isfinite(uf)):
+        raise ValueError("fixed controls must be finite")
+    u[F] = uf
+    LF = enc.W[F] + robot.K[F] * u[F]
+    tauF = robot.k[F] * (LF - robot.L0[F]) / LF
+    return u, wg + tauF @ Ht[F]
+
+
+def _tensions_beyond_k(robot: Robot, sq: SquareSystem, c, S) -> list[int]:
+    """1-based wires whose tension in the square system's solution would reach ``k``."""
+    tau_S = sq.G @ -c
+    return [int(S[i]) + 1 for i in np.flatnonzero(~(tau_S < robot.k[S]))]
+
+
+def _alg2(robot: Robot, pose: Pose, opts: Alg2Options, t0: float) -> IKResult:
+    enc = enclose_pose(robot, pose.position, pose.rotation)
+    check_pose(pose, enc)
+    rho, Ht, wg = enc.rho, enc.Ht, enc.wg
+    m, w = Ht.shape
+    messages: list[str] = []
+    details: dict = {"solve": opts.solve}
+
+    def result(status, u, tau, violations, cert=None, f=None) -> IKResult:
+        res = margin = None
+        if tau is not None:
+            res = float(np.abs(tau @ Ht + wg if f is None else f).max())
+            margin = float(np.minimum(tau - robot.tau_min, robot.tau_max - tau).min())
+        extra = {} if cert is None else {"certificate": cert}
+        return IKResult(
+            robot=robot.name,
+            dof=robot.dof,
+            method="alg2",
+            pose=pose,
+            status=status,
+            feasible=status == IKStatus.OK,
+            u=u,
+            tau=tau,
+            rho=rho,
+            margin=margin,
+            residual=res,
+            violations=violations,
+            messages=messages,
+            details=details,
+            time=time.perf_counter() - t0,
+            **extra,
+        )
+
+    if m < w:  # over-determined: unique tensions if any, nothing square to certify
+        ch = distribute_tensions(Ht.T, wg, robot.tau_min, robot.tau_max)
+        messages += ch.notes + [overdetermined_note(robot, w)]
+        u = controls(robot, rho, ch.tau)
+        viol = limit_violations(robot, ch.tau, u)
+        status = IKStatus.NOT_EQUILIBRIUM if not ch.equilibrium else IKStatus.UNCERTIFIED
+        return result(status, u, ch.tau, viol)
+
+    F, S = _split_wires(robot, Ht, opts.fixed_wire, m - w)
+    details["fixed_wires"] = [int(j) + 1 for j in F]
+    u, c = _fix_controls(robot, enc, F, opts)
+    try:
+        sq = SquareSystem(robot, enc, S)
+    except np.linalg.LinAlgError:
+        messages.append(
+            "the wrench matrix of the free wires is singular at this pose: fix another wire"
+        )
+        return result(IKStatus.SINGULAR, None, None, [])
+    if opts.solve == "tau":
+        tau_S = sq.G @ -c
+        if not (tau_S < robot.k[S]).all():
+            bad = _tensions_beyond_k(robot, sq, c, S)
+            messages.append(f"no control: wires {bad} would need a tension >= k")
+            return result(IKStatus.NO_SOLUTION, None, None, [])
+        u_S = sq.controls(tau_S)
+        details["iterations"] = 1
+    else:
+        u_last = opts.u_last
+        u0 = u_last[S] if u_last is not None else 0.5 * (robot.u_min[S] + robot.u_max[S])
+        u_S, its, conv = _newton_u(robot, rho, Ht[S].T, c, S, u0)
+        details["iterations"] = its
+        if not conv:
+            messages.append(f"Newton did not converge in {its} iterations")
+            bad = _tensions_beyond_k(robot, sq, c, S)
+            if bad:
+                messages.append(f"no control exists: wires {bad} would need a tension >= k")
+            return result(IKStatus.NO_SOLUTION, None, None, [])
+    u[S] = u_S
+    cert = None
+    if opts.certify:
+        # two nested boxes in one call: the large one for uniqueness, the small one for a
+        # tight enclosure
+        au = 1.0 + np.abs(u_S)
+        radii = np.stack([opts.box_radius * au, 1e-10 * au])
+        xlo, xhi, klo, khi, proven, tc, fc = sq.krawczyk(np.stack([u, u]), radii)
+        tau = tc[0]
+        res_f = fc[0]
+        if proven[0] or proven[1]:
+            b = 0 if proven[0] else 1
+            e = 1 if proven[1] else 0
+            cert = unique_in_box(u, F, S, xlo[b], xhi[b], klo[e], khi[e], xlo[e], xhi[e])
+        else:
+            messages.append("Krawczyk test failed: the solution is not certified")
+    else:
+        L = enc.W + robot.K * u
+        tau = robot.k * (L - robot.L0) / L
+        res_f = tau @ Ht + wg
+    tol = LIMIT_TOL
+    violations: list[Violation] = []
+    if not (
+        (tau >= robot.tau_min - tol)
+        & (tau <= robot.tau_max + tol)
+        & (u >= robot.u_min - tol)
+        & (u <= robot.u_max + tol)
+    ).all():
+        violations = limit_violations(robot, tau, u)
+    if opts.u_last is not None and opts.window is not None:
+        violations += window_violations(u, opts.u_last, opts.window)
+    if opts.certify and cert is None:
+        status = IKStatus.UNCERTIFIED
+    else:
+        status = IKStatus.LIMITS_VIOLATED if violations else IKStatus.OK
+    return result(status, u, tau, violations, cert, res_f)
