@@ -99,15 +99,33 @@ def _sum_bound(t, axis):
     return np.sum(t, axis=axis), gamma(k + 2) * np.sum(np.abs(t), axis=axis) + (k + 2) * _TINY
 
 
+def _dot_bound(y, G):
+    """``(y·G, error bound)`` of the ``(L, n)`` products of ``y`` ``(L, m)`` and ``G``
+    ``(L, m, n)``, as one batched ``matmul``.
+
+    Whatever the order of the additions (BLAS may block them) and with or without fused
+    multiply-adds, a floating-point dot product of length ``m`` errs by at most
+    ``γ_m Σ|y_i G_i|`` (Higham, Thm 3.1 and §3.1), plus ``m`` times the underflow unit
+    (covered by ``_TINY``); ``Σ|y_i G_i|`` is itself a computed dot product of nonnegative
+    terms, at least ``1 - γ_m`` times its exact value, so ``γ_{2m+2}`` times it (with
+    ``gamma`` rounded up generously) bounds the error.
+    """
+    m = y.shape[-1]
+    yv = y[:, None, :]
+    g = np.matmul(yv, G)[:, 0, :]
+    mag = np.matmul(np.abs(yv), np.abs(G))[:, 0, :]
+    return g, up(gamma(2 * m + 2) * mag) + (m + 2) * _TINY
+
+
 def proven_lower_bounds(G, rho, w, y, sign, j):
     """Proven lower bounds of ``sign·d_j`` over ``{d ∈ [0, w] : G d <= ρ}``, from ``y >= 0``.
 
     ``G`` ``(L, m, n)``, ``rho`` ``(L, m)``, ``w`` ``(L, n)``, ``y`` ``(L, m)``, ``sign`` ``(L,)``
     of ±1 and ``j`` ``(L,)`` variable indices; ``j = -1`` means ``c = 0``: a positive bound
-    then proves the set empty.  Rounding: each sum is enlarged by its a priori error bound
-    (Higham, Thm 3.1) and every final operation is rounded outward.
+    then proves the set empty.  Rounding: each sum and dot product is enlarged by its a
+    priori error bound (Higham, Thm 3.1) and every final operation is rounded outward.
     """
-    g, gerr = _sum_bound(y[:, :, None] * G, axis=1)
+    g, gerr = _dot_bound(y, G)
     has = j >= 0
     rows = np.flatnonzero(has)
     g[rows, j[has]] += sign[has]
@@ -124,6 +142,14 @@ class PolytopeHull:
         self.csys = csys
         self.directions = int(directions)
         self.max_iter = int(max_iter)
+
+    @staticmethod
+    def _pair(m: int, n: int) -> np.ndarray:
+        """The opposite bound of every constraint (``d_k <= w_k`` <-> ``-d_k <= 0``), or -1."""
+        pair = np.full(m + 2 * n, -1)
+        pair[m : m + n] = m + n + np.arange(n)
+        pair[m + n :] = m + np.arange(n)
+        return pair
 
     def contract(self, lo, hi):
         """Returns ``(lo, hi, empty)`` for a batch of boxes ``(B, n)``."""
@@ -163,7 +189,14 @@ class PolytopeHull:
         N0inv = np.swapaxes(GA[np.repeat(np.arange(S), K)[:, None], W0], 1, 2)  # signed permutation
         box = np.repeat(np.arange(S), K)
         with np.errstate(all="ignore"):
-            lp = dual_active_set(GA, betaA, c, W0, lam0, N0inv, max_iter=self.max_iter)
+            # a program whose objective passes the far side of the box (min d_j > w_j or
+            # max d_j < 0) makes the box empty: the box's other programs stop
+            wj = w[box, j]
+            cutoff = np.where(sign > 0, wj, 0.0) + 1e-9 * wj
+            lp = dual_active_set(
+                GA, betaA, c, W0, lam0, N0inv, pair=self._pair(m, n), cutoff=cutoff,
+                max_iter=self.max_iter,
+            )  # fmt: skip
             bound = proven_lower_bounds(
                 G[box], rho[box], w[box], lp.y[:, :m], sign, np.where(lp.infeasible, -1, j)
             )
