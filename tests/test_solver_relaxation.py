@@ -66,9 +66,7 @@ def _solve_all(G, rho, w, max_iter, long_step=False, cutoff=False):
         cutoff=np.where(sign > 0, wj, 0.0) + 1e-9 * wj if cutoff else None,
         max_iter=max_iter,
     )
-    bound = proven_lower_bounds(
-        G[box], rho[box], w[box], lp.y[:, :m], sign, np.where(lp.infeasible, -1, j)
-    )
+    bound = proven_lower_bounds(G, rho, w, lp.y[:, :m], sign, np.where(lp.infeasible, -1, j))
     return lp, bound, j, sign
 
 
@@ -156,25 +154,45 @@ def test_lp_cutoff_keeps_bounds_sound(seed):
             assert np.any(proves) or not np.any(ref[rows] > far)
 
 
-def test_dot_bound_encloses_the_exact_products():
-    """The batched matmul's error bound covers the exact dot products (rationals), with
-    cancellation, huge and tiny (subnormal) terms."""
+def test_objective_rows_enclose_the_exact_values():
+    """The batched matmul's error bound covers the exact ``c + Gᵀy`` (rationals), with
+    cancellation, huge and tiny (subnormal) terms, and the objective's ±1 added."""
     from fractions import Fraction
 
-    from certsolve.solver.relaxation import _dot_bound
+    from certsolve.solver.relaxation import _objective_rows
 
     rng = np.random.default_rng(3)
-    L, m, n = 30, 12, 4
+    S, K, m, n = 15, 2, 12, 4
+    L = S * K
     y = np.abs(rng.normal(size=(L, m))) * 10.0 ** rng.integers(-8, 8, (L, m))
-    G = rng.normal(size=(L, m, n)) * 10.0 ** rng.integers(-8, 8, (L, m, n))
+    G = rng.normal(size=(S, m, n)) * 10.0 ** rng.integers(-8, 8, (S, m, n))
     G[0] = 1e-310  # subnormal products
-    y[1] = 1.0 / 3.0
+    y[2:4] = 1.0 / 3.0
     G[1, :, 0] = np.tile([1.0, -1.0], m // 2) * (1.0 + 2.0**-40)  # cancellation
-    g, err = _dot_bound(y, G)
+    G[2, :, 1] = 2.0**-60  # the ±1 of c dominates
+    j = rng.integers(-1, n, L)
+    sign = rng.choice([-1.0, 1.0], L)
+    g, err = _objective_rows(G, y, sign, j)
     for li in range(L):
+        s = li // K
         for k in range(n):
-            exact = sum(Fraction(float(y[li, i])) * Fraction(float(G[li, i, k])) for i in range(m))
+            exact = sum(Fraction(float(y[li, i])) * Fraction(float(G[s, i, k])) for i in range(m))
+            exact += Fraction(int(sign[li])) if j[li] == k else 0
             assert abs(Fraction(float(g[li, k])) - exact) <= Fraction(float(err[li, k]))
+
+
+def test_proven_lower_bounds_per_set_and_per_program_agree():
+    """Sets shared by ``K`` programs give the bounds of the same sets repeated per program."""
+    rng = np.random.default_rng(4)
+    S, K, m, n = 10, 3, 8, 3
+    G, rho, w = _programs(rng, S, n, m, slack_low=0.05)
+    y = np.abs(rng.normal(size=(S * K, m)))
+    j = rng.integers(-1, n, S * K)
+    sign = rng.choice([-1.0, 1.0], S * K)
+    box = np.repeat(np.arange(S), K)
+    shared = proven_lower_bounds(G, rho, w, y, sign, j)
+    single = proven_lower_bounds(G[box], rho[box], w[box], y, sign, j)
+    np.testing.assert_allclose(shared, single, rtol=1e-12, atol=1e-12)
 
 
 def test_xtaylor_rows_hold_at_every_solution():

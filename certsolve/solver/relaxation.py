@@ -99,39 +99,45 @@ def _sum_bound(t, axis):
     return np.sum(t, axis=axis), gamma(k + 2) * np.sum(np.abs(t), axis=axis) + (k + 2) * _TINY
 
 
-def _dot_bound(y, G):
-    """``(y·G, error bound)`` of the ``(L, n)`` products of ``y`` ``(L, m)`` and ``G``
-    ``(L, m, n)``, as one batched ``matmul``.
+def _objective_rows(G, y, sign, j):
+    """``g = c + Gᵀy`` (``c = sign·e_j``, 0 where ``j = -1``) of every program, and a bound of
+    its rounding error, by batched ``matmul`` (``G`` ``(S, m, n)`` per set, ``y`` ``(S·K, m)``).
 
     Whatever the order of the additions (BLAS may block them) and with or without fused
-    multiply-adds, a floating-point dot product of length ``m`` errs by at most
-    ``γ_m Σ|y_i G_i|`` (Higham, Thm 3.1 and §3.1), plus ``m`` times the underflow unit
-    (covered by ``_TINY``); ``Σ|y_i G_i|`` is itself a computed dot product of nonnegative
-    terms, at least ``1 - γ_m`` times its exact value, so ``γ_{2m+2}`` times it (with
-    ``gamma`` rounded up generously) bounds the error.
+    multiply-adds, a floating-point sum of ``m + 1`` products errs by at most
+    ``γ_{m+1} Σ|terms|`` (Higham, Thm 3.1 and §3.1), plus the underflow unit per product
+    (covered by ``_TINY``); ``Σ|terms|`` is itself computed (a dot product of nonnegative
+    terms, plus the exact 1 of ``c``), at least ``1 - γ_{m+1}`` times its exact value, so
+    ``γ_{2m+4}`` times it (``gamma`` rounded up generously) bounds the error.
     """
-    m = y.shape[-1]
-    yv = y[:, None, :]
-    g = np.matmul(yv, G)[:, 0, :]
-    mag = np.matmul(np.abs(yv), np.abs(G))[:, 0, :]
-    return g, up(gamma(2 * m + 2) * mag) + (m + 2) * _TINY
+    S, m, n = G.shape
+    L = y.shape[0]
+    yv = y.reshape(S, L // S, m)
+    g = np.matmul(yv, G).reshape(L, n)
+    mag = np.matmul(np.abs(yv), np.abs(G)).reshape(L, n)
+    has = j >= 0
+    rows = np.flatnonzero(has)
+    g[rows, j[has]] += sign[has]
+    mag[rows, j[has]] += 1.0
+    return g, up(gamma(2 * m + 4) * mag) + (m + 2) * _TINY
 
 
 def proven_lower_bounds(G, rho, w, y, sign, j):
     """Proven lower bounds of ``sign·d_j`` over ``{d ∈ [0, w] : G d <= ρ}``, from ``y >= 0``.
 
-    ``G`` ``(L, m, n)``, ``rho`` ``(L, m)``, ``w`` ``(L, n)``, ``y`` ``(L, m)``, ``sign`` ``(L,)``
-    of ±1 and ``j`` ``(L,)`` variable indices; ``j = -1`` means ``c = 0``: a positive bound
-    then proves the set empty.  Rounding: each sum and dot product is enlarged by its a
-    priori error bound (Higham, Thm 3.1) and every final operation is rounded outward.
+    ``G`` ``(S, m, n)``, ``rho`` ``(S, m)`` and ``w`` ``(S, n)`` are ``S`` sets; ``y``
+    ``(L, m)``, ``sign`` ``(L,)`` of ±1 and ``j`` ``(L,)`` variable indices are ``L = S·K``
+    programs, ``K`` per set (program ``l`` uses set ``l // K``); ``j = -1`` means ``c = 0``: a
+    positive bound then proves the set empty.  Rounding: each sum and dot product is enlarged
+    by its a priori error bound (Higham, Thm 3.1) and every final operation is rounded
+    outward.
     """
-    g, gerr = _dot_bound(y, G)
-    has = j >= 0
-    rows = np.flatnonzero(has)
-    g[rows, j[has]] += sign[has]
-    part = np.minimum(down(g - gerr), 0.0) * w
+    S, m, _ = G.shape
+    K = y.shape[0] // S
+    g, gerr = _objective_rows(G, y, sign, j)
+    part = np.minimum(down(g - gerr), 0.0) * np.repeat(w, K, axis=0)
     low, low_err = _sum_bound(part, axis=1)
-    yrho, yrho_err = _sum_bound(y * rho, axis=1)
+    yrho, yrho_err = _sum_bound((y.reshape(S, K, m) * rho[:, None, :]).reshape(-1, m), axis=1)
     return down(down(low - low_err) - up(yrho + yrho_err))
 
 
@@ -198,7 +204,7 @@ class PolytopeHull:
                 max_iter=self.max_iter,
             )  # fmt: skip
             bound = proven_lower_bounds(
-                G[box], rho[box], w[box], lp.y[:, :m], sign, np.where(lp.infeasible, -1, j)
+                G, rho, w, lp.y[:, :m], sign, np.where(lp.infeasible, -1, j)
             )
         bound = np.where(np.isfinite(bound), bound, -np.inf)
         emp = np.zeros(S, dtype=bool)
