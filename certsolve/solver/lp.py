@@ -102,9 +102,8 @@ def dual_active_set(
         while iterations < max_iter:
             iterations += 1
             if cutoff is not None:
-                act = np.flatnonzero(~done)
-                over = np.einsum("li,li->l", c[act], x[act]) > cutoff[act]
-                proven[box[act[over]]] = True
+                over = (np.einsum("li,li->l", c, x) > cutoff) & ~done
+                proven[box[over]] = True
             done |= proven[box]
             act = np.flatnonzero(~done)
             if act.size == 0:
@@ -130,7 +129,8 @@ def dual_active_set(
             alpha = np.einsum("lij,li->lj", Ni, gs)  # g_t = Σ_k α_k g_{W_k}
             lr = lam[run]
             pos = alpha > 1e-12 * max_last(np.abs(alpha))[:, None]
-            ratio = np.where(pos, lr / np.where(pos, alpha, 1.0), np.inf)
+            ratio = lr / alpha
+            ratio[~pos] = np.inf
             farkas = ~any_last(pos)
             if pair is None:
                 k = np.argmin(ratio, axis=1)
