@@ -1,11 +1,11 @@
 """The package's layers: every module imports, no upward import, no import cycle.
 
 Layers, lowest first: interval -> expr -> solver -> robot -> kinematics / force -> jobs ->
-client -> api -> cli (``certsolve serve`` starts the api; small utilities -- ``lazy``, ``extras``, ``plotting`` -- sit below
-everything and import nothing of the package).  Imports are read with :mod:`ast`,
-including those inside functions (a lazy import is still a dependency); imports under
-``if TYPE_CHECKING:`` are ignored.  ``from pkg import name`` depends on the module
-``pkg.name`` when there is one, else on ``pkg``.
+client -> api -> cli (``certsolve serve`` starts the api; small utilities -- ``lazy``,
+``extras``, ``plotting`` -- sit below everything and import nothing of the package).
+Imports are read with :mod:`ast`, including those inside functions (a lazy import is still
+a dependency); imports under ``if TYPE_CHECKING:`` are ignored.  ``from pkg import name``
+depends on the module ``pkg.name`` when there is one, else on ``pkg``.
 """
 
 from __future__ import annotations
