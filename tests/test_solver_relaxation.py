@@ -38,8 +38,10 @@ def _programs(rng, S, n, m, slack_low):
     return G, rho, w
 
 
-def _solve_all(G, rho, w, max_iter):
-    """Both programs (min and max) of every variable, as PolytopeHull sets them up."""
+def _solve_all(G, rho, w, max_iter, long_step=False, cutoff=False):
+    """Both programs (min and max) of every variable, as PolytopeHull sets them up
+    (``long_step``: with the bound-flipping ratio test; ``cutoff``: a set stops once one of
+    its programs passes the far side of the box)."""
     S, m, n = G.shape
     eye = np.eye(n)
     GA = np.concatenate([G, np.broadcast_to(eye, (S, n, n)), np.broadcast_to(-eye, (S, n, n))], 1)
@@ -52,20 +54,29 @@ def _solve_all(G, rho, w, max_iter):
     W0 = np.tile(m + n + np.arange(n), (S * K, 1))
     up = np.flatnonzero(sign < 0)
     W0[up, j[up]] = m + j[up]
-    lp = dual_active_set(GA, betaA, c, W0, np.abs(c), max_iter=max_iter)
     box = np.repeat(np.arange(S), K)
-    bound = proven_lower_bounds(
-        G[box], rho[box], w[box], lp.y[:, :m], sign, np.where(lp.infeasible, -1, j)
+    wj = w[box, j]
+    lp = dual_active_set(
+        GA,
+        betaA,
+        c,
+        W0,
+        np.abs(c),
+        pair=PolytopeHull._pair(m, n) if long_step else None,
+        cutoff=np.where(sign > 0, wj, 0.0) + 1e-9 * wj if cutoff else None,
+        max_iter=max_iter,
     )
+    bound = proven_lower_bounds(G, rho, w, lp.y[:, :m], sign, np.where(lp.infeasible, -1, j))
     return lp, bound, j, sign
 
 
+@pytest.mark.parametrize("long_step", [False, True])
 @pytest.mark.parametrize("seed", range(3))
-def test_lp_bounds_never_exceed_the_optimum(seed):
+def test_lp_bounds_never_exceed_the_optimum(seed, long_step):
     rng = np.random.default_rng(seed)
     S, n, m = 40, 5, 20
     G, rho, w = _programs(rng, S, n, m, slack_low=-0.4)
-    lp, bound, j, sign = _solve_all(G, rho, w, max_iter=60)
+    lp, bound, j, sign = _solve_all(G, rho, w, max_iter=60, long_step=long_step)
     K = 2 * n
     checked = infeasible = 0
     for s in range(S):
@@ -92,12 +103,96 @@ def test_lp_bounds_never_exceed_the_optimum(seed):
     assert checked > 30 and infeasible > 0
 
 
-def test_lp_iteration_cap_only_weakens_bounds():
+@pytest.mark.parametrize("long_step", [False, True])
+def test_lp_iteration_cap_only_weakens_bounds(long_step):
     rng = np.random.default_rng(7)
     G, rho, w = _programs(rng, 30, 6, 24, slack_low=0.05)  # all feasible
-    _, full, _, _ = _solve_all(G, rho, w, max_iter=60)
-    _, capped, _, _ = _solve_all(G, rho, w, max_iter=2)
+    _, full, _, _ = _solve_all(G, rho, w, max_iter=60, long_step=long_step)
+    _, capped, _, _ = _solve_all(G, rho, w, max_iter=2, long_step=long_step)
     assert np.all(capped <= full + 1e-9 * (1.0 + np.abs(full)))
+
+
+def test_long_step_converges_in_fewer_iterations():
+    """Bound flipping passes the box's bounds in one step: the same optima, fewer pivots."""
+    rng = np.random.default_rng(11)
+    S, n, m = 30, 7, 28
+    G, rho, w = _programs(rng, S, n, m, slack_low=0.05)  # all feasible
+    plain, _, _, _ = _solve_all(G, rho, w, max_iter=60)
+    flips, bound, j, sign = _solve_all(G, rho, w, max_iter=60, long_step=True)
+    assert flips.iterations < plain.iterations
+    for row in range(S * 2 * n):
+        s = row // (2 * n)
+        c = np.zeros(n)
+        c[j[row]] = sign[row]
+        opt = linprog(c, A_ub=G[s], b_ub=rho[s], bounds=list(zip(np.zeros(n), w[s]))).fun
+        assert opt - 1e-7 * (1.0 + abs(opt)) <= bound[row] <= opt + 1e-9 * (1.0 + abs(opt))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_lp_cutoff_keeps_bounds_sound(seed):
+    """Sets stopped early (a program proved them empty) still give only valid bounds; the
+    empty sets are still proven empty and feasible sets never stop."""
+    rng = np.random.default_rng(100 + seed)
+    S, n, m = 40, 5, 20
+    G, rho, w = _programs(rng, S, n, m, slack_low=-0.6)
+    _, ref, _, _ = _solve_all(G, rho, w, max_iter=60, long_step=True)
+    lp, bound, j, sign = _solve_all(G, rho, w, max_iter=60, long_step=True, cutoff=True)
+    K = 2 * n
+    for s in range(S):
+        feas = linprog(
+            np.zeros(n), A_ub=G[s], b_ub=rho[s], bounds=list(zip(np.zeros(n), w[s])), method="highs"
+        )
+        rows = slice(s * K, (s + 1) * K)
+        if feas.status == 0:  # feasible: no program may prove it empty, none stops early
+            assert not np.any(lp.infeasible[rows])
+            np.testing.assert_allclose(bound[rows], ref[rows], rtol=1e-9, atol=1e-12)
+        else:  # still proven empty: a Farkas certificate or a bound past the box
+            far = np.where(sign[rows] > 0, w[s, j[rows]], 0.0)
+            proves = (lp.infeasible[rows] & (bound[rows] > 0.0)) | (
+                ~lp.infeasible[rows] & (bound[rows] > far)
+            )
+            assert np.any(proves) or not np.any(ref[rows] > far)
+
+
+def test_objective_rows_enclose_the_exact_values():
+    """The batched matmul's error bound covers the exact ``c + Gᵀy`` (rationals), with
+    cancellation, huge and tiny (subnormal) terms, and the objective's ±1 added."""
+    from fractions import Fraction
+
+    from certsolve.solver.relaxation import _objective_rows
+
+    rng = np.random.default_rng(3)
+    S, K, m, n = 15, 2, 12, 4
+    L = S * K
+    y = np.abs(rng.normal(size=(L, m))) * 10.0 ** rng.integers(-8, 8, (L, m))
+    G = rng.normal(size=(S, m, n)) * 10.0 ** rng.integers(-8, 8, (S, m, n))
+    G[0] = 1e-310  # subnormal products
+    y[2:4] = 1.0 / 3.0
+    G[1, :, 0] = np.tile([1.0, -1.0], m // 2) * (1.0 + 2.0**-40)  # cancellation
+    G[2, :, 1] = 2.0**-60  # the ±1 of c dominates
+    j = rng.integers(-1, n, L)
+    sign = rng.choice([-1.0, 1.0], L)
+    g, err = _objective_rows(G, y, sign, j)
+    for li in range(L):
+        s = li // K
+        for k in range(n):
+            exact = sum(Fraction(float(y[li, i])) * Fraction(float(G[s, i, k])) for i in range(m))
+            exact += Fraction(int(sign[li])) if j[li] == k else 0
+            assert abs(Fraction(float(g[li, k])) - exact) <= Fraction(float(err[li, k]))
+
+
+def test_proven_lower_bounds_per_set_and_per_program_agree():
+    """Sets shared by ``K`` programs give the bounds of the same sets repeated per program."""
+    rng = np.random.default_rng(4)
+    S, K, m, n = 10, 3, 8, 3
+    G, rho, w = _programs(rng, S, n, m, slack_low=0.05)
+    y = np.abs(rng.normal(size=(S * K, m)))
+    j = rng.integers(-1, n, S * K)
+    sign = rng.choice([-1.0, 1.0], S * K)
+    box = np.repeat(np.arange(S), K)
+    shared = proven_lower_bounds(G, rho, w, y, sign, j)
+    single = proven_lower_bounds(G[box], rho[box], w[box], y, sign, j)
+    np.testing.assert_allclose(shared, single, rtol=1e-12, atol=1e-12)
 
 
 def test_xtaylor_rows_hold_at_every_solution():

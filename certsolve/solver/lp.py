@@ -13,6 +13,14 @@ constraint ``t*`` into ``W``; the constraint leaving ``W`` is chosen by the rati
 ``α_k`` is positive the program is infeasible, and ``(1 at t*, -α on W)`` is a Farkas
 certificate.  ``N_W^{-1}`` follows by a rank-one update (its pivot is ``α_k > 0``).
 
+Box bounds come in pairs (``-d_k <= 0``, ``d_k <= w_k``): with ``pair`` the ratio test is the
+*bound-flipping* (long-step) one of the dual simplex method: a bound whose multiplier reaches
+zero swaps for its opposite bound, and the step goes on, while the dual objective still
+increases.  One iteration then moves a vertex across the whole box where the plain test
+needs one pivot per bound; on katsura-6 the median program needs ~7 iterations instead of
+~11 (and the plain test cycles on some programs).  With ``cutoff`` the programs of a set stop
+as soon as one of them proves it empty (a Farkas ray, or a dual objective past the cutoff).
+
 Nothing here needs to be exact: the caller turns the multipliers into *rigorous* bounds
 (any ``y >= 0`` gives a valid bound, Neumaier & Shcherbina 2004), so rounding, cycling or
 the iteration cap can only weaken a bound, never make it wrong.  Programs sharing a
@@ -27,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..interval.reductions import all_last, any_last, max_last
+from ..interval.reductions import all_last, any_last, count_last, max_last
 
 __all__ = ["LPBatch", "dual_active_set"]
 
@@ -49,6 +57,8 @@ def dual_active_set(
     lam0: np.ndarray,
     Ninv0: np.ndarray | None = None,
     *,
+    pair: np.ndarray | None = None,
+    cutoff: np.ndarray | None = None,
     max_iter: int = 15,
     tol: float = 1e-9,
 ) -> LPBatch:
@@ -59,6 +69,12 @@ def dual_active_set(
     ``W0[l]`` (``n`` constraint indices) with multipliers ``lam0[l] >= 0`` such that
     ``c + Σ_k lam0_k g_{W0_k} = 0`` (dual feasible); ``Ninv0`` is the inverse of the starting
     active matrix (computed if not given).
+
+    ``pair`` ``(M,)``: the opposite constraint of each one (``g_{pair[t]} = -g_t`` in every
+    set) or -1; given, the ratio test flips bounds (see the module doc).  ``cutoff``
+    ``(L,)``: a program whose dual objective ``c·x`` (a lower bound of its minimum) exceeds
+    its cutoff proves its set empty for the caller; the set's other programs then stop, their
+    multipliers as they are (valid, only less tight).
     """
     L, n = c.shape
     S, M, _ = G.shape
@@ -70,6 +86,8 @@ def dual_active_set(
     beta_n = beta * inv_norm
     Gf = G.reshape(S * M, n)
     bf = beta.reshape(S * M)
+    if pair is not None:
+        gap = np.where(pair >= 0, beta + beta[:, np.maximum(pair, 0)], np.inf).reshape(S * M)
     W = W0.copy()
     lam = lam0.astype(float)
     with np.errstate(all="ignore"):
@@ -78,19 +96,26 @@ def dual_active_set(
     y = np.zeros((L, M))
     infeasible = np.zeros(L, dtype=bool)
     done = ~np.all(np.isfinite(Ninv), axis=(1, 2))
+    proven = np.zeros(S, dtype=bool)  # a program of the set proved it empty: all stop
     iterations = 0
     with np.errstate(all="ignore"):
         while iterations < max_iter:
             iterations += 1
+            if cutoff is not None:
+                over = (np.einsum("li,li->l", c, x) > cutoff) & ~done
+                proven[box[over]] = True
+            done |= proven[box]
             act = np.flatnonzero(~done)
             if act.size == 0:
                 break
             # normalised violations; the most violated constraint enters
             if 3 * act.size > L:
-                V = np.matmul(x.reshape(S, K, n), GT).reshape(L, M)[act]
+                V = np.matmul(x.reshape(S, K, n), GT)
+                V -= beta_n[:, None, :]
+                V = V.reshape(L, M)[act]
             else:
                 V = np.matmul(x[act][:, None, :], GT[box[act]])[:, 0, :]
-            V -= beta_n[box[act]]
+                V -= beta_n[box[act]]
             V[np.arange(act.size)[:, None], W[act]] = -np.inf
             t = np.argmax(V, axis=1)
             vmax = V[np.arange(act.size), t]
@@ -104,9 +129,15 @@ def dual_active_set(
             alpha = np.einsum("lij,li->lj", Ni, gs)  # g_t = Σ_k α_k g_{W_k}
             lr = lam[run]
             pos = alpha > 1e-12 * max_last(np.abs(alpha))[:, None]
-            ratio = np.where(pos, lr / np.where(pos, alpha, 1.0), np.inf)
-            k = np.argmin(ratio, axis=1)
+            ratio = lr / alpha
+            ratio[~pos] = np.inf
             farkas = ~any_last(pos)
+            if pair is None:
+                k = np.argmin(ratio, axis=1)
+                flip = None
+            else:
+                delta = vmax[~conv] * norms[box[run], t]  # g_t·x - β_t > 0
+                k, flip = _long_step(ratio, pos, alpha, W[run], gap, box[run] * M, delta)
             if np.any(farkas):  # every α_k <= 0: infeasible
                 fr = run[farkas]
                 rows = np.arange(fr.size)
@@ -116,19 +147,29 @@ def dual_active_set(
                 y[fr] = np.maximum(fy, 0.0)
                 infeasible[fr] = True
                 done[fr] = True
+                proven[box[fr]] = True
                 keep = ~farkas
                 run, t, k, gs, Ni, alpha, lr = (
                     run[keep], t[keep], k[keep], gs[keep], Ni[keep], alpha[keep], lr[keep]
                 )  # fmt: skip
+                if flip is not None:
+                    flip = flip[keep]
                 if run.size == 0:
                     continue
+            Wr = W[run]
+            if flip is not None and pair is not None and np.any(flip):
+                # the flipped bounds change sides: their row of N, α and λ change sign
+                Wr = np.where(flip, pair[Wr], Wr)
+                sgn = np.where(flip, -1.0, 1.0)
+                Ni *= sgn[:, None, :]  # a copy of Ninv[run]
+                alpha *= sgn
+                lr = lr * sgn
             ar = np.arange(run.size)
             ak = alpha[ar, k]
             s = lr[ar, k] / ak
             lr = np.maximum(lr - s[:, None] * alpha, 0.0)
             lr[ar, k] = s
             lam[run] = lr
-            Wr = W[run]
             Wr[ar, k] = t
             W[run] = Wr
             # N' = N + e_k (g_t - g_k)ᵀ  =>  N'^{-1} = N^{-1} - N^{-1} e_k (α - e_k)ᵀ / α_k
@@ -143,3 +184,29 @@ def dual_active_set(
     feasible = np.flatnonzero(~infeasible)
     np.add.at(y, (feasible[:, None], W[feasible]), np.maximum(lam[feasible], 0.0))
     return LPBatch(y=np.where(np.isfinite(y), y, 0.0), infeasible=infeasible, iterations=iterations)
+
+
+def _long_step(ratio, pos, alpha, Wr, gap, base, delta):
+    """The bound-flipping ("long-step") ratio test of the dual simplex method.
+
+    The breakpoints ``λ_k / α_k`` (``α_k > 0``) are passed in increasing order while the
+    dual objective still increases: passing a bound ``k`` that has an opposite bound
+    ``pair[W_k]`` (``g_{pair} = -g_{W_k}``) swaps it for that bound and lowers the slope
+    ``δ = g_t·x - β_t`` by ``α_k (β_k + β_pair)`` (``gap`` holds ``β_k + β_pair`` of every
+    constraint of every set, flat, ``inf`` without a pair); a constraint without a pair stops
+    the step.  Returns the leaving position ``k`` and the ``(R, n)`` mask of bounds to flip
+    (the breakpoints below ``k``'s; ``k`` itself is never flipped).
+    """
+    R = ratio.shape[0]
+    cost = np.where(pos, alpha * gap[base[:, None] + Wr], np.inf)
+    order = np.argsort(ratio, axis=1)
+    # costs in breakpoint order, summed down the short axis laid out first (whole rows)
+    cum = np.take_along_axis(cost, order, axis=1).T.copy()
+    np.cumsum(cum, axis=0, out=cum)
+    # costs are >= 0 (or NaN): the passed breakpoints are a prefix of the sorted ones
+    first = np.add.reduce(cum < delta, axis=0)
+    last = count_last(pos) - 1  # the last finite breakpoint
+    p = np.minimum(first, np.maximum(last, 0))
+    k = order[np.arange(R), p]
+    # every breakpoint before k (ties with k stay, with a zero multiplier) is passed
+    return k, ratio < ratio[np.arange(R), k][:, None]

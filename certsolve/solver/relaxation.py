@@ -99,21 +99,45 @@ def _sum_bound(t, axis):
     return np.sum(t, axis=axis), gamma(k + 2) * np.sum(np.abs(t), axis=axis) + (k + 2) * _TINY
 
 
-def proven_lower_bounds(G, rho, w, y, sign, j):
-    """Proven lower bounds of ``sign·d_j`` over ``{d ∈ [0, w] : G d <= ρ}``, from ``y >= 0``.
+def _objective_rows(G, y, sign, j):
+    """``g = c + Gᵀy`` (``c = sign·e_j``, 0 where ``j = -1``) of every program, and a bound of
+    its rounding error, by batched ``matmul`` (``G`` ``(S, m, n)`` per set, ``y`` ``(S·K, m)``).
 
-    ``G`` ``(L, m, n)``, ``rho`` ``(L, m)``, ``w`` ``(L, n)``, ``y`` ``(L, m)``, ``sign`` ``(L,)``
-    of ±1 and ``j`` ``(L,)`` variable indices; ``j = -1`` means ``c = 0``: a positive bound
-    then proves the set empty.  Rounding: each sum is enlarged by its a priori error bound
-    (Higham, Thm 3.1) and every final operation is rounded outward.
+    Whatever the order of the additions (BLAS may block them) and with or without fused
+    multiply-adds, a floating-point sum of ``m + 1`` products errs by at most
+    ``γ_{m+1} Σ|terms|`` (Higham, Thm 3.1 and §3.1), plus the underflow unit per product
+    (covered by ``_TINY``); ``Σ|terms|`` is itself computed (a dot product of nonnegative
+    terms, plus the exact 1 of ``c``), at least ``1 - γ_{m+1}`` times its exact value, so
+    ``γ_{2m+4}`` times it (``gamma`` rounded up generously) bounds the error.
     """
-    g, gerr = _sum_bound(y[:, :, None] * G, axis=1)
+    S, m, n = G.shape
+    L = y.shape[0]
+    yv = y.reshape(S, L // S, m)
+    g = np.matmul(yv, G).reshape(L, n)
+    mag = np.matmul(np.abs(yv), np.abs(G)).reshape(L, n)
     has = j >= 0
     rows = np.flatnonzero(has)
     g[rows, j[has]] += sign[has]
-    part = np.minimum(down(g - gerr), 0.0) * w
+    mag[rows, j[has]] += 1.0
+    return g, up(gamma(2 * m + 4) * mag) + (m + 2) * _TINY
+
+
+def proven_lower_bounds(G, rho, w, y, sign, j):
+    """Proven lower bounds of ``sign·d_j`` over ``{d ∈ [0, w] : G d <= ρ}``, from ``y >= 0``.
+
+    ``G`` ``(S, m, n)``, ``rho`` ``(S, m)`` and ``w`` ``(S, n)`` are ``S`` sets; ``y``
+    ``(L, m)``, ``sign`` ``(L,)`` of ±1 and ``j`` ``(L,)`` variable indices are ``L = S·K``
+    programs, ``K`` per set (program ``l`` uses set ``l // K``); ``j = -1`` means ``c = 0``: a
+    positive bound then proves the set empty.  Rounding: each sum and dot product is enlarged
+    by its a priori error bound (Higham, Thm 3.1) and every final operation is rounded
+    outward.
+    """
+    S, m, _ = G.shape
+    K = y.shape[0] // S
+    g, gerr = _objective_rows(G, y, sign, j)
+    part = np.minimum(down(g - gerr), 0.0) * np.repeat(w, K, axis=0)
     low, low_err = _sum_bound(part, axis=1)
-    yrho, yrho_err = _sum_bound(y * rho, axis=1)
+    yrho, yrho_err = _sum_bound((y.reshape(S, K, m) * rho[:, None, :]).reshape(-1, m), axis=1)
     return down(down(low - low_err) - up(yrho + yrho_err))
 
 
@@ -124,6 +148,14 @@ class PolytopeHull:
         self.csys = csys
         self.directions = int(directions)
         self.max_iter = int(max_iter)
+
+    @staticmethod
+    def _pair(m: int, n: int) -> np.ndarray:
+        """The opposite bound of every constraint (``d_k <= w_k`` <-> ``-d_k <= 0``), or -1."""
+        pair = np.full(m + 2 * n, -1)
+        pair[m : m + n] = m + n + np.arange(n)
+        pair[m + n :] = m + np.arange(n)
+        return pair
 
     def contract(self, lo, hi):
         """Returns ``(lo, hi, empty)`` for a batch of boxes ``(B, n)``."""
@@ -163,9 +195,16 @@ class PolytopeHull:
         N0inv = np.swapaxes(GA[np.repeat(np.arange(S), K)[:, None], W0], 1, 2)  # signed permutation
         box = np.repeat(np.arange(S), K)
         with np.errstate(all="ignore"):
-            lp = dual_active_set(GA, betaA, c, W0, lam0, N0inv, max_iter=self.max_iter)
+            # a program whose objective passes the far side of the box (min d_j > w_j or
+            # max d_j < 0) makes the box empty: the box's other programs stop
+            wj = w[box, j]
+            cutoff = np.where(sign > 0, wj, 0.0) + 1e-9 * wj
+            lp = dual_active_set(
+                GA, betaA, c, W0, lam0, N0inv, pair=self._pair(m, n), cutoff=cutoff,
+                max_iter=self.max_iter,
+            )  # fmt: skip
             bound = proven_lower_bounds(
-                G[box], rho[box], w[box], lp.y[:, :m], sign, np.where(lp.infeasible, -1, j)
+                G, rho, w, lp.y[:, :m], sign, np.where(lp.infeasible, -1, j)
             )
         bound = np.where(np.isfinite(bound), bound, -np.inf)
         emp = np.zeros(S, dtype=bool)
