@@ -75,9 +75,11 @@ from pathlib import Path
 from certsolve.expr.minibex import MinibexError, load_minibex
 
 
-def run_once(path: Path, timeout: float, eps: float) -> tuple[float, dict | None, str]:
+def run_once(
+    path: Path, timeout: float, eps: float, cid_vars: str = "1"
+) -> tuple[float, dict | None, str]:
     cmd = [sys.executable, "-m", "certsolve", "solve", str(path), "--json",
-           "--timeout", str(timeout), "--eps", str(eps)]  # fmt: skip
+           "--timeout", str(timeout), "--eps", str(eps), "--cid-vars", cid_vars]  # fmt: skip
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout * 3 + 60)
     wall = time.perf_counter() - t0
@@ -93,6 +95,7 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=3, help="runs per file (median wall time)")
     ap.add_argument("--eps", type=float, default=1e-8, help="the CLI's default, 1e-8")
     ap.add_argument("--csv", type=Path, default=None, help="also write the table as CSV")
+    ap.add_argument("--cid-vars", default="1", help="certsolve solve --cid-vars (1, K or all)")
     args = ap.parse_args()
     files = sorted(p for p in args.dir.iterdir() if p.suffix in (".bch", ".mbx"))
     header = ["file", "n", "status", "solutions", "undecided", "hulls", "boxes", "wall_s"]
@@ -110,7 +113,7 @@ def main() -> None:
         parsed += 1
         walls, result, error = [], None, ""
         for _ in range(args.runs):
-            wall, result, error = run_once(path, args.timeout, args.eps)
+            wall, result, error = run_once(path, args.timeout, args.eps, args.cid_vars)
             walls.append(wall)
             if result is None:
                 break

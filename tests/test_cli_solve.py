@@ -54,3 +54,37 @@ def test_bad_limits_are_refused(tmp_path):
     for opt, val in (("--timeout", "-1"), ("--timeout", "nan"), ("--max-pending", "0")):
         code, _, err = run_cli("solve", str(f), opt, val)
         assert code == 2 and err.startswith("error: ") and opt in err
+
+
+def test_cid_vars_shaves_more_and_keeps_the_solutions():
+    """``--cid-vars all`` (CID on every variable before a bisection) needs fewer boxes on
+    eco-6 and certifies the same solutions; a bad value is one ``error:`` line, and the
+    job kind refuses it with the same message."""
+    import pytest
+    from pydantic import ValidationError
+
+    from certsolve.jobs.kinds.solve import SolveParams
+
+    eco6 = "examples/systems/eco-6.mbx"
+    runs = {}
+    for k in ("1", "3", "all"):
+        code, out, _ = run_cli("solve", eco6, "--json", "--workers", "1", "--cid-vars", k)
+        assert code == 0
+        runs[k] = json.loads(out)
+    assert {d["status"] for d in runs.values()} == {"complete"}
+    ref = [s["box"] for s in runs["1"]["solutions"]]
+    assert len(ref) == 4
+    for k in ("3", "all"):  # the same 4 solutions: each box meets exactly one reference box
+        found = [s["box"] for s in runs[k]["solutions"]]
+        assert len(found) == 4
+        for box in found:
+            meets = [all(a <= d and c <= b for (a, b), (c, d) in zip(box, r)) for r in ref]
+            assert sum(meets) == 1
+    assert runs["all"]["stats"]["boxes"] < runs["1"]["stats"]["boxes"]
+    for bad in ("0", "x", "1.5", "101"):
+        code, _, err = run_cli("solve", eco6, "--cid-vars", bad)
+        assert code == 2 and err.startswith("error: --cid-vars") and "'all'" in err
+    assert SolveParams(cid_vars="all").solver_cid_vars() is None
+    assert SolveParams(cid_vars=4).solver_cid_vars() == 4
+    with pytest.raises(ValidationError, match="cid_vars"):
+        SolveParams(cid_vars=True)

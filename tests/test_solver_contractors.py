@@ -186,8 +186,8 @@ def test_cid_on_several_variables_keeps_solutions(name):
     never loses a reference point, and contracts at least as much as CID on one variable."""
     csys, _ = compiled(name)
     rng = np.random.default_rng(5)
-    every = Solver(csys)  # default: CID on all the variables
-    one = Solver(csys, cid_vars=1)
+    every = Solver(csys, cid_vars=None)  # CID on all the variables
+    one = Solver(csys)  # default: the chosen variable only
     assert every.cid_vars == csys.n and one.cid_vars == 1
     gains = []
 
@@ -210,8 +210,8 @@ def test_cid_on_several_variables_keeps_solutions(name):
 
 def test_cid_vars_needs_fewer_boxes_and_keeps_the_solutions():
     system = load_minibex(SYSTEMS / "eco-6.mbx")
-    one = solve(system, cid_vars=1, timeout=300)
-    every = solve(system, timeout=300)
+    one = solve(system, timeout=300)
+    every = solve(system, cid_vars=None, timeout=300)
     assert one.status == every.status == "complete"
     assert len(one.solutions) == len(every.solutions) == len(REFERENCE["eco-6"]["solutions"])
     assert every.stats.boxes < one.stats.boxes
@@ -225,7 +225,7 @@ def test_cid_on_several_variables_is_the_sequence_box_by_box(name):
     a single box may round differently): the chosen variable, then every other one with a
     positive smear score, best first."""
     csys, pts = compiled(name)
-    solver = Solver(csys)
+    solver = Solver(csys, cid_vars=None)
     rng = np.random.default_rng(6)
     lo, hi = random_boxes(pts, csys.system.domain, rng, count=60)
     _, _, jlo, jhi = csys.eval_fj(lo, hi)

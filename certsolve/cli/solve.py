@@ -48,6 +48,14 @@ def register(sub) -> None:
     p.add_argument(
         "--max-solutions", type=int, default=None, help="stop after this many certified solutions"
     )
+    p.add_argument(
+        "--cid-vars",
+        default="1",
+        metavar="K|all",
+        help="variables shaved by CID before each bisection: the chosen one (default "
+        "%(default)s), the first K by smear score, or all (ACID-like: fewer boxes, more time "
+        "per box)",
+    )
     add_executor_options(p)
     add_checkpoint_options(p)
     p.add_argument("--verify", action="store_true", help="re-prove solutions with mpmath")
@@ -69,6 +77,7 @@ def run(args: argparse.Namespace) -> int:
         eps=params.eps,
         max_undecided=params.max_undecided,
         max_pending=params.max_pending,
+        cid_vars=params.solver_cid_vars(),
     )
     show, stop = progress_reporter(not args.json)
     saving = checkpointing(args, "solve")

@@ -82,11 +82,12 @@ class Solver:
     cid_vars:
         how many variables CID contracts before a bisection: the chosen one, then the others
         by decreasing smear score (variables that may be split and have a positive score);
-        ``None`` (default): all of them.  Measured against CID on the chosen variable
-        alone (``cid_vars=1``, the former behaviour): on IBEX's benchmarks 2-9x fewer boxes
-        (Eco9 2x, transistor 4.6x, Brent-8 6.5x, Brent-10 9x) and less time on the hard
-        ones (transistor and Brent-10 now finish within 30 s); on the small systems of
-        ``examples/systems`` 0-60% fewer boxes but up to 1.8x the CPU time.
+        ``None``: all of them (close to IBEX's ACID without its adaptive count).  Default 1,
+        the chosen variable only.  Measured with ``None`` against 1: on IBEX's benchmarks
+        2-9x fewer boxes (Eco9 2x, transistor 4.6x, Brent-8 6.5x, Brent-10 9x) and two more
+        files complete within 30 s (transistor, Brent-10; 25 of 30 instead of 23), but 1.3-2x
+        the CPU time on ``examples/systems`` (katsura-6 52758 -> 44302 boxes, 7.8 -> 10.9 s)
+        and on Katsura-14 and Eco9: the default stays 1 until the count adapts per search.
     subsystems:
         square sub-systems ``(equations, variables)`` also contracted by partial Newton.
     max_undecided, max_pending:
@@ -111,7 +112,7 @@ class Solver:
         subsystems=(),
         newton_groups="variables",
         cid_slices: int = 4,
-        cid_vars: int | None = None,
+        cid_vars: int | None = 1,
         max_undecided: int = MAX_LISTED,
         max_pending: int = MAX_LISTED,
         relax: bool = True,

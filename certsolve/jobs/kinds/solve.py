@@ -28,6 +28,26 @@ class SolveParams(Params):
     max_pending: int = Field(
         default=1000, ge=1, le=100_000, description="hulls listing the boxes left by a limit"
     )
+    cid_vars: int | Literal["all"] = Field(
+        default=1,
+        description="variables shaved by CID before a bisection: the chosen one (1), the "
+        "first k by smear score, or all (ACID-like: fewer boxes, more time per box)",
+    )
+
+    @field_validator("cid_vars", mode="before")
+    @classmethod
+    def _cid_vars(cls, v: Any) -> Any:
+        if v == "all":
+            return v
+        if isinstance(v, str) and v.strip().isdigit():
+            v = int(v)
+        if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= MAX_VARIABLES:
+            raise ValueError(f"must be 'all' or an integer in [1, {MAX_VARIABLES}]")
+        return v
+
+    def solver_cid_vars(self) -> int | None:
+        """``cid_vars`` as :class:`~certsolve.solver.Solver` takes it (None: all)."""
+        return None if self.cid_vars == "all" else int(self.cid_vars)
 
 
 def check_system(text: str) -> str:
@@ -73,6 +93,7 @@ def run_solve(job: SolveJob, ctx: RunContext) -> Any:
         max_solutions=p.max_solutions,
         max_undecided=p.max_undecided,
         max_pending=p.max_pending,
+        cid_vars=p.solver_cid_vars(),
         checkpoint=ctx.checkpoint,
     )
     return result
