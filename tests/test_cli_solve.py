@@ -67,14 +67,14 @@ def test_cid_vars_shaves_more_and_keeps_the_solutions():
 
     eco6 = "examples/systems/eco-6.mbx"
     runs = {}
-    for k in ("1", "3", "all"):
+    for k in ("1", "3", "all", "auto"):
         code, out, _ = run_cli("solve", eco6, "--json", "--workers", "1", "--cid-vars", k)
         assert code == 0
         runs[k] = json.loads(out)
     assert {d["status"] for d in runs.values()} == {"complete"}
     ref = [s["box"] for s in runs["1"]["solutions"]]
     assert len(ref) == 4
-    for k in ("3", "all"):  # the same 4 solutions: each box meets exactly one reference box
+    for k in ("3", "all", "auto"):  # the same 4 solutions: each box meets exactly one reference box
         found = [s["box"] for s in runs[k]["solutions"]]
         assert len(found) == 4
         for box in found:
@@ -85,6 +85,7 @@ def test_cid_vars_shaves_more_and_keeps_the_solutions():
         code, _, err = run_cli("solve", eco6, "--cid-vars", bad)
         assert code == 2 and err.startswith("error: --cid-vars") and "'all'" in err
     assert SolveParams(cid_vars="all").solver_cid_vars() is None
+    assert SolveParams(cid_vars="auto").solver_cid_vars() == "auto"
     assert SolveParams(cid_vars=4).solver_cid_vars() == 4
     with pytest.raises(ValidationError, match="cid_vars"):
         SolveParams(cid_vars=True)

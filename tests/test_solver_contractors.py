@@ -23,7 +23,7 @@ from certsolve.expr.minibex import load_minibex
 from certsolve.solver import Solver, solve
 from certsolve.solver.bisectors import smear_scores
 from certsolve.solver.contractors import HC4, IntervalNewton, PartialNewton, log_volume_ratio
-from certsolve.solver.shaving import CID
+from certsolve.solver.shaving import CID, AdaptiveCount
 
 ROOT = Path(__file__).resolve().parent.parent
 SYSTEMS = ROOT / "examples" / "systems"
@@ -243,3 +243,36 @@ def test_cid_on_several_variables_is_the_sequence_box_by_box(name):
         if not e[0]:
             assert np.allclose(blo[k], a[0], rtol=1e-9, atol=1e-12), (k, blo[k] - a[0])
             assert np.allclose(bhi[k], b[0], rtol=1e-9, atol=1e-12), (k, bhi[k] - b[0])
+
+
+def test_adaptive_count_learns_the_mean_need():
+    """ACID's rule: every variable during the learning calls, then the mean count the
+    boxes needed (rounded up, at least 1) until the next learning phase."""
+    acid = AdaptiveCount(7, cycle=4, learn=2)
+    assert acid.count == 7 and acid.learning()
+    acid.done(np.array([1, 2, 4]))
+    assert acid.learning()
+    acid.done(np.array([3]))  # mean 2.5 -> 3
+    assert not acid.learning() and acid.count == 3
+    acid.done(None)
+    acid.done(None)
+    assert acid.learning() and acid.count == 3  # kept through the next learning phase
+    acid.done(np.array([1, 1]))
+    acid.done(np.array([1]))
+    assert acid.count == 1
+    with pytest.raises(ValueError):
+        AdaptiveCount(3, cycle=2, learn=3)
+
+
+@pytest.mark.parametrize("name", ["eco-6", "kin2-6r"])
+def test_auto_cid_count_keeps_every_solution(name):
+    """cid_vars="auto" changes how much is shaved, never what is found."""
+    system = load_minibex(SYSTEMS / f"{name}.mbx")
+    one = solve(system, timeout=300)
+    auto = Solver(system, cid_vars="auto")
+    res = auto.solve(timeout=300)
+    assert res.status == one.status == "complete"
+    assert len(res.solutions) == len(one.solutions) == len(REFERENCE[name]["solutions"])
+    assert auto.acid is not None and auto.acid.calls > 0 and 1 <= auto.acid.count <= system.n
+    for s in res.solutions:
+        assert sum(np.all((s.lo <= o.hi) & (o.lo <= s.hi)) for o in one.solutions) == 1

@@ -49,7 +49,7 @@ from .executors import resolve_executor
 from .relaxation import PolytopeHull
 from .result import Solution, SolveResult, Stats, Undecided
 from .search import Limits, Progress, SearchRun, SearchStatus, Tally, run_search
-from .shaving import CID
+from .shaving import CID, AdaptiveCount
 from .summary import MAX_LISTED, summarize
 
 __all__ = ["Solver", "SearchState", "solve"]
@@ -82,12 +82,13 @@ class Solver:
     cid_vars:
         how many variables CID contracts before a bisection: the chosen one, then the others
         by decreasing smear score (variables that may be split and have a positive score);
-        ``None``: all of them (close to IBEX's ACID without its adaptive count).  Default 1,
-        the chosen variable only.  Measured with ``None`` against 1: on IBEX's benchmarks
-        2-9x fewer boxes (Eco9 2x, transistor 4.6x, Brent-8 6.5x, Brent-10 9x) and two more
-        files complete within 30 s (transistor, Brent-10; 25 of 30 instead of 23), but 1.3-2x
-        the CPU time on ``examples/systems`` (katsura-6 52758 -> 44302 boxes, 7.8 -> 10.9 s)
-        and on Katsura-14 and Eco9: the default stays 1 until the count adapts per search.
+        ``None``: all of them; ``"auto"``: the count learnt during the search
+        (:class:`~.shaving.AdaptiveCount`, IBEX's ACID rule).  Default 1, the chosen
+        variable only.  Measured with ``None`` against 1: on IBEX's benchmarks 2-9x fewer
+        boxes (Eco9 2x, transistor 4.6x, Brent-8 6.5x, Brent-10 9x) and two more files
+        complete within 30 s (transistor, Brent-10), but 1.3-2x the CPU time on
+        ``examples/systems`` (katsura-6 51285 -> 43372 boxes, 6.2 -> 9.0 s); ``"auto"``
+        sits between (katsura-6 46752 boxes, 7.7 s).
     subsystems:
         square sub-systems ``(equations, variables)`` also contracted by partial Newton.
     max_undecided, max_pending:
@@ -112,7 +113,7 @@ class Solver:
         subsystems=(),
         newton_groups="variables",
         cid_slices: int = 4,
-        cid_vars: int | None = 1,
+        cid_vars: int | str | None = 1,
         max_undecided: int = MAX_LISTED,
         max_pending: int = MAX_LISTED,
         relax: bool = True,
@@ -144,10 +145,12 @@ class Solver:
         #: it shrinks as much as a bisection goes round again instead of being split
         self.cid = CID(self.hc4.contract, cid_slices) if cid_slices else None
         self.cid_gain = _LOG_HALF
-        if cid_vars is not None and not int(cid_vars) >= 1:
-            raise ValueError("cid_vars must be >= 1 (or None: all variables)")
+        #: learns the count of variables to shave (``cid_vars="auto"``; None: fixed count)
+        self.acid = AdaptiveCount(self.n) if cid_vars == "auto" else None
+        if self.acid is None and cid_vars is not None and not int(cid_vars) >= 1:
+            raise ValueError("cid_vars must be >= 1, None (all variables) or 'auto'")
         #: variables CID contracts before a bisection (chosen first, then by smear score)
-        self.cid_vars = self.n if cid_vars is None else min(int(cid_vars), self.n)
+        self.cid_vars = self.n if cid_vars in (None, "auto") else min(int(cid_vars), self.n)
         #: polytope hull of the linear relaxation, after Newton (None: off)
         self.relax = PolytopeHull(self.csys) if relax else None
         #: variables the bisector may split (None: all); the others are auxiliary
@@ -249,7 +252,8 @@ class Solver:
             ),
             f"parameters: {c.param_names} {c.param_lo.tolist()!r} {c.param_hi.tolist()!r}",
             f"eps: {self.eps!r}, hc4: {self.hc4.max_passes}, relax: {self.relax is not None}, "
-            f"cid: {None if self.cid is None else self.cid.slices} x {self.cid_vars}, "
+            f"cid: {None if self.cid is None else self.cid.slices} x "
+            f"{'auto' if self.acid is not None else self.cid_vars}, "
             f"mask: {mask}",
             f"newton: {[g.tolist() for g in self.newton.groups or []]}",
             f"partial: {[(p.S.tolist(), p.V.tolist()) for p in self.partial]}",
@@ -386,29 +390,41 @@ class Solver:
             state.stack.push(np.concatenate([alo, blo]), np.concatenate([ahi, bhi]))
 
     def _cid(self, lo, hi, jlo, jhi, var):
-        """CID on ``var`` then on up to ``cid_vars - 1`` other variables of each box, by
-        decreasing smear score over the box (``J`` is its enclosure from Newton).
+        """CID on ``var`` then on up to ``cid_vars - 1`` other variables of each box (or the
+        learnt count; all of them in a learning call), by decreasing smear score over the
+        box (``J`` is its enclosure from Newton).
 
         Each round is one batched CID call on the boxes that still have a variable to
         contract; every call is sound (:class:`~.shaving.CID`), so is the sequence.  A box
         proven empty stays empty.  Returns ``(lo, hi, empty)``.
         """
         clo, chi, cemp = self.cid.contract(lo, hi, var)
-        extra = self.cid_vars - 1
-        if extra <= 0 or lo.shape[0] == 0:
-            return clo, chi, cemp
-        rows = np.arange(lo.shape[0])
-        score = smear_scores(lo, hi, jlo, jhi, self.eps, self.bisect_mask)
-        score[rows, var] = -1.0
-        order = np.argsort(-score, axis=1, kind="stable")[:, :extra]
-        useful = np.take_along_axis(score, order, axis=1) > 0.0
-        for k in range(order.shape[1]):
-            act = np.flatnonzero(useful[:, k] & ~cemp)
-            if act.size == 0:
-                break  # scores are sorted: no box has a k-th (or later) variable left
-            nlo, nhi, emp = self.cid.contract(clo[act], chi[act], order[act, k])
-            clo[act], chi[act] = nlo, nhi
-            cemp[act] |= emp
+        learning = self.acid is not None and self.acid.learning()
+        if self.acid is None:
+            extra = self.cid_vars - 1
+        else:
+            extra = self.n - 1 if learning else self.acid.count - 1
+        needed = np.ones(lo.shape[0], dtype=np.int64) if learning else None
+        if extra > 0 and lo.shape[0]:
+            rows = np.arange(lo.shape[0])
+            score = smear_scores(lo, hi, jlo, jhi, self.eps, self.bisect_mask)
+            score[rows, var] = -1.0
+            order = np.argsort(-score, axis=1, kind="stable")[:, :extra]
+            useful = np.take_along_axis(score, order, axis=1) > 0.0
+            for k in range(order.shape[1]):
+                act = np.flatnonzero(useful[:, k] & ~cemp)
+                if act.size == 0:
+                    break  # scores are sorted: no box has a k-th (or later) variable left
+                nlo, nhi, emp = self.cid.contract(clo[act], chi[act], order[act, k])
+                if needed is not None:
+                    shrank = emp | (
+                        log_volume_ratio(clo[act], chi[act], nlo, nhi) < self.acid.threshold
+                    )
+                    needed[act[shrank]] = k + 2  # the chosen variable, then k + 1 others
+                clo[act], chi[act] = nlo, nhi
+                cemp[act] |= emp
+        if self.acid is not None:
+            self.acid.done(needed)
         return clo, chi, cemp
 
     def _record(self, state: SearchState, elo, ehi, ulo, uhi, tight: bool = True) -> None:

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..interval.core import cut_points
 
-__all__ = ["CID"]
+__all__ = ["CID", "AdaptiveCount"]
 
 
 class CID:
@@ -57,3 +57,37 @@ class CID:
         nlo = np.where(empty[:, None], lo, nlo)
         nhi = np.where(empty[:, None], hi, nhi)
         return nlo, nhi, empty
+
+
+class AdaptiveCount:
+    """How many variables to shave before a bisection, learnt as IBEX's ACID does.
+
+    The search alternates learning and use: in the first ``learn`` calls of every ``cycle``
+    every variable is shaved (by decreasing smear score), and each box records how many of
+    those rounds it needed -- the position of its last round that shrank its volume by at
+    least ``ratio``.  The mean of those counts over the learning calls (rounded up, at least
+    1) is the count used until the next learning phase.  It only chooses *how much* sound
+    contraction to apply, never what is kept.
+    """
+
+    def __init__(self, n: int, *, cycle: int = 50, learn: int = 5, ratio: float = 0.1):
+        if not 0 < learn <= cycle:
+            raise ValueError("need 0 < learn <= cycle")
+        self.n, self.cycle, self.learn = int(n), int(cycle), int(learn)
+        self.threshold = float(np.log1p(-ratio))  # log-volume change of a useful round
+        self.count = self.n  # the count in use (all until the first learning phase ends)
+        self.calls = 0
+        self._needed: list[np.ndarray] = []
+
+    def learning(self) -> bool:
+        """True while this call is a learning call (shave every variable, then record)."""
+        return self.calls % self.cycle < self.learn
+
+    def done(self, needed: np.ndarray | None) -> None:
+        """End of one call; ``needed`` (learning calls): the rounds each box needed."""
+        if needed is not None and needed.size:
+            self._needed.append(needed)
+        self.calls += 1
+        if self.calls % self.cycle == self.learn and self._needed:
+            self.count = max(1, int(np.ceil(np.mean(np.concatenate(self._needed)))))
+            self._needed = []

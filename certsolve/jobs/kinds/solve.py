@@ -28,26 +28,29 @@ class SolveParams(Params):
     max_pending: int = Field(
         default=1000, ge=1, le=100_000, description="hulls listing the boxes left by a limit"
     )
-    cid_vars: int | Literal["all"] = Field(
+    cid_vars: int | Literal["all", "auto"] = Field(
         default=1,
         description="variables shaved by CID before a bisection: the chosen one (1), the "
-        "first k by smear score, or all (ACID-like: fewer boxes, more time per box)",
+        "first k by smear score, all (fewer boxes, more time per box), or auto (the count "
+        "learnt during the search, as IBEX's ACID)",
     )
 
     @field_validator("cid_vars", mode="before")
     @classmethod
     def _cid_vars(cls, v: Any) -> Any:
-        if v == "all":
+        if v in ("all", "auto"):
             return v
         if isinstance(v, str) and v.strip().isdigit():
             v = int(v)
         if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= MAX_VARIABLES:
-            raise ValueError(f"must be 'all' or an integer in [1, {MAX_VARIABLES}]")
+            raise ValueError(f"must be 'all', 'auto' or an integer in [1, {MAX_VARIABLES}]")
         return v
 
-    def solver_cid_vars(self) -> int | None:
+    def solver_cid_vars(self) -> int | str | None:
         """``cid_vars`` as :class:`~certsolve.solver.Solver` takes it (None: all)."""
-        return None if self.cid_vars == "all" else int(self.cid_vars)
+        if self.cid_vars == "all":
+            return None
+        return self.cid_vars if self.cid_vars == "auto" else int(self.cid_vars)
 
 
 def check_system(text: str) -> str:
