@@ -30,6 +30,10 @@ from .fk_systems import (
 
 __all__ = ["FKPose", "FKResult", "FKSolver", "with_tau_max"]
 
+#: the largest share of the position's width over the orientation's at which the frame
+#: bisector still splits the orientation (:class:`.Prioritized` ``alpha``, see ``_prepare``)
+ALPHA_MAX = 0.5
+
 
 @dataclass
 class FKPose:
@@ -194,10 +198,14 @@ class FKSolver:
             # narrow wire-length ranges (low tension limits) pin the platform position once
             # its orientation is known: split the orientation first; wide ranges leave
             # the position free, so it is split sooner (measured: T-16 at 10 N / 60 N; a
-            # planar platform has a single rotation and keeps the default)
+            # planar platform has a single rotation and keeps the default), though never
+            # before it is twice as wide as the orientation (ALPHA_MAX): at 60 N a split of
+            # the orientation leaves ~0.27 of a surviving box after contraction, one of the
+            # position ~0.65 (random-general-0; 0.5 instead of 0.75: general-19 u~S(2) and
+            # T-16 u=2 at 60 N, 8 % and 1 % fewer boxes; docs/fk-cost.md)
             rho = np.array([v.startswith("rho") for v in self.form.system.variables])
             width = float(np.mean(dom[rho, 1] - dom[rho, 0])) if rho.any() else 0.0
-            bis.alpha = float(np.clip(width / 25.0, 0.25, 0.75))
+            bis.alpha = float(np.clip(width / 25.0, 0.25, ALPHA_MAX))
         return u, dom, ok
 
     def solve(

@@ -1,0 +1,53 @@
+"""The contraction fixpoint counts only the variables the bisector may split.
+
+A box goes round again (instead of being bisected) when contraction shrank it at least as
+much as a bisection would.  Auxiliary variables (``bisect_mask`` False: forward kinematics'
+wire lengths) narrow whenever the others move; their shrinking alone must not send a box
+round again.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from certsolve.expr import System, var
+from certsolve.kinematics import FKSolver, with_tau_max
+from certsolve.kinematics.fk_solver import ALPHA_MAX
+from certsolve.robot import Robot
+from certsolve.solver import Solver
+
+
+def _cubic():
+    """Roots x = -1, 0, 1 with y = x; HC4 narrows y (auxiliary) a lot, x not at all."""
+    x, y = var("x"), var("y")
+    return System(["x", "y"], np.array([[-2.0, 2.0], [-100.0, 100.0]]), [x * x * x - x, y - x])
+
+
+@pytest.mark.parametrize(("mask", "bisected"), [([True, False], 1), (None, 0)])
+def test_auxiliary_shrinking_alone_does_not_send_a_box_round_again(mask, bisected):
+    solver = Solver(_cubic(), bisect_mask=mask, cid_slices=0, relax=False)
+    state = solver.start()
+    dom = solver.domain
+    solver.process(dom[:, 0][None].copy(), dom[:, 1][None].copy(), state)
+    lo, hi = state.stack.snapshot()
+    assert state.stats.bisections == bisected
+    assert len(lo) == 1 + bisected
+    assert np.all(hi[:, 1] - lo[:, 1] < 4.001)  # y contracted to x's range either way
+
+
+@pytest.mark.parametrize("mask", [[True, False], None])
+def test_same_roots_with_and_without_the_mask(mask):
+    res = Solver(_cubic(), bisect_mask=mask).solve()
+    assert res.status == "complete" and not res.undecided
+    mids = sorted(float(s.midpoint[0]) for s in res.solutions)
+    assert np.allclose(mids, [-1.0, 0.0, 1.0], atol=1e-9)
+
+
+@pytest.mark.parametrize(("tau", "alpha"), [(60.0, ALPHA_MAX), (10.0, 0.25)])
+def test_frame_bisector_splits_the_position_only_when_much_wider(tau, alpha):
+    robot = with_tau_max(Robot.load("examples/robots/marionet.json"), tau)
+    fk = FKSolver(robot)
+    fk.search_box(np.zeros(robot.m))
+    fk._prepare(np.zeros(robot.m))
+    assert fk.solver.bisector.alpha == pytest.approx(alpha)
