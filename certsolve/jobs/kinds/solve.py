@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import Field, field_validator
 
@@ -28,7 +28,7 @@ class SolveParams(Params):
     max_pending: int = Field(
         default=1000, ge=1, le=100_000, description="hulls listing the boxes left by a limit"
     )
-    cid_vars: int | Literal["all", "auto"] = Field(
+    cid_vars: Annotated[int, Field(ge=1, le=MAX_VARIABLES)] | Literal["all", "auto"] = Field(
         default=1,
         description="variables shaved by CID before a bisection: the chosen one (1), the "
         "first k by smear score, all (fewer boxes, more time per box), or auto (the count "
