@@ -87,5 +87,6 @@ def test_cid_vars_shaves_more_and_keeps_the_solutions():
     assert SolveParams(cid_vars="all").solver_cid_vars() is None
     assert SolveParams(cid_vars="auto").solver_cid_vars() == "auto"
     assert SolveParams(cid_vars=4).solver_cid_vars() == 4
+    assert SolveParams(cid_vars=4.0).cid_vars == 4  # a JSON Schema integer
     with pytest.raises(ValidationError, match="cid_vars"):
         SolveParams(cid_vars=True)

@@ -53,6 +53,7 @@ MAX_WIRES = 32
 _MAX_COORD = 1e6  # cm: anything larger is a unit mistake
 _MAX_TENSION = 1e9  # N
 _MAX_CONSTANT = 1e12  # k, K, V, L0
+_MIN_CONSTANT = 1e-9  # k, K, L0: smaller is a unit mistake (and overflows eqs. 1-2's controls)
 
 Coordinate = Annotated[float, Field(ge=-_MAX_COORD, le=_MAX_COORD)]
 Tension = Annotated[float, Field(gt=-_MAX_TENSION, lt=_MAX_TENSION)]
@@ -69,16 +70,19 @@ class WireSpec(_Strict):
         default=None, description="attachment B_i in the platform frame (cm); 0 if omitted"
     )
     k: float | None = Field(
-        default=None, gt=0, le=_MAX_CONSTANT, description="wire material constant (N), eq. 1"
+        default=None,
+        ge=_MIN_CONSTANT,
+        le=_MAX_CONSTANT,
+        description="wire material constant (N), eq. 1",
     )
     K: float | None = Field(
-        default=None, gt=0, le=_MAX_CONSTANT, description="pulley amplification, eq. 2"
+        default=None, ge=_MIN_CONSTANT, le=_MAX_CONSTANT, description="pulley amplification, eq. 2"
     )
     V: float | None = Field(
         default=None, ge=0, le=_MAX_CONSTANT, description="fixed length from A to F (cm)"
     )
     L0: float | None = Field(
-        default=None, gt=0, le=_MAX_CONSTANT, description="unloaded wire length (cm)"
+        default=None, ge=_MIN_CONSTANT, le=_MAX_CONSTANT, description="unloaded wire length (cm)"
     )
     tau: tuple[Tension, Tension] = Field(description="[tau_min, tau_max] (N)")
     u: tuple[Coordinate, Coordinate] | None = Field(

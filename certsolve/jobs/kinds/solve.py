@@ -42,6 +42,8 @@ class SolveParams(Params):
             return v
         if isinstance(v, str) and v.strip().isdigit():
             v = int(v)
+        elif isinstance(v, float) and v.is_integer():
+            v = int(v)  # JSON Schema's integers include 3.0
         if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= MAX_VARIABLES:
             raise ValueError(f"must be 'all', 'auto' or an integer in [1, {MAX_VARIABLES}]")
         return v
