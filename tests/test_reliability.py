@@ -164,7 +164,7 @@ def test_heavy_quick_calls_memory_and_starvation(server):
     assert heavy_codes.count(200) >= 5 and set(heavy_codes) <= {200, 429}
     # a client that goes away: its heavy call is stopped and its process replaced
     started = server.http.get("/healthz").json()["quick"]["heavy"]["started"]
-    slow = {"robot": spatial_robot(11), "params": {"pose": pose6}}
+    slow = {"robot": spatial_robot(12), "params": {"pose": pose6}}  # ~3 s
     with pytest.raises(httpx.ReadTimeout):
         httpx.post(
             server.base + "/v1/isotropic", json=slow, headers=auth("ops"), timeout=1.0,
