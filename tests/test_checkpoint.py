@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_search_driver import FlakyExecutor
 
 from certsolve.expr.minibex import load_minibex
 from certsolve.force import certified_workspace
@@ -26,9 +27,7 @@ from certsolve.kinematics import FKSolver, with_tau_max
 from certsolve.robot import Robot
 from certsolve.solver import Solver
 from certsolve.solver.checkpoint import Checkpoint, CheckpointError, decode, encode
-from certsolve.solver.executors import TaskExecutor, TaskPool
 from certsolve.solver.result import Undecided
-from certsolve.solver.search import run_task
 
 ROOT = Path(__file__).resolve().parents[1]
 K5 = str(ROOT / "examples/systems/katsura-5.mbx")  # 16 solutions, ~8300 boxes
@@ -131,47 +130,13 @@ def test_resume_from_snapshots_taken_mid_search(k5):
         assert res.stats.boxes == ref.stats.boxes
 
 
-class InlinePool(TaskPool):
-    """Tasks run here, in submission order, with several in flight at once."""
-
-    def __init__(self, step):
-        self.step, self.workers, self.slots, self.queue, self.count = step, 2, 3, [], 0
-
-    def submit(self, lo, hi, known, limits):
-        self.count += 1
-        self.queue.append((self.count, lo, hi, known, limits))
-        return self.count
-
-    def next_done(self):
-        n, lo, hi, known, limits = self.queue.pop(0)
-        return n, run_task(self.step, lo, hi, known, limits), None
-
-    def lost(self, error):
-        return False
-
-    def cancel(self, handles):
-        self.queue.clear()
-
-    def close(self):
-        pass
-
-
-class InlineExecutor(TaskExecutor):
-    name = "inline"
-
-    def __init__(self):
-        super().__init__(warmup=0.0, task_seconds=10.0, slice_size=64, task_max_boxes=256)
-
-    def open(self, step):
-        return InlinePool(step)
-
-
 def test_snapshots_with_tasks_in_flight_keep_the_handed_out_boxes(k5):
     """A snapshot taken while workers hold slices of the buffer lists those slices as
     pending: resuming serially from it still finds every solution."""
     solver, ref = k5
     mem = Memory()
-    run = solver.solve(executor=InlineExecutor(), checkpoint=mem.checkpoint(interval=0.0))
+    tasks_here = FlakyExecutor(slice_size=64, task_max_boxes=256)  # none lost
+    run = solver.solve(executor=tasks_here, checkpoint=mem.checkpoint(interval=0.0))
     assert run.stats.tasks > 10 and same_solutions(run.solutions, ref.solutions)
     mid = mem.saved[len(mem.saved) // 2]
     one = Memory()

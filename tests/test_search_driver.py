@@ -231,8 +231,11 @@ class FlakyPool(TaskPool):
 class FlakyExecutor(TaskExecutor):
     name = "flaky"
 
-    def __init__(self, lose=(), **kw):
-        super().__init__(warmup=0.0, task_seconds=10.0, slice_size=3, task_max_boxes=8, **kw)
+    def __init__(self, lose=(), *, slice_size=3, task_max_boxes=8, **kw):
+        super().__init__(
+            warmup=0.0, task_seconds=10.0, slice_size=slice_size, task_max_boxes=task_max_boxes,
+            **kw,
+        )  # fmt: skip
         self.lose = set(lose)
 
     def open(self, step):
