@@ -147,9 +147,10 @@ class Solver:
         #: it shrinks as much as a bisection goes round again instead of being split
         self.cid = CID(self.hc4.contract, cid_slices) if cid_slices else None
         self.cid_gain = _LOG_HALF
-        #: learns the count of variables to shave (``cid_vars="auto"``; None: fixed count)
-        self.acid = AdaptiveCount(self.n) if cid_vars == "auto" else None
-        if self.acid is None and cid_vars is not None and not int(cid_vars) >= 1:
+        #: learn the count of variables to shave (``cid_vars="auto"``; the learnt state is
+        #: the search's: :attr:`SearchState.acid`)
+        self.auto_cid = cid_vars == "auto"
+        if not self.auto_cid and cid_vars is not None and not int(cid_vars) >= 1:
             raise ValueError("cid_vars must be >= 1, None (all variables) or 'auto'")
         #: variables CID contracts before a bisection (chosen first, then by smear score)
         self.cid_vars = self.n if cid_vars in (None, "auto") else min(int(cid_vars), self.n)
@@ -255,7 +256,7 @@ class Solver:
             f"parameters: {c.param_names} {c.param_lo.tolist()!r} {c.param_hi.tolist()!r}",
             f"eps: {self.eps!r}, hc4: {self.hc4.max_passes}, relax: {self.relax is not None}, "
             f"cid: {None if self.cid is None else self.cid.slices} x "
-            f"{'auto' if self.acid is not None else self.cid_vars}, "
+            f"{'auto' if self.auto_cid else self.cid_vars}, "
             f"mask: {mask}",
             f"newton: {[g.tolist() for g in self.newton.groups or []]}",
             f"partial: {[(p.S.tolist(), p.V.tolist()) for p in self.partial]}",
@@ -264,31 +265,39 @@ class Solver:
         return "\n".join(parts)
 
     def start(self, known: bytes | None = None) -> SearchState:
-        """An empty search state, with the solutions in ``known`` (see :meth:`known`)."""
-        sols = SolutionSet(self.n) if known is None else pickle.loads(known)
-        return SearchState(BoxStack(self.n), sols, [], Stats(), mark=len(sols))
+        """An empty search state, with the solutions and the learnt CID count in ``known``
+        (see :meth:`known`)."""
+        if known is None:
+            sols, acid = SolutionSet(self.n), AdaptiveCount(self.n) if self.auto_cid else None
+        else:
+            sols, acid = pickle.loads(known)
+        return SearchState(BoxStack(self.n), sols, [], Stats(), mark=len(sols), acid=acid)
 
     def tally(self, state: SearchState) -> Tally:
         return Tally(solutions=state.solutions.count("ok"), undecided=len(state.undecided))
 
     def known(self, state: SearchState) -> bytes:
-        """The solution set, pickled (for tasks: unpickling is ~100x faster than adding the
-        solutions one by one, and the copy is the task's own)."""
-        return pickle.dumps(state.solutions, protocol=pickle.HIGHEST_PROTOCOL)
+        """The solution set and the learnt CID count, pickled (for tasks: unpickling is
+        ~100x faster than adding the solutions one by one, and the copy is the task's
+        own; a task goes on with the count its search has learnt)."""
+        return pickle.dumps((state.solutions, state.acid), protocol=pickle.HIGHEST_PROTOCOL)
 
     def found(self, state: SearchState):
-        """Solutions recorded since :meth:`start`, undecided boxes and counters."""
+        """Solutions recorded since :meth:`start`, undecided boxes, counters and the learnt
+        CID count."""
         sols = state.solutions
         new = range(state.mark, len(sols))
         entries = [
             (sols.E_lo[i], sols.E_hi[i], sols.U_lo[i], sols.U_hi[i], sols.kind[i]) for i in new
         ]
         st = state.stats
-        return entries, state.undecided, (st.bisections, st.certified, st.duplicates)
+        counters = (st.bisections, st.certified, st.duplicates)
+        return entries, state.undecided, counters, copy.copy(state.acid)
 
     def merge(self, state: SearchState, found) -> None:
-        """Add a task's findings; a solution two tasks proved is recorded once."""
-        entries, undecided, (bisections, certified, duplicates) = found
+        """Add a task's findings; a solution two tasks proved is recorded once.  The learnt
+        CID count is the task's (the latest a task brings home; a checkpoint's on restore)."""
+        entries, undecided, (bisections, certified, duplicates), acid = found
         for e0, e1, u0, u1, kind in entries:
             if kind == "alias":
                 state.solutions.add(e0, e1, u0, u1, "alias")
@@ -298,6 +307,8 @@ class Solver:
         state.stats.bisections += bisections
         state.stats.certified += certified
         state.stats.duplicates += duplicates
+        if acid is not None and state.acid is not None:
+            state.acid = copy.copy(acid)
 
     def process(self, lo: np.ndarray, hi: np.ndarray, state: SearchState) -> None:
         """One batched contract / certify / bisect step on the boxes ``lo, hi``."""
@@ -383,7 +394,7 @@ class Solver:
             jlo3, jhi3 = jlo[todo][big], jhi[todo][big]
             var = self.bisector.choose(lo3, hi3, jlo3, jhi3, self.eps, self.bisect_mask)
             if self.cid is not None:
-                clo, chi, cemp = self._cid(lo3, hi3, jlo3, jhi3, var)
+                clo, chi, cemp = self._cid(lo3, hi3, jlo3, jhi3, var, state.acid)
                 gain = self._gain(lo3, hi3, clo, chi)
                 again = ~cemp & (gain <= self.cid_gain)
                 if np.any(again):
@@ -409,21 +420,22 @@ class Solver:
         lo0, hi0 = np.where(count, lo0, 0.0), np.where(count, hi0, 0.0)
         return log_volume_ratio(lo0, hi0, lo1, hi1)
 
-    def _cid(self, lo, hi, jlo, jhi, var):
+    def _cid(self, lo, hi, jlo, jhi, var, acid: AdaptiveCount | None = None):
         """CID on ``var`` then on up to ``cid_vars - 1`` other variables of each box (or the
-        learnt count; all of them in a learning call), by decreasing smear score over the
-        box (``J`` is its enclosure from Newton).
+        count ``acid`` has learnt, which this call updates; all of them in a learning call),
+        by decreasing smear score over the box (``J`` is its enclosure from Newton).
 
         Each round is one batched CID call on the boxes that still have a variable to
         contract; every call is sound (:class:`~.shaving.CID`), so is the sequence.  A box
         proven empty stays empty.  Returns ``(lo, hi, empty)``.
         """
+        assert self.cid is not None  # called only with CID on
         clo, chi, cemp = self.cid.contract(lo, hi, var)
-        learning = self.acid is not None and self.acid.learning()
-        if self.acid is None:
+        learning = acid is not None and acid.learning()
+        if acid is None:
             extra = self.cid_vars - 1
         else:
-            extra = self.n - 1 if learning else self.acid.count - 1
+            extra = self.n - 1 if learning else acid.count - 1
         needed = np.ones(lo.shape[0], dtype=np.int64) if learning else None
         if extra > 0 and lo.shape[0]:
             rows = np.arange(lo.shape[0])
@@ -436,15 +448,13 @@ class Solver:
                 if act.size == 0:
                     break  # scores are sorted: no box has a k-th (or later) variable left
                 nlo, nhi, emp = self.cid.contract(clo[act], chi[act], order[act, k])
-                if needed is not None:
-                    shrank = emp | (
-                        log_volume_ratio(clo[act], chi[act], nlo, nhi) < self.acid.threshold
-                    )
+                if needed is not None and acid is not None:
+                    shrank = emp | (log_volume_ratio(clo[act], chi[act], nlo, nhi) < acid.threshold)
                     needed[act[shrank]] = k + 2  # the chosen variable, then k + 1 others
                 clo[act], chi[act] = nlo, nhi
                 cemp[act] |= emp
-        if self.acid is not None:
-            self.acid.done(needed)
+        if acid is not None:
+            acid.done(needed)
         return clo, chi, cemp
 
     def _record(self, state: SearchState, elo, ehi, ulo, uhi, tight: bool = True) -> None:
@@ -524,6 +534,7 @@ class SearchState:
     undecided: list
     stats: Stats  # the step's counters: bisections, certified, duplicates
     mark: int = 0  # solutions[:mark] were known when the state started
+    acid: AdaptiveCount | None = None  # the learnt CID count (``cid_vars="auto"``)
 
 
 def solve(

@@ -13,6 +13,9 @@ All boxes of a batch, each with its own variable, are sliced at once: one inner 
 
 from __future__ import annotations
 
+import math
+from dataclasses import KW_ONLY, dataclass
+
 import numpy as np
 
 from ..interval.core import cut_points
@@ -59,6 +62,7 @@ class CID:
         return nlo, nhi, empty
 
 
+@dataclass
 class AdaptiveCount:
     """How many variables to shave before a bisection, learnt as IBEX's ACID does.
 
@@ -68,16 +72,32 @@ class AdaptiveCount:
     least ``ratio``.  The mean of those counts over the learning calls (rounded up, at least
     1) is the count used until the next learning phase.  It only chooses *how much* sound
     contraction to apply, never what is kept.
+
+    Plain data: the learnt state belongs to a search (the solver keeps it in its search
+    state), so a checkpoint saves it with the search and a worker task starts from the count
+    its search has learnt.
     """
 
-    def __init__(self, n: int, *, cycle: int = 50, learn: int = 5, ratio: float = 0.1):
-        if not 0 < learn <= cycle:
+    n: int
+    _: KW_ONLY
+    cycle: int = 50
+    learn: int = 5
+    ratio: float = 0.1
+    count: int = -1  #: the count in use (-1: ``n``, all until the first learning phase ends)
+    calls: int = 0  #: calls so far
+    needed_sum: int = 0  #: sum of the rounds the boxes of this learning phase needed
+    needed_boxes: int = 0  #: boxes of this learning phase
+
+    def __post_init__(self) -> None:
+        if not 0 < self.learn <= self.cycle:
             raise ValueError("need 0 < learn <= cycle")
-        self.n, self.cycle, self.learn = int(n), int(cycle), int(learn)
-        self.threshold = float(np.log1p(-ratio))  # log-volume change of a useful round
-        self.count = self.n  # the count in use (all until the first learning phase ends)
-        self.calls = 0
-        self._needed: list[np.ndarray] = []
+        if self.count < 0:
+            self.count = int(self.n)
+
+    @property
+    def threshold(self) -> float:
+        """Log-volume change of a useful round."""
+        return float(np.log1p(-self.ratio))
 
     def learning(self) -> bool:
         """True while this call is a learning call (shave every variable, then record)."""
@@ -86,8 +106,9 @@ class AdaptiveCount:
     def done(self, needed: np.ndarray | None) -> None:
         """End of one call; ``needed`` (learning calls): the rounds each box needed."""
         if needed is not None and needed.size:
-            self._needed.append(needed)
+            self.needed_sum += int(np.sum(needed))
+            self.needed_boxes += int(needed.size)
         self.calls += 1
-        if self.calls % self.cycle == self.learn and self._needed:
-            self.count = max(1, int(np.ceil(np.mean(np.concatenate(self._needed)))))
-            self._needed = []
+        if self.calls % self.cycle == self.learn and self.needed_boxes:
+            self.count = max(1, math.ceil(self.needed_sum / self.needed_boxes))
+            self.needed_sum = self.needed_boxes = 0
