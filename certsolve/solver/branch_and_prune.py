@@ -70,7 +70,10 @@ class Solver:
         boxes whose every component is narrower than ``eps`` are not bisected further;
         if still undecided they are reported as such.
     batch_size:
-        boxes processed per round (per numpy call).
+        boxes processed per round (per numpy call).  Default 1024: a batch costs ~8 ms of
+        numpy calls plus its boxes, so on ``examples/systems`` 1024 takes 1.3-1.5x less CPU
+        than 256 for the same boxes (katsura-6 51,246 boxes: 6.6 -> 3.9-4.7 s; katsura-5
+        0.95 -> 0.69 s); box counts were equal on every file.
     hc4_passes, bisector, certifier:
         swappable parts (defaults: 4 HC4 passes, smear-sum-relative bisection, Krawczyk).
     newton_groups:
@@ -84,13 +87,16 @@ class Solver:
     cid_vars:
         how many variables CID contracts before a bisection: the chosen one, then the others
         by decreasing smear score (variables that may be split and have a positive score);
-        ``None``: all of them; ``"auto"``: the count learnt during the search
-        (:class:`~.shaving.AdaptiveCount`, IBEX's ACID rule).  Default 1, the chosen
-        variable only.  Measured with ``None`` against 1: on IBEX's benchmarks 2-9x fewer
-        boxes (Eco9 2x, transistor 4.6x, Brent-8 6.5x, Brent-10 9x) and two more files
-        complete within 30 s (transistor, Brent-10), but 1.3-2x the CPU time on
-        ``examples/systems`` (katsura-6 51285 -> 43372 boxes, 6.2 -> 9.0 s); ``"auto"``
-        sits between (katsura-6 46752 boxes, 7.7 s).
+        ``None``: all of them; ``"auto"`` (default): the count learnt during the search
+        (:class:`~.shaving.AdaptiveCount`, IBEX's ACID rule; the learnt state is the
+        search's, :attr:`SearchState.acid`).  Measured against 1 (batches of 1024, one
+        process, CPU s): on IBEX's benchmarks 1.1-9x fewer boxes and half the time on the
+        hard files (Brent-10 152,065 -> 17,480 boxes, 23 -> 12 s; transistor 235,364 ->
+        67,219 boxes, 27 -> 15 s; Discrete-Integral-6 119,805 -> 19,921 boxes, 8.2 -> 3.0 s),
+        23% less CPU over 17 files that complete either way, but 1.2-1.7x the time on small
+        ones (eco-7 0.8 -> 1.3 s, kin2-6r 0.85 -> 1.3 s, BroydenTri-0020 1.2 -> 2.0 s);
+        katsura-6 about the same (51,246 -> 47,460 boxes).  ``None`` against 1: 2-9x
+        fewer boxes, 1.3-2x the CPU time on ``examples/systems``.
     subsystems:
         square sub-systems ``(equations, variables)`` also contracted by partial Newton.
     max_undecided, max_pending:
@@ -107,7 +113,7 @@ class Solver:
         system: System | CompiledSystem,
         *,
         eps: float = 1e-8,
-        batch_size: int = 256,
+        batch_size: int = 1024,
         hc4_passes: int = 4,
         bisector=None,
         certifier: Certifier | None = None,
@@ -115,7 +121,7 @@ class Solver:
         subsystems=(),
         newton_groups="variables",
         cid_slices: int = 4,
-        cid_vars: int | str | None = 1,
+        cid_vars: int | str | None = "auto",
         max_undecided: int = MAX_LISTED,
         max_pending: int = MAX_LISTED,
         relax: bool = True,
@@ -149,8 +155,8 @@ class Solver:
         self.cid_gain = _LOG_HALF
         #: learn the count of variables to shave (``cid_vars="auto"``; the learnt state is
         #: the search's: :attr:`SearchState.acid`)
-        self.auto_cid = cid_vars == "auto"
-        if not self.auto_cid and cid_vars is not None and not int(cid_vars) >= 1:
+        self.auto_cid = cid_vars == "auto" and self.cid is not None
+        if cid_vars not in (None, "auto") and not int(cid_vars) >= 1:
             raise ValueError("cid_vars must be >= 1, None (all variables) or 'auto'")
         #: variables CID contracts before a bisection (chosen first, then by smear score)
         self.cid_vars = self.n if cid_vars in (None, "auto") else min(int(cid_vars), self.n)
@@ -297,7 +303,8 @@ class Solver:
     def merge(self, state: SearchState, found) -> None:
         """Add a task's findings; a solution two tasks proved is recorded once.  The learnt
         CID count is the task's (the latest a task brings home; a checkpoint's on restore)."""
-        entries, undecided, (bisections, certified, duplicates), acid = found
+        entries, undecided, (bisections, certified, duplicates), *rest = found
+        acid = rest[0] if rest else None  # absent from checkpoints written before it was kept
         for e0, e1, u0, u1, kind in entries:
             if kind == "alias":
                 state.solutions.add(e0, e1, u0, u1, "alias")
@@ -422,8 +429,8 @@ class Solver:
 
     def _cid(self, lo, hi, jlo, jhi, var, acid: AdaptiveCount | None = None):
         """CID on ``var`` then on up to ``cid_vars - 1`` other variables of each box (or the
-        count ``acid`` has learnt, which this call updates; all of them in a learning call),
-        by decreasing smear score over the box (``J`` is its enclosure from Newton).
+        count ``acid`` has learnt, more for its learning boxes; this call updates it), by
+        decreasing smear score over the box (``J`` is its enclosure from Newton).
 
         Each round is one batched CID call on the boxes that still have a variable to
         contract; every call is sound (:class:`~.shaving.CID`), so is the sequence.  A box
@@ -431,30 +438,33 @@ class Solver:
         """
         assert self.cid is not None  # called only with CID on
         clo, chi, cemp = self.cid.contract(lo, hi, var)
-        learning = acid is not None and acid.learning()
+        B = lo.shape[0]
         if acid is None:
-            extra = self.cid_vars - 1
+            limit, learns = np.full(B, self.cid_vars), np.zeros(B, dtype=bool)
         else:
-            extra = self.n - 1 if learning else acid.count - 1
-        needed = np.ones(lo.shape[0], dtype=np.int64) if learning else None
-        if extra > 0 and lo.shape[0]:
-            rows = np.arange(lo.shape[0])
+            limit, learns = acid.plan(B)
+        needed = np.ones(B, dtype=np.int64)  # recorded for the learning boxes only
+        extra = int(np.max(limit, initial=1)) - 1
+        if extra > 0:
+            rows = np.arange(B)
             score = smear_scores(lo, hi, jlo, jhi, self.eps, self.bisect_mask)
             score[rows, var] = -1.0
             order = np.argsort(-score, axis=1, kind="stable")[:, :extra]
             useful = np.take_along_axis(score, order, axis=1) > 0.0
+            useful &= np.arange(order.shape[1]) < (limit - 1)[:, None]
             for k in range(order.shape[1]):
                 act = np.flatnonzero(useful[:, k] & ~cemp)
                 if act.size == 0:
                     break  # scores are sorted: no box has a k-th (or later) variable left
                 nlo, nhi, emp = self.cid.contract(clo[act], chi[act], order[act, k])
-                if needed is not None and acid is not None:
-                    shrank = emp | (log_volume_ratio(clo[act], chi[act], nlo, nhi) < acid.threshold)
+                if acid is not None:
+                    gain = log_volume_ratio(clo[act], chi[act], nlo, nhi)
+                    shrank = learns[act] & (emp | (gain < acid.threshold))
                     needed[act[shrank]] = k + 2  # the chosen variable, then k + 1 others
                 clo[act], chi[act] = nlo, nhi
                 cemp[act] |= emp
         if acid is not None:
-            acid.done(needed)
+            acid.done(needed[learns], B)
         return clo, chi, cemp
 
     def _record(self, state: SearchState, elo, ehi, ulo, uhi, tight: bool = True) -> None:
