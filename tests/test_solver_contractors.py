@@ -247,27 +247,29 @@ def test_cid_on_several_variables_is_the_sequence_box_by_box(name):
 
 
 def test_adaptive_count_learns_the_mean_need():
-    """ACID's rule, counted in boxes: the first ``learn`` boxes of every ``cycle`` shave more
+    """ACID's rule, counted in boxes: the last ``learn`` boxes of every ``cycle`` shave more
     (all the variables in the first phase, then twice the learnt count) and record what they
-    needed; at the end of a phase the mean (rounded up, at least 1) is the count in use."""
+    needed; at the end of a phase the mean (rounded up, at least 1) is the count in use.
+    Until the first phase ends the count is ``start``: the chosen variable only."""
     acid = AdaptiveCount(7, cycle=10, learn=4)
-    limit, learns = acid.plan(3)  # boxes 0-2: first phase, every variable
-    assert limit.tolist() == [7, 7, 7] and learns.all()
-    acid.done(np.array([1, 2, 4]), 3)
-    assert acid.count == 7 and acid.phases == 0  # the phase is not over
-    limit, learns = acid.plan(3)  # boxes 3-5: box 3 ends the phase
-    assert learns.tolist() == [True, False, False] and limit.tolist() == [7, 7, 7]
-    acid.done(np.array([3]), 3)  # mean 2.5 -> 3
+    limit, learns = acid.plan(5)  # boxes 0-4: no learning yet, the chosen variable only
+    assert limit.tolist() == [1] * 5 and not learns.any()
+    acid.done(np.zeros(0, dtype=int), 5)
+    limit, learns = acid.plan(3)  # boxes 5-7: 6 and 7 learn, with every variable
+    assert learns.tolist() == [False, True, True] and limit.tolist() == [1, 7, 7]
+    acid.done(np.array([1, 2]), 3)
+    assert acid.count == 1 and acid.phases == 0  # the phase is not over
+    limit, learns = acid.plan(3)  # boxes 8-10: 8 and 9 end the phase
+    assert learns.tolist() == [True, True, False] and limit.tolist() == [7, 7, 1]
+    acid.done(np.array([4, 3]), 3)  # mean 2.5 -> 3
     assert acid.count == 3 and acid.phases == 1
-    limit, learns = acid.plan(6)  # boxes 6-11: boxes 10, 11 learn with twice the count
-    assert learns.tolist() == [False] * 4 + [True] * 2 and limit.tolist() == [3] * 4 + [6] * 2
-    acid.done(np.array([1, 1]), 6)
-    assert acid.count == 3  # the second phase (boxes 10-13) is not over
-    acid.done(np.array([1, 2])[acid.plan(2)[1]], 2)
-    assert acid.count == 2 and acid.phases == 2  # mean of 1, 1, 1, 2
+    limit, learns = acid.plan(9)  # boxes 11-19: 16-19 learn with twice the count
+    assert learns.tolist() == [False] * 5 + [True] * 4 and limit.tolist() == [3] * 5 + [6] * 4
+    acid.done(np.array([1, 1, 1, 2]), 9)
+    assert acid.count == 2 and acid.phases == 2  # mean 1.25 -> 2
     with pytest.raises(ValueError):
         AdaptiveCount(3, cycle=2, learn=3)
-    plain = AdaptiveCount(3, cycle=10, learn=4, count=1, phases=1, double=False)
+    plain = AdaptiveCount(3, cycle=10, learn=4, count=1, phases=1, boxes=16, double=False)
     assert plain.plan(1)[0].tolist() == [3]  # without doubling, learning shaves every variable
 
 

@@ -90,13 +90,13 @@ class Solver:
         ``None``: all of them; ``"auto"`` (default): the count learnt during the search
         (:class:`~.shaving.AdaptiveCount`, IBEX's ACID rule; the learnt state is the
         search's, :attr:`SearchState.acid`).  Measured against 1 (batches of 1024, one
-        process, CPU s): on IBEX's benchmarks 1.1-9x fewer boxes and half the time on the
-        hard files (Brent-10 152,065 -> 17,480 boxes, 23 -> 12 s; transistor 235,364 ->
-        67,219 boxes, 27 -> 15 s; Discrete-Integral-6 119,805 -> 19,921 boxes, 8.2 -> 3.0 s),
-        23% less CPU over 17 files that complete either way, but 1.2-1.7x the time on small
-        ones (eco-7 0.8 -> 1.3 s, kin2-6r 0.85 -> 1.3 s, BroydenTri-0020 1.2 -> 2.0 s);
-        katsura-6 about the same (51,246 -> 47,460 boxes).  ``None`` against 1: 2-9x
-        fewer boxes, 1.3-2x the CPU time on ``examples/systems``.
+        process, CPU s): on IBEX's benchmarks up to 8x fewer boxes and half the time or
+        less on the hard files (Brent-10 152,065 -> 19,257 boxes, 23 -> 13 s; transistor
+        235,364 -> 63,852 boxes, 27 -> 16 s; Discrete-Integral-6 119,805 -> 19,016 boxes,
+        8.2 -> 2.2 s), but 1.1-1.25x the time on medium systems of ``examples/systems``
+        (katsura-6 51,246 -> 46,397 boxes, 4.9 -> 5.2 s; eco-7 0.90 -> 1.12 s; kin2-6r
+        0.97 -> 1.18 s); searches of fewer than ~950 boxes never learn, so cost the same.
+        ``None`` against 1: 2-9x fewer boxes, 1.3-2x the CPU time on ``examples/systems``.
     subsystems:
         square sub-systems ``(equations, variables)`` also contracted by partial Newton.
     max_undecided, max_pending:
