@@ -1,6 +1,7 @@
 """IBEX's satisfaction benchmarks through ``certsolve solve``, as a user runs them.
 
     python benchmarks/ibex_bench.py DIR [--timeout 30] [--runs 3] [--eps 1e-8] [--csv OUT]
+                                        [--cid-vars auto] [--workers N]
 
 For every ``.bch`` / ``.mbx`` file in ``DIR``: parse it (a parse error is reported, with its
 line and column), then run the whole ``certsolve solve FILE --timeout T --json`` subprocess
@@ -76,10 +77,12 @@ from certsolve.expr.minibex import MinibexError, load_minibex
 
 
 def run_once(
-    path: Path, timeout: float, eps: float, cid_vars: str = "1"
+    path: Path, timeout: float, eps: float, cid_vars: str = "auto", workers: str | None = None
 ) -> tuple[float, dict | None, str]:
     cmd = [sys.executable, "-m", "certsolve", "solve", str(path), "--json",
            "--timeout", str(timeout), "--eps", str(eps), "--cid-vars", cid_vars]  # fmt: skip
+    if workers is not None:
+        cmd += ["--workers", workers]
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout * 3 + 60)
     wall = time.perf_counter() - t0
@@ -95,7 +98,12 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=3, help="runs per file (median wall time)")
     ap.add_argument("--eps", type=float, default=1e-8, help="the CLI's default, 1e-8")
     ap.add_argument("--csv", type=Path, default=None, help="also write the table as CSV")
-    ap.add_argument("--cid-vars", default="1", help="certsolve solve --cid-vars (1, K or all)")
+    ap.add_argument(
+        "--cid-vars", default="auto", help="certsolve solve --cid-vars (auto, 1, K or all)"
+    )
+    ap.add_argument(
+        "--workers", default=None, help="certsolve solve --workers (default: the CLI's, auto)"
+    )
     args = ap.parse_args()
     files = sorted(p for p in args.dir.iterdir() if p.suffix in (".bch", ".mbx"))
     header = ["file", "n", "status", "solutions", "undecided", "hulls", "boxes", "wall_s"]
@@ -113,7 +121,9 @@ def main() -> None:
         parsed += 1
         walls, result, error = [], None, ""
         for _ in range(args.runs):
-            wall, result, error = run_once(path, args.timeout, args.eps, args.cid_vars)
+            wall, result, error = run_once(
+                path, args.timeout, args.eps, args.cid_vars, args.workers
+            )
             walls.append(wall)
             if result is None:
                 break

@@ -33,7 +33,7 @@ def main() -> None:
     ap.add_argument("--workers", default="1,2")
     ap.add_argument("--timeout", type=float, default=300.0)
     ap.add_argument("--eps", type=float, default=1e-8)
-    ap.add_argument("--cid-vars", default="1", help="comma-separated: 1, K, all, auto")
+    ap.add_argument("--cid-vars", default="auto", help="comma-separated: auto, 1, K, all")
     ap.add_argument("--dir", type=Path, default=HERE, help="folder of Minibex files")
     args = ap.parse_args()
     files = sorted(p for p in args.dir.iterdir() if p.suffix in (".mbx", ".bch"))

@@ -180,7 +180,8 @@ def test_a_killed_worker_process_loses_nothing(katsura):
             os.kill(pids[0], signal.SIGKILL)
             killed.append(pids[0])
 
-    res = solve(system, executor=ProcessExecutor(2, **TASK), progress=progress)
+    # batches of 256 (not the default 1024): enough tasks that one is running at the kill
+    res = solve(system, executor=ProcessExecutor(2, **TASK), progress=progress, batch_size=256)
     assert killed and res.status == "complete" and res.stats.resubmitted >= 1
     assert_same_solutions(res, ref)
 
@@ -199,7 +200,8 @@ def test_a_killed_dask_worker_loses_nothing(katsura, client):
                 os.kill(pids[busy[0]], signal.SIGKILL)
                 killed.append(busy[0])
 
-    res = solve(system, executor=DaskExecutor(client, **TASK), progress=progress)
+    # batches of 256 (not the default 1024): enough tasks that one is running at the kill
+    res = solve(system, executor=DaskExecutor(client, **TASK), progress=progress, batch_size=256)
     assert killed and res.status == "complete" and res.stats.resubmitted >= 1
     assert_same_solutions(res, ref)
     client.wait_for_workers(2, timeout=60)

@@ -23,6 +23,7 @@ from certsolve.expr.minibex import load_minibex
 from certsolve.solver import Solver, solve
 from certsolve.solver.bisectors import smear_scores
 from certsolve.solver.contractors import HC4, IntervalNewton, PartialNewton, log_volume_ratio
+from certsolve.solver.search import run_search
 from certsolve.solver.shaving import CID, AdaptiveCount
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -187,7 +188,7 @@ def test_cid_on_several_variables_keeps_solutions(name):
     csys, _ = compiled(name)
     rng = np.random.default_rng(5)
     every = Solver(csys, cid_vars=None)  # CID on all the variables
-    one = Solver(csys)  # default: the chosen variable only
+    one = Solver(csys, cid_vars=1)  # the chosen variable only
     assert every.cid_vars == csys.n and one.cid_vars == 1
     gains = []
 
@@ -210,7 +211,7 @@ def test_cid_on_several_variables_keeps_solutions(name):
 
 def test_cid_vars_needs_fewer_boxes_and_keeps_the_solutions():
     system = load_minibex(SYSTEMS / "eco-6.mbx")
-    one = solve(system, timeout=300)
+    one = solve(system, cid_vars=1, timeout=300)
     every = solve(system, cid_vars=None, timeout=300)
     assert one.status == every.status == "complete"
     assert len(one.solutions) == len(every.solutions) == len(REFERENCE["eco-6"]["solutions"])
@@ -246,33 +247,43 @@ def test_cid_on_several_variables_is_the_sequence_box_by_box(name):
 
 
 def test_adaptive_count_learns_the_mean_need():
-    """ACID's rule: every variable during the learning calls, then the mean count the
-    boxes needed (rounded up, at least 1) until the next learning phase."""
-    acid = AdaptiveCount(7, cycle=4, learn=2)
-    assert acid.count == 7 and acid.learning()
-    acid.done(np.array([1, 2, 4]))
-    assert acid.learning()
-    acid.done(np.array([3]))  # mean 2.5 -> 3
-    assert not acid.learning() and acid.count == 3
-    acid.done(None)
-    acid.done(None)
-    assert acid.learning() and acid.count == 3  # kept through the next learning phase
-    acid.done(np.array([1, 1]))
-    acid.done(np.array([1]))
-    assert acid.count == 1
+    """ACID's rule, counted in boxes: the last ``learn`` boxes of every ``cycle`` shave more
+    (all the variables in the first phase, then twice the learnt count) and record what they
+    needed; at the end of a phase the mean (rounded up, at least 1) is the count in use.
+    Until the first phase ends the count is ``start``: the chosen variable only."""
+    acid = AdaptiveCount(7, cycle=10, learn=4)
+    limit, learns = acid.plan(5)  # boxes 0-4: no learning yet, the chosen variable only
+    assert limit.tolist() == [1] * 5 and not learns.any()
+    acid.done(np.zeros(0, dtype=int), 5)
+    limit, learns = acid.plan(3)  # boxes 5-7: 6 and 7 learn, with every variable
+    assert learns.tolist() == [False, True, True] and limit.tolist() == [1, 7, 7]
+    acid.done(np.array([1, 2]), 3)
+    assert acid.count == 1 and acid.phases == 0  # the phase is not over
+    limit, learns = acid.plan(3)  # boxes 8-10: 8 and 9 end the phase
+    assert learns.tolist() == [True, True, False] and limit.tolist() == [7, 7, 1]
+    acid.done(np.array([4, 3]), 3)  # mean 2.5 -> 3
+    assert acid.count == 3 and acid.phases == 1
+    limit, learns = acid.plan(9)  # boxes 11-19: 16-19 learn with twice the count
+    assert learns.tolist() == [False] * 5 + [True] * 4 and limit.tolist() == [3] * 5 + [6] * 4
+    acid.done(np.array([1, 1, 1, 2]), 9)
+    assert acid.count == 2 and acid.phases == 2  # mean 1.25 -> 2
     with pytest.raises(ValueError):
         AdaptiveCount(3, cycle=2, learn=3)
+    plain = AdaptiveCount(3, cycle=10, learn=4, count=1, phases=1, boxes=16, double=False)
+    assert plain.plan(1)[0].tolist() == [3]  # without doubling, learning shaves every variable
 
 
 @pytest.mark.parametrize("name", ["eco-6", "kin2-6r"])
 def test_auto_cid_count_keeps_every_solution(name):
     """cid_vars="auto" changes how much is shaved, never what is found."""
     system = load_minibex(SYSTEMS / f"{name}.mbx")
-    one = solve(system, timeout=300)
+    one = solve(system, cid_vars=1, timeout=300)
     auto = Solver(system, cid_vars="auto")
     res = auto.solve(timeout=300)
     assert res.status == one.status == "complete"
     assert len(res.solutions) == len(one.solutions) == len(REFERENCE[name]["solutions"])
-    assert auto.acid is not None and auto.acid.calls > 0 and 1 <= auto.acid.count <= system.n
+    dom = auto.domain
+    acid = run_search(auto, dom[:, 0][None], dom[:, 1][None]).state.acid  # the search's state
+    assert acid is not None and acid.boxes > 0 and 1 <= acid.count <= system.n
     for s in res.solutions:
         assert sum(np.all((s.lo <= o.hi) & (o.lo <= s.hi)) for o in one.solutions) == 1

@@ -8,14 +8,19 @@ round again.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from certsolve.expr import System, var
+from certsolve.expr.minibex import load_minibex
 from certsolve.kinematics import FKSolver, with_tau_max
 from certsolve.kinematics.fk_solver import ALPHA_MAX
 from certsolve.robot import Robot
 from certsolve.solver import Solver
+
+SYSTEMS = Path(__file__).resolve().parent.parent / "examples" / "systems"
 
 
 def _cubic():
@@ -51,3 +56,23 @@ def test_frame_bisector_splits_the_position_only_when_much_wider(tau, alpha):
     fk.search_box(np.zeros(robot.m))
     fk._prepare(np.zeros(robot.m))
     assert fk.solver.bisector.alpha == pytest.approx(alpha)
+
+
+def test_variables_narrower_than_eps_do_not_count_as_progress():
+    """A component converging to an exact zero (``[-1e-200, 1e-200]`` -> ``[-1e-250,
+    1e-250]``) is no progress towards a bisection: the box must not go round again for it."""
+    solver = Solver(_cubic(), eps=1e-8)
+    lo0, hi0 = np.array([[0.5, -1e-200]]), np.array([[0.6, 1e-200]])
+    lo1, hi1 = np.array([[0.5, -1e-250]]), np.array([[0.6, 1e-250]])
+    assert solver._gain(lo0, hi0, lo1, hi1)[0] == 0.0
+    lo1[0, 0] = 0.55  # the wide variable halved: that counts
+    assert solver._gain(lo0, hi0, lo1, hi1)[0] == pytest.approx(np.log(0.5))
+
+
+def test_no_long_tail_of_single_box_rounds_at_a_solution_with_zeros():
+    """katsura-5 has the solution (1, 0, 0, 0, 0, 0): near it, HC4 shrinks the zero components
+    by orders of magnitude at every round.  Counted as progress, one box went round again
+    ~180 times (210 batches in all with batches of 1024; 28 without the tail)."""
+    res = Solver(load_minibex(SYSTEMS / "katsura-5.mbx"), batch_size=1024).solve(timeout=300)
+    assert res.status == "complete" and len(res.solutions) == 16 and not res.undecided
+    assert res.stats.rounds < 60

@@ -50,11 +50,11 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--cid-vars",
-        default="1",
+        default="auto",
         metavar="K|all|auto",
-        help="variables shaved by CID before each bisection: the chosen one (default "
-        "%(default)s), the first K by smear score, all (fewer boxes, more time per box), or "
-        "auto (the count learnt during the search, as IBEX's ACID)",
+        help="variables shaved by CID before each bisection: the chosen one (1), the first "
+        "K by smear score, all (fewer boxes, more time per box), or auto (default: the count "
+        "learnt during the search, as IBEX's ACID)",
     )
     add_executor_options(p)
     add_checkpoint_options(p)

@@ -170,6 +170,7 @@ class FKSolver:
             bisector=bisector,
             newton_groups=_newton_groups(self.form.system.variables),
             cid_slices=0,
+            cid_vars=1,  # CID is off: nothing to learn (and the checkpoint fingerprint stays)
             relax=False,
         )
         self.csys = self.solver.csys

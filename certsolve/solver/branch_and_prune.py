@@ -70,7 +70,10 @@ class Solver:
         boxes whose every component is narrower than ``eps`` are not bisected further;
         if still undecided they are reported as such.
     batch_size:
-        boxes processed per round (per numpy call).
+        boxes processed per round (per numpy call).  Default 1024: a batch costs ~8 ms of
+        numpy calls plus its boxes, so on ``examples/systems`` 1024 takes 1.3-1.5x less CPU
+        than 256 for the same boxes (katsura-6 51,246 boxes: 6.6 -> 3.9-4.7 s; katsura-5
+        0.95 -> 0.69 s); box counts were equal on every file.
     hc4_passes, bisector, certifier:
         swappable parts (defaults: 4 HC4 passes, smear-sum-relative bisection, Krawczyk).
     newton_groups:
@@ -84,13 +87,16 @@ class Solver:
     cid_vars:
         how many variables CID contracts before a bisection: the chosen one, then the others
         by decreasing smear score (variables that may be split and have a positive score);
-        ``None``: all of them; ``"auto"``: the count learnt during the search
-        (:class:`~.shaving.AdaptiveCount`, IBEX's ACID rule).  Default 1, the chosen
-        variable only.  Measured with ``None`` against 1: on IBEX's benchmarks 2-9x fewer
-        boxes (Eco9 2x, transistor 4.6x, Brent-8 6.5x, Brent-10 9x) and two more files
-        complete within 30 s (transistor, Brent-10), but 1.3-2x the CPU time on
-        ``examples/systems`` (katsura-6 51285 -> 43372 boxes, 6.2 -> 9.0 s); ``"auto"``
-        sits between (katsura-6 46752 boxes, 7.7 s).
+        ``None``: all of them; ``"auto"`` (default): the count learnt during the search
+        (:class:`~.shaving.AdaptiveCount`, IBEX's ACID rule; the learnt state is the
+        search's, :attr:`SearchState.acid`).  Measured against 1 (batches of 1024, one
+        process, CPU s): on IBEX's benchmarks up to 8x fewer boxes and half the time or
+        less on the hard files (Brent-10 152,065 -> 19,257 boxes, 23 -> 13 s; transistor
+        235,364 -> 63,852 boxes, 27 -> 16 s; Discrete-Integral-6 119,805 -> 19,016 boxes,
+        8.2 -> 2.2 s), but 1.1-1.25x the time on medium systems of ``examples/systems``
+        (katsura-6 51,246 -> 46,397 boxes, 4.9 -> 5.2 s; eco-7 0.90 -> 1.12 s; kin2-6r
+        0.97 -> 1.18 s); searches of fewer than ~950 boxes never learn, so cost the same.
+        ``None`` against 1: 2-9x fewer boxes, 1.3-2x the CPU time on ``examples/systems``.
     subsystems:
         square sub-systems ``(equations, variables)`` also contracted by partial Newton.
     max_undecided, max_pending:
@@ -107,7 +113,7 @@ class Solver:
         system: System | CompiledSystem,
         *,
         eps: float = 1e-8,
-        batch_size: int = 256,
+        batch_size: int = 1024,
         hc4_passes: int = 4,
         bisector=None,
         certifier: Certifier | None = None,
@@ -115,7 +121,7 @@ class Solver:
         subsystems=(),
         newton_groups="variables",
         cid_slices: int = 4,
-        cid_vars: int | str | None = 1,
+        cid_vars: int | str | None = "auto",
         max_undecided: int = MAX_LISTED,
         max_pending: int = MAX_LISTED,
         relax: bool = True,
@@ -147,9 +153,10 @@ class Solver:
         #: it shrinks as much as a bisection goes round again instead of being split
         self.cid = CID(self.hc4.contract, cid_slices) if cid_slices else None
         self.cid_gain = _LOG_HALF
-        #: learns the count of variables to shave (``cid_vars="auto"``; None: fixed count)
-        self.acid = AdaptiveCount(self.n) if cid_vars == "auto" else None
-        if self.acid is None and cid_vars is not None and not int(cid_vars) >= 1:
+        #: learn the count of variables to shave (``cid_vars="auto"``; the learnt state is
+        #: the search's: :attr:`SearchState.acid`)
+        self.auto_cid = cid_vars == "auto" and self.cid is not None
+        if cid_vars not in (None, "auto") and not int(cid_vars) >= 1:
             raise ValueError("cid_vars must be >= 1, None (all variables) or 'auto'")
         #: variables CID contracts before a bisection (chosen first, then by smear score)
         self.cid_vars = self.n if cid_vars in (None, "auto") else min(int(cid_vars), self.n)
@@ -255,7 +262,7 @@ class Solver:
             f"parameters: {c.param_names} {c.param_lo.tolist()!r} {c.param_hi.tolist()!r}",
             f"eps: {self.eps!r}, hc4: {self.hc4.max_passes}, relax: {self.relax is not None}, "
             f"cid: {None if self.cid is None else self.cid.slices} x "
-            f"{'auto' if self.acid is not None else self.cid_vars}, "
+            f"{'auto' if self.auto_cid else self.cid_vars}, "
             f"mask: {mask}",
             f"newton: {[g.tolist() for g in self.newton.groups or []]}",
             f"partial: {[(p.S.tolist(), p.V.tolist()) for p in self.partial]}",
@@ -264,31 +271,40 @@ class Solver:
         return "\n".join(parts)
 
     def start(self, known: bytes | None = None) -> SearchState:
-        """An empty search state, with the solutions in ``known`` (see :meth:`known`)."""
-        sols = SolutionSet(self.n) if known is None else pickle.loads(known)
-        return SearchState(BoxStack(self.n), sols, [], Stats(), mark=len(sols))
+        """An empty search state, with the solutions and the learnt CID count in ``known``
+        (see :meth:`known`)."""
+        if known is None:
+            sols, acid = SolutionSet(self.n), AdaptiveCount(self.n) if self.auto_cid else None
+        else:
+            sols, acid = pickle.loads(known)
+        return SearchState(BoxStack(self.n), sols, [], Stats(), mark=len(sols), acid=acid)
 
     def tally(self, state: SearchState) -> Tally:
         return Tally(solutions=state.solutions.count("ok"), undecided=len(state.undecided))
 
     def known(self, state: SearchState) -> bytes:
-        """The solution set, pickled (for tasks: unpickling is ~100x faster than adding the
-        solutions one by one, and the copy is the task's own)."""
-        return pickle.dumps(state.solutions, protocol=pickle.HIGHEST_PROTOCOL)
+        """The solution set and the learnt CID count, pickled (for tasks: unpickling is
+        ~100x faster than adding the solutions one by one, and the copy is the task's
+        own; a task goes on with the count its search has learnt)."""
+        return pickle.dumps((state.solutions, state.acid), protocol=pickle.HIGHEST_PROTOCOL)
 
     def found(self, state: SearchState):
-        """Solutions recorded since :meth:`start`, undecided boxes and counters."""
+        """Solutions recorded since :meth:`start`, undecided boxes, counters and the learnt
+        CID count."""
         sols = state.solutions
         new = range(state.mark, len(sols))
         entries = [
             (sols.E_lo[i], sols.E_hi[i], sols.U_lo[i], sols.U_hi[i], sols.kind[i]) for i in new
         ]
         st = state.stats
-        return entries, state.undecided, (st.bisections, st.certified, st.duplicates)
+        counters = (st.bisections, st.certified, st.duplicates)
+        return entries, state.undecided, counters, copy.copy(state.acid)
 
     def merge(self, state: SearchState, found) -> None:
-        """Add a task's findings; a solution two tasks proved is recorded once."""
-        entries, undecided, (bisections, certified, duplicates) = found
+        """Add a task's findings; a solution two tasks proved is recorded once.  The learnt
+        CID count is the task's (the latest a task brings home; a checkpoint's on restore)."""
+        entries, undecided, (bisections, certified, duplicates), *rest = found
+        acid = rest[0] if rest else None  # absent from checkpoints written before it was kept
         for e0, e1, u0, u1, kind in entries:
             if kind == "alias":
                 state.solutions.add(e0, e1, u0, u1, "alias")
@@ -298,6 +314,8 @@ class Solver:
         state.stats.bisections += bisections
         state.stats.certified += certified
         state.stats.duplicates += duplicates
+        if acid is not None and state.acid is not None:
+            state.acid = copy.copy(acid)
 
     def process(self, lo: np.ndarray, hi: np.ndarray, state: SearchState) -> None:
         """One batched contract / certify / bisect step on the boxes ``lo, hi``."""
@@ -342,11 +360,7 @@ class Solver:
         # the variables the bisector may split count: auxiliary ones (FK wire lengths) narrow
         # whenever the others move, and another round for them alone gains little (measured:
         # general-19 at 60 N, 406,749 -> 357,470 boxes; random-general-0: see docs/fk-cost.md)
-        m = self.bisect_mask
-        if m is None:
-            shrunk = log_volume_ratio(lo0, hi0, lo1, hi1) <= _LOG_HALF
-        else:
-            shrunk = log_volume_ratio(lo0[:, m], hi0[:, m], lo1[:, m], hi1[:, m]) <= _LOG_HALF
+        shrunk = self._gain(lo0, hi0, lo1, hi1) <= _LOG_HALF
         if np.any(shrunk):
             state.stack.push(lo1[shrunk], hi1[shrunk])
         stalled = ~shrunk
@@ -387,8 +401,8 @@ class Solver:
             jlo3, jhi3 = jlo[todo][big], jhi[todo][big]
             var = self.bisector.choose(lo3, hi3, jlo3, jhi3, self.eps, self.bisect_mask)
             if self.cid is not None:
-                clo, chi, cemp = self._cid(lo3, hi3, jlo3, jhi3, var)
-                gain = log_volume_ratio(lo3, hi3, clo, chi)
+                clo, chi, cemp = self._cid(lo3, hi3, jlo3, jhi3, var, state.acid)
+                gain = self._gain(lo3, hi3, clo, chi)
                 again = ~cemp & (gain <= self.cid_gain)
                 if np.any(again):
                     state.stack.push(clo[again], chi[again])
@@ -398,42 +412,59 @@ class Solver:
             stats.bisections += lo3.shape[0]
             state.stack.push(np.concatenate([alo, blo]), np.concatenate([ahi, bhi]))
 
-    def _cid(self, lo, hi, jlo, jhi, var):
+    def _gain(self, lo0, hi0, lo1, hi1) -> np.ndarray:
+        """Log-volume change from ``lo0, hi0`` to ``lo1, hi1`` over the variables the
+        bisector may still split: those of the mask, wider than ``eps`` in ``lo0, hi0``.
+
+        A variable narrower than ``eps`` is never split, so its shrinking is no progress
+        towards a decision: counted, a component converging to an exact zero (``[-1e-200,
+        1e-200]``, then ``[-1e-250, 1e-250]`` ...) looked like a halving of the volume at
+        every round, and one box went round again ~180 times (katsura-5, batches of 1024).
+        """
+        count = (hi0 - lo0) > self.eps
+        if self.bisect_mask is not None:
+            count &= self.bisect_mask
+        lo0, hi0 = np.where(count, lo0, 0.0), np.where(count, hi0, 0.0)
+        return log_volume_ratio(lo0, hi0, lo1, hi1)
+
+    def _cid(self, lo, hi, jlo, jhi, var, acid: AdaptiveCount | None = None):
         """CID on ``var`` then on up to ``cid_vars - 1`` other variables of each box (or the
-        learnt count; all of them in a learning call), by decreasing smear score over the
-        box (``J`` is its enclosure from Newton).
+        count ``acid`` has learnt, more for its learning boxes; this call updates it), by
+        decreasing smear score over the box (``J`` is its enclosure from Newton).
 
         Each round is one batched CID call on the boxes that still have a variable to
         contract; every call is sound (:class:`~.shaving.CID`), so is the sequence.  A box
         proven empty stays empty.  Returns ``(lo, hi, empty)``.
         """
+        assert self.cid is not None  # called only with CID on
         clo, chi, cemp = self.cid.contract(lo, hi, var)
-        learning = self.acid is not None and self.acid.learning()
-        if self.acid is None:
-            extra = self.cid_vars - 1
+        B = lo.shape[0]
+        if acid is None:
+            limit, learns = np.full(B, self.cid_vars), np.zeros(B, dtype=bool)
         else:
-            extra = self.n - 1 if learning else self.acid.count - 1
-        needed = np.ones(lo.shape[0], dtype=np.int64) if learning else None
-        if extra > 0 and lo.shape[0]:
-            rows = np.arange(lo.shape[0])
+            limit, learns = acid.plan(B)
+        needed = np.ones(B, dtype=np.int64)  # recorded for the learning boxes only
+        extra = int(np.max(limit, initial=1)) - 1
+        if extra > 0:
+            rows = np.arange(B)
             score = smear_scores(lo, hi, jlo, jhi, self.eps, self.bisect_mask)
             score[rows, var] = -1.0
             order = np.argsort(-score, axis=1, kind="stable")[:, :extra]
             useful = np.take_along_axis(score, order, axis=1) > 0.0
+            useful &= np.arange(order.shape[1]) < (limit - 1)[:, None]
             for k in range(order.shape[1]):
                 act = np.flatnonzero(useful[:, k] & ~cemp)
                 if act.size == 0:
                     break  # scores are sorted: no box has a k-th (or later) variable left
                 nlo, nhi, emp = self.cid.contract(clo[act], chi[act], order[act, k])
-                if needed is not None:
-                    shrank = emp | (
-                        log_volume_ratio(clo[act], chi[act], nlo, nhi) < self.acid.threshold
-                    )
+                if acid is not None:
+                    gain = log_volume_ratio(clo[act], chi[act], nlo, nhi)
+                    shrank = learns[act] & (emp | (gain < acid.threshold))
                     needed[act[shrank]] = k + 2  # the chosen variable, then k + 1 others
                 clo[act], chi[act] = nlo, nhi
                 cemp[act] |= emp
-        if self.acid is not None:
-            self.acid.done(needed)
+        if acid is not None:
+            acid.done(needed[learns], B)
         return clo, chi, cemp
 
     def _record(self, state: SearchState, elo, ehi, ulo, uhi, tight: bool = True) -> None:
@@ -513,6 +544,7 @@ class SearchState:
     undecided: list
     stats: Stats  # the step's counters: bisections, certified, duplicates
     mark: int = 0  # solutions[:mark] were known when the state started
+    acid: AdaptiveCount | None = None  # the learnt CID count (``cid_vars="auto"``)
 
 
 def solve(

@@ -114,21 +114,26 @@ class SolutionSet:
         """
         B, n = lo.shape
         none = np.empty((0, n))
+        keep = np.ones(B, dtype=bool)
         if not len(self.kind) or B == 0:
-            return np.ones(B, dtype=bool), none, none
-        cover = lo[:, None, :] >= self._ulo[None]
-        cover &= hi[:, None, :] <= self._uhi[None]
-        inside = all_last(cover)
-        keep = ~np.any(inside, axis=1)
-        meet = lo[:, None, :] < self._uhi[None]
-        meet &= hi[:, None, :] > self._ulo[None]
-        overlap = all_last(meet)
+            return keep, none, none
+        # only pairs whose closed boxes meet can be "inside" or overlap: most boxes meet
+        # no unicity box, so the tests below run on those pairs only (row-major order kept)
+        near = lo[:, None, :] <= self._uhi[None]
+        near &= hi[:, None, :] >= self._ulo[None]
+        rows, us = np.nonzero(all_last(near))
+        if rows.size == 0:
+            return keep, none, none
+        blo, bhi, ulo, uhi = lo[rows], hi[rows], self._ulo[us], self._uhi[us]
+        cover = (blo >= ulo) & (bhi <= uhi)
+        keep[rows[all_last(cover)]] = False
+        overlap = all_last((blo < uhi) & (bhi > ulo))
         uncovered = n - count_last(cover)  # directions where U does not cover the box
-        clip = keep[:, None] & overlap & (uncovered == 1)
+        clip = keep[rows] & overlap & (uncovered == 1)
         if not np.any(clip):
             return keep, none, none
         plo, phi = [], []
-        rows, us = np.nonzero(clip)
+        rows, us = rows[clip], us[clip]
         done = set()
         for r, k in zip(rows.tolist(), us.tolist()):
             if r in done:

@@ -29,10 +29,10 @@ class SolveParams(Params):
         default=1000, ge=1, le=100_000, description="hulls listing the boxes left by a limit"
     )
     cid_vars: Annotated[int, Field(ge=1, le=MAX_VARIABLES)] | Literal["all", "auto"] = Field(
-        default=1,
+        default="auto",
         description="variables shaved by CID before a bisection: the chosen one (1), the "
-        "first k by smear score, all (fewer boxes, more time per box), or auto (the count "
-        "learnt during the search, as IBEX's ACID)",
+        "first k by smear score, all (fewer boxes, more time per box), or auto (default: "
+        "the count learnt during the search, as IBEX's ACID)",
     )
 
     @field_validator("cid_vars", mode="before")
