@@ -152,8 +152,14 @@ class FKSolver:
         # 8192 are slower again (cache).  Peak RSS of T-16 at 60 N: 160 MB (113 MB at 512).
         self.robot = robot
         self.form: FKFormulation = build_formulation(robot, formulation)
-        # wire lengths are auxiliary: fixed by the pose through the length equations
+        # auxiliary variables, never split: the wire lengths (fixed by the pose through the
+        # length equations) and, in general-19's frame, the fourth edge vector (fixed by the
+        # other two through the fourth-point equalities; splitting only E_2, E_3 and P_1:
+        # general-19 at 60 N u~S(2) 332,650 -> 174,968 boxes, u~S(3) 304,304 -> 226,492,
+        # at 10 N 156,523 -> 130,749; random-general-0 at 60 N 3.92M -> 3.85M)
         mask = [not v.startswith("rho") for v in self.form.system.variables]
+        for j in self.form.info.get("determined", []):
+            mask[j] = False
         sub = self.form.info.get("translation")
         subsystems = [(sub["equations"], sub["variables"])] if sub else []
         bisector = None

@@ -653,6 +653,9 @@ def _platform_formulation(
     domain = _with_rho(rows, robot, np.zeros(robot.m), d, k)
     system = _system(robot, names, domain, eqs, constraints, name)
     info: dict = {"points": [int(i) for i in sel]}
+    if frame and d == 3 and k == 4:
+        # E_4 follows E_2 and E_3 through the fourth-point equalities: not split (see FKSolver)
+        info["determined"] = list(range(3 * d, 4 * d))
     if frame:
         # lengths + forces in (P_1, ρ): a square sub-system, well conditioned for a whole
         # box of orientations (partial Newton, see FKSolver)
