@@ -33,6 +33,11 @@ __all__ = ["FKPose", "FKResult", "FKSolver", "with_tau_max"]
 #: the largest share of the position's width over the orientation's at which the frame
 #: bisector still splits the orientation (:class:`.Prioritized` ``alpha``, see ``_prepare``)
 ALPHA_MAX = 0.5
+#: the same for general-19, whose orientation is split on E_2 and E_3 only (E_4 auxiliary):
+#: each split of them gains more, and the position is worth splitting later (at 60 N, 0.35
+#: against 0.5: u~S(2) 174,968 -> 164,109 boxes, u~S(3) 226,492 -> 201,974,
+#: random-general-0 3.85M -> 3.21M; T-16 keeps 0.5: 0.35 costs it 17 % more boxes)
+ALPHA_MAX_GENERAL = 0.35
 
 
 @dataclass
@@ -215,7 +220,8 @@ class FKSolver:
             # T-16 u=2 at 60 N, 8 % and 1 % fewer boxes; docs/fk-cost.md)
             rho = np.array([v.startswith("rho") for v in self.form.system.variables])
             width = float(np.mean(dom[rho, 1] - dom[rho, 0])) if rho.any() else 0.0
-            bis.alpha = float(np.clip(width / 25.0, 0.25, ALPHA_MAX))
+            cap = ALPHA_MAX_GENERAL if self.form.info.get("determined") else ALPHA_MAX
+            bis.alpha = float(np.clip(width / 25.0, 0.25, cap))
         return u, dom, ok
 
     def solve(
