@@ -1,7 +1,9 @@
 """The fourth-point constraints of general-19: ``E4 = a E2 + b E3 + c (E2 × E3)``.
 
 They are redundant (contraction only): they must hold at every proper pose, fail at the
-mirror image, and leave the certified poses of a search unchanged when switched off.
+mirror image, and leave the certified poses of a search unchanged when switched off.  With
+them, the frame formulation never splits ``E4`` (an auxiliary variable, like the wire
+lengths): splitting it too must certify the same poses.
 """
 
 from __future__ import annotations
@@ -63,4 +65,25 @@ def test_search_finds_the_same_poses_without_them(name, monkeypatch):
         assert res.status == "complete"
         assert len(matching(res, robot, pose)) == 1
         found.append(np.array(sorted(s.position.tolist() for s in res.solutions)))
+    assert found[0].shape == found[1].shape and np.allclose(found[0], found[1], atol=1e-7)
+
+
+def test_e4_is_auxiliary_and_splitting_it_finds_the_same_poses():
+    robot = load("marionet")
+    fk = FKSolver(robot, "auto")
+    names = fk.form.system.variables
+    e4 = [names.index(v) for v in ("ex4", "ey4", "ez4")]
+    assert fk.form.info["determined"] == e4
+    assert not fk.solver.bisect_mask[e4].any() and fk.solver.bisect_mask[:9].all()
+    pose = Pose.from_params(6, (108, 60, 104, 5, 3, -4))
+    u = ik_u(robot, pose)
+    found = []
+    for split_e4 in (False, True):
+        fk = FKSolver(robot, "auto")
+        if split_e4:
+            fk.solver.bisect_mask[e4] = True
+        res = fk.solve(u, boxes=local_boxes(fk, robot, pose, 2.0, u), timeout=120)
+        assert res.status == "complete" and not res.undecided
+        assert len(matching(res, robot, pose)) == 1
+        found.append(np.array(sorted(s.platform_points.ravel().tolist() for s in res.solutions)))
     assert found[0].shape == found[1].shape and np.allclose(found[0], found[1], atol=1e-7)

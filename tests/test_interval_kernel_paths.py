@@ -212,3 +212,47 @@ def test_merged_forward_groups_give_the_level_by_level_bits(name):
             u, v = prog.eval_float(x, csys.param_mid), levelwise.eval_float(x, csys.param_mid)
             assert np.array_equal(u.view(np.int64), v.view(np.int64))
     assert len(csys.hc4.fwd_groups) < len(csys.hc4.groups) or name != "eco-7"
+
+
+def test_batched_inverse_with_singular_members_equals_the_one_call_inverses():
+    """Singular matrices in a stack get NaN and ``ok = False``; the others get exactly the
+    inverse one ``np.linalg.inv`` call on them gives (the stack is halved, not looped)."""
+    from certsolve.interval.linalg import batched_inverse
+
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(257, 4, 4))
+    A[[0, 100, 256]] = 0.0
+    A[9, :, 2] = 0.0
+    A[17, 0] = np.inf
+    Y, ok = batched_inverse(A)
+    assert np.flatnonzero(~ok).tolist() == [0, 9, 17, 100, 256]
+    assert np.all(np.isnan(Y[~ok]))
+    assert np.array_equal(Y[ok], np.linalg.inv(A[ok]))
+
+
+def test_hc4_intersects_the_ranges_of_an_expression_given_twice():
+    """An expression bounded by two constraints (one graph node, two ranges) is bounded by
+    their intersection, in either order; an empty intersection proves the box empty."""
+    from certsolve.expr import Constraint, System, var
+    from certsolve.expr.compiled import CompiledSystem
+
+    x, y = var("x"), var("y")
+    s = x + y
+
+    def revise(r1, r2):
+        system = System(
+            variables=["x", "y"],
+            domain=[[0.0, 5.0], [0.0, 5.0]],
+            equations=[x - y, x * y - 0.01],
+            constraints=[Constraint(s, *r1), Constraint(s, *r2)],
+        )
+        csys = CompiledSystem(system)
+        assert csys.hc4_out.size < len(csys.hc4.outputs)  # the node is shared
+        return csys.hc4_revise(np.array([[0.0, 0.0]]), np.array([[5.0, 5.0]]))
+
+    for r1, r2 in [((-1.0, 0.5), (0.25, 2.0)), ((0.25, 2.0), (-1.0, 0.5))]:
+        lo, hi, empty = revise(r1, r2)
+        assert not empty[0]
+        assert np.all(hi[0] <= 0.5) and np.all(lo[0] >= 0.0)  # x + y <= 0.5, x, y >= 0
+    _, _, empty = revise((-1.0, 0.2), (0.25, 2.0))
+    assert empty[0]

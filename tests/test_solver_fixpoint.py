@@ -16,7 +16,7 @@ import pytest
 from certsolve.expr import System, var
 from certsolve.expr.minibex import load_minibex
 from certsolve.kinematics import FKSolver, with_tau_max
-from certsolve.kinematics.fk_solver import ALPHA_MAX
+from certsolve.kinematics.fk_solver import ALPHA_MAX, ALPHA_MAX_GENERAL
 from certsolve.robot import Robot
 from certsolve.solver import Solver
 
@@ -49,9 +49,17 @@ def test_same_roots_with_and_without_the_mask(mask):
     assert np.allclose(mids, [-1.0, 0.0, 1.0], atol=1e-9)
 
 
-@pytest.mark.parametrize(("tau", "alpha"), [(60.0, ALPHA_MAX), (10.0, 0.25)])
-def test_frame_bisector_splits_the_position_only_when_much_wider(tau, alpha):
-    robot = with_tau_max(Robot.load("examples/robots/marionet.json"), tau)
+@pytest.mark.parametrize(
+    ("name", "tau", "alpha"),
+    [
+        ("marionet", 60.0, ALPHA_MAX_GENERAL),
+        ("marionet", 10.0, 0.25),
+        ("marionet-t", 60.0, ALPHA_MAX),
+        ("marionet-t", 10.0, 0.25),
+    ],
+)
+def test_frame_bisector_splits_the_position_only_when_much_wider(name, tau, alpha):
+    robot = with_tau_max(Robot.load(f"examples/robots/{name}.json"), tau)
     fk = FKSolver(robot)
     fk.search_box(np.zeros(robot.m))
     fk._prepare(np.zeros(robot.m))

@@ -38,13 +38,17 @@ class CompiledSystem:
 
         hc4_out = self.eq_roots + self.cons_roots
         self.hc4 = Program(g, hc4_out)
-        self.hc4_target_lo = np.array(
-            [0.0] * n + [c.lo for c in system.constraints], dtype=np.float64
-        )[:, None]
-        self.hc4_target_hi = np.array(
-            [0.0] * n + [c.hi for c in system.constraints], dtype=np.float64
-        )[:, None]
-        self._hc4_out_unique = len(np.unique(self.hc4.outputs)) == len(self.hc4.outputs)
+        # the range each output must lie in (equations: 0); an expression that is both an
+        # equation and a constraint (or two constraints) gets the intersection, once
+        tlo = np.array([0.0] * n + [c.lo for c in system.constraints], dtype=np.float64)
+        thi = np.array([0.0] * n + [c.hi for c in system.constraints], dtype=np.float64)
+        self.hc4_out, inverse = np.unique(self.hc4.outputs, return_inverse=True)
+        self.hc4_target_lo = np.full(self.hc4_out.size, -np.inf)
+        self.hc4_target_hi = np.full(self.hc4_out.size, np.inf)
+        np.fmax.at(self.hc4_target_lo, inverse, tlo)
+        np.fmin.at(self.hc4_target_hi, inverse, thi)
+        self.hc4_target_lo = self.hc4_target_lo[:, None]
+        self.hc4_target_hi = self.hc4_target_hi[:, None]
 
         self.f = Program(g, self.eq_roots)
         jac_nodes = [d for row in jac for d in row if d is not None]
@@ -221,13 +225,9 @@ class CompiledSystem:
         """
         p = self.hc4
         LO, HI = p.eval_interval(lo, hi, self.param_lo, self.param_hi)
-        out = p.outputs
-        if self._hc4_out_unique:
-            LO[out] = np.fmax(LO[out], self.hc4_target_lo)
-            HI[out] = np.fmin(HI[out], self.hc4_target_hi)
-        else:
-            np.fmax.at(LO, out, np.broadcast_to(self.hc4_target_lo, LO[out].shape))
-            np.fmin.at(HI, out, np.broadcast_to(self.hc4_target_hi, HI[out].shape))
+        out = self.hc4_out
+        LO[out] = np.fmax(LO[out], self.hc4_target_lo)
+        HI[out] = np.fmin(HI[out], self.hc4_target_hi)
         p.revise(LO, HI)
         empty = np.any(~(LO <= HI), axis=0)
         n = self.n

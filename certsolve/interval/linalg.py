@@ -132,20 +132,26 @@ def batched_inverse(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Y = np.full_like(A, np.nan)
     if not np.any(finite):
         return Y, finite
-    Af = A[finite]
-    try:
-        with np.errstate(all="ignore"):
-            Yf = np.linalg.inv(Af)
-    except np.linalg.LinAlgError:
-        Yf = np.full_like(Af, np.nan)
-        for k in range(Af.shape[0]):  # rare: some exactly singular matrix in the batch
-            try:
-                Yf[k] = np.linalg.inv(Af[k])
-            except np.linalg.LinAlgError:
-                pass
-    Y[finite] = Yf
+    Y[finite] = _inverse_or_nan(A[finite])
     ok = np.all(np.isfinite(Y), axis=(-2, -1))
     return Y, ok
+
+
+def _inverse_or_nan(A: np.ndarray) -> np.ndarray:
+    """``np.linalg.inv`` of a stack, NaN for the exactly singular matrices.
+
+    numpy refuses the whole stack if one matrix is singular; the stack is then halved until
+    the singular ones are alone: a few calls per singular matrix instead of one per matrix
+    (the inverses are the ones a single call would give).
+    """
+    try:
+        with np.errstate(all="ignore"):
+            return np.linalg.inv(A)
+    except np.linalg.LinAlgError:
+        if A.shape[0] == 1:
+            return np.full_like(A, np.nan)
+        h = A.shape[0] // 2
+        return np.concatenate([_inverse_or_nan(A[:h]), _inverse_or_nan(A[h:])])
 
 
 @dataclass(kw_only=True)

@@ -33,6 +33,11 @@ __all__ = ["FKPose", "FKResult", "FKSolver", "with_tau_max"]
 #: the largest share of the position's width over the orientation's at which the frame
 #: bisector still splits the orientation (:class:`.Prioritized` ``alpha``, see ``_prepare``)
 ALPHA_MAX = 0.5
+#: the same for general-19, whose orientation is split on E_2 and E_3 only (E_4 auxiliary):
+#: each split of them gains more, and the position is worth splitting later (at 60 N, 0.35
+#: against 0.5: u~S(2) 174,968 -> 164,109 boxes, u~S(3) 226,492 -> 201,974,
+#: random-general-0 3.85M -> 3.21M; T-16 keeps 0.5: 0.35 costs it 17 % more boxes)
+ALPHA_MAX_GENERAL = 0.35
 
 
 @dataclass
@@ -144,12 +149,22 @@ class FKSolver:
         formulation: str = "auto",
         *,
         eps: float = 1e-8,
-        batch_size: int = 512,
+        batch_size: int = 2048,
     ):
+        # batch_size: boxes per numpy call.  The FK systems' batches are large enough for
+        # numpy's per-call cost to matter: 2048 against 512 is 25-30 % less CPU with the
+        # same boxes (general-19 u~S(2) and T-16 u=2 at 60 N, general-19 at 10 N); 4096 and
+        # 8192 are slower again (cache).  Peak RSS of T-16 at 60 N: 160 MB (113 MB at 512).
         self.robot = robot
         self.form: FKFormulation = build_formulation(robot, formulation)
-        # wire lengths are auxiliary: fixed by the pose through the length equations
+        # auxiliary variables, never split: the wire lengths (fixed by the pose through the
+        # length equations) and, in general-19's frame, the fourth edge vector (fixed by the
+        # other two through the fourth-point equalities; splitting only E_2, E_3 and P_1:
+        # general-19 at 60 N u~S(2) 332,650 -> 174,968 boxes, u~S(3) 304,304 -> 226,492,
+        # at 10 N 156,523 -> 130,749; random-general-0 at 60 N 3.92M -> 3.85M)
         mask = [not v.startswith("rho") for v in self.form.system.variables]
+        for j in self.form.info.get("determined", []):
+            mask[j] = False
         sub = self.form.info.get("translation")
         subsystems = [(sub["equations"], sub["variables"])] if sub else []
         bisector = None
@@ -206,7 +221,8 @@ class FKSolver:
             # T-16 u=2 at 60 N, 8 % and 1 % fewer boxes; docs/fk-cost.md)
             rho = np.array([v.startswith("rho") for v in self.form.system.variables])
             width = float(np.mean(dom[rho, 1] - dom[rho, 0])) if rho.any() else 0.0
-            bis.alpha = float(np.clip(width / 25.0, 0.25, ALPHA_MAX))
+            cap = ALPHA_MAX_GENERAL if self.form.info.get("determined") else ALPHA_MAX
+            bis.alpha = float(np.clip(width / 25.0, 0.25, cap))
         return u, dom, ok
 
     def solve(

@@ -610,6 +610,7 @@ def _platform_formulation(
     eqs += co.equilibrium(w)
 
     constraints: list[Constraint] = []
+    fourth: list[Constraint] = []
     if k == d + 1:  # orientation: the signed area / volume of the chosen points keeps its sign
         E = co.edges()
         if d == 3:
@@ -623,7 +624,8 @@ def _platform_formulation(
             Constraint(signed, 0.0, np.inf) if s0 > 0 else Constraint(signed, -np.inf, 0.0)
         )
         if d == 3 and k == 4:
-            constraints += _fourth_point_constraints(Q, E[0], E[1], E[2])
+            fourth = _fourth_point_constraints(Q, E[0], E[1], E[2])
+            constraints += fourth
     # every platform point (chosen points, attachments, centre of mass) inside the domain
     extra = [np.eye(k)[j] for j in range(1, k)] + [L[i] for i in range(robot.m)] + [lG]
     seen = set(co.bounded)
@@ -653,6 +655,9 @@ def _platform_formulation(
     domain = _with_rho(rows, robot, np.zeros(robot.m), d, k)
     system = _system(robot, names, domain, eqs, constraints, name)
     info: dict = {"points": [int(i) for i in sel]}
+    if frame and fourth:
+        # E_4 follows E_2 and E_3 through the fourth-point equalities: not split (see FKSolver)
+        info["determined"] = list(range(3 * d, 4 * d))
     if frame:
         # lengths + forces in (P_1, ρ): a square sub-system, well conditioned for a whole
         # box of orientations (partial Newton, see FKSolver)
