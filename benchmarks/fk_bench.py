@@ -54,6 +54,8 @@ CASES = {
     "general-19 tau<=60 u~S(2) (target)": ("marionet", 60.0, ("S", 2, 1.0)),
     "general-19 tau<=60 u~S(3) (target)": ("marionet", 60.0, ("S", 3, 1.0)),
     "random-T-0 tau<=60 u~S(7)": ("random-T-0", 60.0, ("S", 7, 1.0)),
+    "random-general-0 tau<=20 u~S(7)": ("random-general-0", 20.0, ("S", 7, 1.0)),
+    "random-general-0 tau<=40 u~S(7)": ("random-general-0", 40.0, ("S", 7, 1.0)),
     "random-general-0 tau<=60 u~S(7)": ("random-general-0", 60.0, ("S", 7, 1.0)),
     "random-general-1 tau<=60 u~S(7)": ("random-general-1", 60.0, ("S", 7, 1.0)),
 }
