@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..expr.affine import affine_forms
 from ..expr.compiled import CompiledSystem
 from ..interval.linalg import gamma
 from ..interval.reductions import all_last, any_last, to_front
@@ -45,7 +46,7 @@ from ..interval.rounding import down, up
 from .bisectors import smear_scores
 from .lp import dual_active_set
 
-__all__ = ["PolytopeHull", "xtaylor_rows", "proven_lower_bounds"]
+__all__ = ["PolytopeHull", "affine_rows", "xtaylor_rows", "proven_lower_bounds"]
 
 _TINY = 2.0**-1000
 
@@ -79,6 +80,33 @@ def xtaylor_rows(csys: CompiledSystem, lo, hi):
         & all_last(np.isfinite(w))
     )
     return G, rho, w, ok
+
+
+def affine_rows(csys: CompiledSystem, lo, hi):
+    """The ``2n`` rows ``G d <= ρ`` (``d = x - lo``) of the affine forms of ``f``.
+
+    With ``f_i(x) ∈ c₀ + c·(x - m) ± e`` over the box (:func:`certsolve.expr.affine.
+    affine_forms`) and ``x - m = d - s``, ``s = m - lo``, a zero of ``f_i`` satisfies
+
+        c·d <= -c₀ + e + c·s,        -c·d <= c₀ + e - c·s,
+
+    right-hand sides bounded above with the rounding of ``s``, of the products and of the
+    sums (Higham, Thm 3.1).  Over a wide box the forms keep what X-Taylor's corner rows lose
+    on quadratic terms (``x²``: an error of ``r²/2`` against ``2w²``).  Returns ``G``
+    ``(B, 2n, n)``, ``rho`` ``(B, 2n)`` and the ``(B,)`` mask of finite rows.
+    """
+    F = affine_forms(csys.f, lo, hi, csys.param_lo, csys.param_hi)
+    n = lo.shape[1]
+    with np.errstate(all="ignore"):
+        s = F.mid - lo  # the exact m - lo is within one rounding of it
+        t = F.c * s[:, None, :]
+        cs = np.sum(t, axis=2)
+        err = gamma(n + 4) * np.sum(np.abs(t), axis=2) + (n + 4) * _TINY
+        slack = F.e + err + gamma(6) * (np.abs(F.c0) + F.e + np.abs(cs))
+        G = np.concatenate([F.c, -F.c], axis=1)
+        rho = np.concatenate([up(cs - F.c0 + slack), up(F.c0 - cs + slack)], axis=1)
+    ok = all_last(np.isfinite(rho)) & np.all(np.isfinite(G), axis=(1, 2))
+    return G, rho, ok
 
 
 def _row_dot_bound(J, wl, wh, upper: bool):
@@ -142,10 +170,15 @@ def proven_lower_bounds(G, rho, w, y, sign, j):
 
 
 class PolytopeHull:
-    """Contract boxes to the proven hull of their X-Taylor linear relaxation."""
+    """Contract boxes to the proven hull of their linear relaxation: the X-Taylor rows
+    (:func:`xtaylor_rows`) and, with ``affine``, the rows of the affine forms
+    (:func:`affine_rows`)."""
 
-    def __init__(self, csys: CompiledSystem, directions: int = 3, max_iter: int = 15):
+    def __init__(
+        self, csys: CompiledSystem, directions: int = 3, max_iter: int = 15, affine: bool = True
+    ):
         self.csys = csys
+        self.affine = bool(affine)
         self.directions = int(directions)
         self.max_iter = int(max_iter)
 
@@ -165,6 +198,9 @@ class PolytopeHull:
         if B == 0:
             return lo, hi, empty
         G, rho, w, ok = xtaylor_rows(self.csys, lo, hi)
+        if self.affine:
+            GA, rhoA, okA = affine_rows(self.csys, lo, hi)
+            G, rho, ok = np.concatenate([G, GA], 1), np.concatenate([rho, rhoA], 1), ok & okA
         idx = np.flatnonzero(ok)
         if idx.size == 0:
             return lo, hi, empty
