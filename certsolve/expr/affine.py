@@ -36,6 +36,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..interval import arith as A
+from ..interval import elementary as EL
 from ..interval.rounding import EPS, up
 from .ops import FORWARD
 from .program import Program
@@ -74,10 +76,7 @@ def affine_forms(prog: Program, lo: np.ndarray, hi: np.ndarray, plo=None, phi=No
     with np.errstate(all="ignore"):
         mid = 0.5 * lo + 0.5 * hi
         mid = np.where(np.isfinite(mid), mid, 0.0)
-        r = up(np.maximum(hi - mid, mid - lo))  # X ⊆ [mid - r, mid + r]
-        big = 1.0 + _gamma(4 * n + 32)  # the relative slack of every computed e
-        # an absolute bound of the underflow of every product of a rule (< 2^60 of them)
-        under = (1.0 + np.sum(r, axis=1)) * 2.0**-960
+        ctx = _Rounding(up(np.maximum(hi - mid, mid - lo)))  # X ⊆ [mid - r, mid + r]
         c0 = np.zeros((N, B))
         C = np.zeros((N, B, n))
         E = np.zeros((N, B))
@@ -86,52 +85,34 @@ def affine_forms(prog: Program, lo: np.ndarray, hi: np.ndarray, plo=None, phi=No
         if prog.n_params:
             _const_rows(c0, E, prog.param_slice, np.asarray(plo, float), np.asarray(phi, float))
         _const_rows(c0, E, prog.const_slice, prog.const_lo[:, 0], prog.const_hi[:, 0])
-
-        def radius(idx):
-            """An upper bound of ``R`` (the float sum times ``big``, plus ``under``)."""
-            return (np.einsum("kbn,bn->kb", np.abs(C[idx]), r) + E[idx]) * big + under
-
-        def close(s, e_terms, mag0, mag, k):
-            """``e`` of the nodes ``s`` from its exact terms and the rounding of the rule."""
-            rounding = _gamma(k) * (mag0 + np.einsum("kbn,bn->kb", mag, r))
-            E[s] = (e_terms + rounding) * big + under
-
         for g in prog.fwd_groups:
-            s, a, b, op = slice(g.start, g.stop), g.a, g.b, g.op
+            s, op = slice(g.start, g.stop), g.op
+            a = (c0[g.a], C[g.a], E[g.a])
+            b = None if g.b is None else (c0[g.b], C[g.b], E[g.b])
             if op in ("add", "sub"):
-                sg = 1.0 if op == "add" else -1.0
-                c0[s] = c0[a] + sg * c0[b]
-                C[s] = C[a] + sg * C[b]
-                close(s, E[a] + E[b], np.abs(c0[a]) + np.abs(c0[b]), np.abs(C[a]) + np.abs(C[b]), 1)
+                c0[s], C[s], E[s] = ctx.add(a, b, 1.0 if op == "add" else -1.0)
             elif op == "neg":
-                c0[s], C[s], E[s] = -c0[a], -C[a], E[a]
+                c0[s], C[s], E[s] = -a[0], -a[1], a[2]
             elif op == "cadd":
                 p = np.asarray(g.param)  # (k, 1): exact floats
-                c0[s] = c0[a] + p
-                C[s] = C[a]
-                close(s, E[a], np.abs(c0[a]) + np.abs(p), np.zeros_like(C[a]), 1)
+                c0[s] = a[0] + p
+                C[s] = a[1]
+                E[s] = ctx.close(a[2], np.abs(a[0]) + np.abs(p), None, 1)
             elif op == "cmul":
                 p = np.asarray(g.param)
-                c0[s] = c0[a] * p
-                C[s] = C[a] * p[:, :, None]
-                close(s, E[a] * np.abs(p), np.abs(c0[s]), np.abs(C[s]), 1)
+                c0[s] = a[0] * p
+                C[s] = a[1] * p[:, :, None]
+                E[s] = ctx.close(a[2] * np.abs(p), np.abs(c0[s]), np.abs(C[s]), 1)
             elif op == "mul":
-                ra, rb = radius(a), radius(b)
-                a0, b0 = c0[a], c0[b]
-                c0[s] = a0 * b0
-                t1, t2 = a0[:, :, None] * C[b], b0[:, :, None] * C[a]
-                C[s] = t1 + t2
-                e_terms = np.abs(a0) * E[b] + np.abs(b0) * E[a] + ra * rb
-                close(s, e_terms, np.abs(c0[s]), np.abs(t1) + np.abs(t2), 3)
+                c0[s], C[s], E[s] = ctx.mul(a, b)
             elif op == "sqr" or (op == "pow" and g.param == 2):
-                ra = radius(a)
-                a0 = c0[a]
-                h = 0.5 * (ra * ra)
-                c0[s] = a0 * a0 + h
-                C[s] = (2.0 * a0)[:, :, None] * C[a]
-                close(s, 2.0 * np.abs(a0) * E[a] + h, a0 * a0 + h, np.abs(C[s]), 3)
+                c0[s], C[s], E[s] = ctx.sqr(a)
+            elif op == "div":
+                c0[s], C[s], E[s] = ctx.mul(a, ctx.smooth(b, _RECIP, _DERIV["recip"], None))
+            elif op in _DERIV:
+                c0[s], C[s], E[s] = ctx.smooth(a, FORWARD[op], _DERIV[op], g.param)
             else:
-                _interval_rows(g, s, a, b, c0, C, E, radius)
+                c0[s], C[s], E[s] = ctx.interval(a, b, FORWARD[op], g.param)
         out = prog.outputs
         return AffineForms(
             c0=c0[out].T.copy(),
@@ -148,21 +129,147 @@ def _const_rows(c0, E, rows: slice, lo: np.ndarray, hi: np.ndarray) -> None:
     E[rows] = up(np.maximum(hi - m, m - lo))[:, None]
 
 
-def _interval_rows(g, s, a, b, c0, C, E, radius) -> None:
-    """A node without an affine rule: the interval of its operation on the arguments'
-    ranges ``c₀ ± R`` (rounded outward), as a form without coefficients."""
+def _mid_rad(lo, hi):
+    """``(m, ρ)`` with ``[lo, hi] ⊆ m ± ρ`` (``ρ`` rounded up)."""
+    m = 0.5 * lo + 0.5 * hi
+    return m, up(np.maximum(hi - m, m - lo))
 
-    def rng(idx):
-        rad = radius(idx)
-        return -up(rad - c0[idx]), up(c0[idx] + rad)
 
-    alo, ahi = rng(a)
-    if b is None:
-        zlo, zhi = FORWARD[g.op](alo, ahi, None, None, g.param)
-    else:
-        blo, bhi = rng(b)
-        zlo, zhi = FORWARD[g.op](alo, ahi, blo, bhi, g.param)
-    m = 0.5 * zlo + 0.5 * zhi
-    c0[s] = m
-    C[s] = 0.0
-    E[s] = up(np.maximum(zhi - m, m - zlo))
+def _shifted_sqr(lo, hi, sign: float, c: float):
+    """``c + sign·[u]²``."""
+    slo, shi = A.sqr(lo, hi)
+    if sign < 0:
+        slo, shi = A.neg(slo, shi)
+    return A.shift(slo, shi, c)
+
+
+def _inv_sqrt(lo, hi):
+    """``1 / √[u]``."""
+    rlo, rhi = A.sqrt(lo, hi)
+    return A.recip(rlo, rhi)
+
+
+def _d_sqrt(lo, hi, p):
+    return A.scale(*_inv_sqrt(lo, hi), 0.5)
+
+
+def _d_tan(lo, hi, p):
+    return _shifted_sqr(*EL.tan(lo, hi), 1.0, 1.0)
+
+
+def _d_tanh(lo, hi, p):
+    return _shifted_sqr(*EL.tanh(lo, hi), -1.0, 1.0)
+
+
+def _d_acos(lo, hi, p):
+    return A.neg(*_inv_sqrt(*_shifted_sqr(lo, hi, -1.0, 1.0)))
+
+
+def _d_pow(lo, hi, p):
+    return A.scale(*A.pow_int(lo, hi, p - 1), float(p))
+
+
+def _d_recip(lo, hi, p):
+    return A.neg(*A.recip(*A.sqr(lo, hi)))
+
+
+#: interval derivatives ``f'([u])`` of the operations with the mean-value rule; each is
+#: infinite where ``[u]`` reaches outside ``f``'s domain (0 for log, sqrt; ±1 for asin...)
+_DERIV = {
+    "exp": lambda lo, hi, p: EL.exp(lo, hi),
+    "log": lambda lo, hi, p: A.recip(lo, hi),
+    "sqrt": _d_sqrt,
+    "sin": lambda lo, hi, p: EL.cos(lo, hi),
+    "cos": lambda lo, hi, p: A.neg(*EL.sin(lo, hi)),
+    "tan": _d_tan,
+    "sinh": lambda lo, hi, p: EL.cosh(lo, hi),
+    "cosh": lambda lo, hi, p: EL.sinh(lo, hi),
+    "tanh": _d_tanh,
+    "atan": lambda lo, hi, p: A.recip(*_shifted_sqr(lo, hi, 1.0, 1.0)),
+    "asinh": lambda lo, hi, p: _inv_sqrt(*_shifted_sqr(lo, hi, 1.0, 1.0)),
+    "asin": lambda lo, hi, p: _inv_sqrt(*_shifted_sqr(lo, hi, -1.0, 1.0)),
+    "acos": _d_acos,
+    "atanh": lambda lo, hi, p: A.recip(*_shifted_sqr(lo, hi, -1.0, 1.0)),
+    "acosh": lambda lo, hi, p: _inv_sqrt(*_shifted_sqr(lo, hi, 1.0, -1.0)),
+    "pow": _d_pow,
+    "recip": _d_recip,
+}
+
+
+def _RECIP(lo, hi, b, c, p):
+    return A.recip(lo, hi)
+
+
+class _Rounding:
+    """The rules on forms ``(c₀, c, e)`` (arrays ``(k, B)``, ``(k, B, n)``, ``(k, B)``) for
+    boxes of radii ``r`` ``(B, n)``, with the rounding bounds of the module doc."""
+
+    def __init__(self, r: np.ndarray):
+        n = r.shape[1]
+        self.r = r
+        self.big = 1.0 + _gamma(4 * n + 32)  # the relative slack of every computed e
+        # an absolute bound of the underflow of every product of a rule (< 2^60 of them)
+        self.under = (1.0 + np.sum(r, axis=1)) * 2.0**-960
+
+    def radius(self, a):
+        """An upper bound of ``R = Σ|c_j| r_j + e``."""
+        return (np.einsum("kbn,bn->kb", np.abs(a[1]), self.r) + a[2]) * self.big + self.under
+
+    def close(self, e_terms, mag0, mag, k: int):
+        """``e`` from its exact terms and the rounding of a rule of ``k`` operations per
+        coefficient (``mag0``, ``mag``: the magnitudes of the terms of ``c₀`` and ``c``)."""
+        rounding = mag0 if mag is None else mag0 + np.einsum("kbn,bn->kb", mag, self.r)
+        return (e_terms + _gamma(k) * rounding) * self.big + self.under
+
+    def add(self, a, b, sign: float):
+        c0 = a[0] + sign * b[0]
+        C = a[1] + sign * b[1]
+        mag0, mag = np.abs(a[0]) + np.abs(b[0]), np.abs(a[1]) + np.abs(b[1])
+        return c0, C, self.close(a[2] + b[2], mag0, mag, 1)
+
+    def mul(self, a, b):
+        """``u·v = u₀v₀ + u₀c_v·t + v₀c_u·t + (u₀δ_v + v₀δ_u) + (u - u₀)(v - v₀)``."""
+        a0, b0 = a[0], b[0]
+        t1, t2 = a0[:, :, None] * b[1], b0[:, :, None] * a[1]
+        c0 = a0 * b0
+        e_terms = np.abs(a0) * b[2] + np.abs(b0) * a[2] + self.radius(a) * self.radius(b)
+        return c0, t1 + t2, self.close(e_terms, np.abs(c0), np.abs(t1) + np.abs(t2), 3)
+
+    def sqr(self, a):
+        """``u² = u₀² + 2u₀c_u·t + 2u₀δ_u + (u - u₀)²``, the last in ``[0, R²] = R²/2 ± R²/2``."""
+        a0 = a[0]
+        ra = self.radius(a)
+        h = 0.5 * (ra * ra)
+        C = (2.0 * a0)[:, :, None] * a[1]
+        e_terms = 2.0 * np.abs(a0) * a[2] + h
+        return a0 * a0 + h, C, self.close(e_terms, a0 * a0 + h, np.abs(C), 3)
+
+    def smooth(self, a, f, df, param):
+        """Mean value at the centre: ``f(u) = f(u₀) + f'(ξ)(u - u₀)``, ``ξ`` in the range
+        ``U = u₀ ± R`` of ``u``; with ``α`` the midpoint of ``f'(U)``:
+        ``c₀ ± e ∋ f(u₀)``, ``c = α c_u``, ``e += |α| e_u + max|f'(U) - α| R``."""
+        a0 = a[0]
+        ra = self.radius(a)
+        flo, fhi = f(a0, a0, None, None, param)
+        dlo, dhi = df(-up(ra - a0), up(a0 + ra), param)
+        c0, frad = _mid_rad(flo, fhi)
+        alpha = 0.5 * dlo + 0.5 * dhi
+        dev = up(np.maximum(dhi - alpha, alpha - dlo))
+        C = alpha[:, :, None] * a[1]
+        e_terms = frad + np.abs(alpha) * a[2] + dev * ra
+        return c0, C, self.close(e_terms, np.zeros_like(c0), np.abs(C), 1)
+
+    def interval(self, a, b, f, param):
+        """No rule: the interval of ``f`` on the arguments' ranges ``c₀ ± R``, without
+        coefficients (sound; it forgets the dependence on the variables)."""
+
+        def rng(x):
+            rad = self.radius(x)
+            return -up(rad - x[0]), up(x[0] + rad)
+
+        if b is None:
+            zlo, zhi = f(*rng(a), None, None, param)
+        else:
+            zlo, zhi = f(*rng(a), *rng(b), param)
+        c0, rad = _mid_rad(zlo, zhi)
+        return c0, np.zeros_like(a[1]), rad

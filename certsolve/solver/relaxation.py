@@ -93,7 +93,8 @@ def affine_rows(csys: CompiledSystem, lo, hi):
     right-hand sides bounded above with the rounding of ``s``, of the products and of the
     sums (Higham, Thm 3.1).  Over a wide box the forms keep what X-Taylor's corner rows lose
     on quadratic terms (``x²``: an error of ``r²/2`` against ``2w²``).  Returns ``G``
-    ``(B, 2n, n)``, ``rho`` ``(B, 2n)`` and the ``(B,)`` mask of finite rows.
+    ``(B, 2n, n)`` and ``rho`` ``(B, 2n)``; the two rows of a form that is not finite (an
+    overflow, a box reaching outside ``f_i``'s domain) are ``0 <= 0``.
     """
     F = affine_forms(csys.f, lo, hi, csys.param_lo, csys.param_hi)
     n = lo.shape[1]
@@ -105,8 +106,8 @@ def affine_rows(csys: CompiledSystem, lo, hi):
         slack = F.e + err + gamma(6) * (np.abs(F.c0) + F.e + np.abs(cs))
         G = np.concatenate([F.c, -F.c], axis=1)
         rho = np.concatenate([up(cs - F.c0 + slack), up(F.c0 - cs + slack)], axis=1)
-    ok = all_last(np.isfinite(rho)) & np.all(np.isfinite(G), axis=(1, 2))
-    return G, rho, ok
+    bad = ~(np.isfinite(rho) & all_last(np.isfinite(G)))
+    return np.where(bad[:, :, None], 0.0, G), np.where(bad, 0.0, rho)
 
 
 def _row_dot_bound(J, wl, wh, upper: bool):
@@ -199,8 +200,13 @@ class PolytopeHull:
             return lo, hi, empty
         G, rho, w, ok = xtaylor_rows(self.csys, lo, hi)
         if self.affine:
-            GA, rhoA, okA = affine_rows(self.csys, lo, hi)
-            G, rho, ok = np.concatenate([G, GA], 1), np.concatenate([rho, rhoA], 1), ok & okA
+            # the affine rows hold wherever they are finite: a box without valid X-Taylor
+            # rows (f not differentiable everywhere on it) keeps its affine rows alone
+            G = np.where(ok[:, None, None], G, 0.0)
+            rho = np.where(ok[:, None], rho, 0.0)
+            GA, rhoA = affine_rows(self.csys, lo, hi)
+            G, rho = np.concatenate([G, GA], 1), np.concatenate([rho, rhoA], 1)
+            ok = all_last(np.isfinite(w)) & np.any(GA != 0.0, axis=(1, 2))
         idx = np.flatnonzero(ok)
         if idx.size == 0:
             return lo, hi, empty
