@@ -191,7 +191,7 @@ class FKSolver:
             newton_groups=_newton_groups(self.form.system.variables),
             cid_slices=0,
             cid_vars=1,  # CID is off: nothing to learn (and the checkpoint fingerprint stays)
-            relax=False,
+            relax=False,  # fewer boxes, more CPU (see Solver's ``relax``)
         )
         self.csys = self.solver.csys
 
