@@ -24,11 +24,15 @@ from certsolve.expr import (
     asin,
     asinh,
     atan,
+    atan2,
     atanh,
     cos,
     cosh,
     exp,
     log,
+    max_,
+    min_,
+    rpow,
     sin,
     sinh,
     sqr,
@@ -169,3 +173,32 @@ def test_affine_rows_prune_quadratic_systems(name):
     expected = len(REFERENCE[name]["solutions"])
     assert len(runs[True].solutions) == len(runs[False].solutions) == expected
     assert runs[True].stats.boxes < 0.7 * runs[False].stats.boxes
+
+
+@pytest.mark.parametrize("op", ["max", "min", "abs", "atan2", "rpow", "div", "exp"])
+def test_unbounded_boxes_never_give_finite_wrong_forms(op):
+    """In a box with infinite sides, ``0·inf`` makes radii NaN; no rule and no interval
+    function may turn that into a finite form: every form is either not finite or holds
+    at sample points of the box."""
+    x, y = var("x"), var("y")
+    expr = {
+        "max": max_(x, 1.0) - y,
+        "min": min_(x, y) + 2.0,
+        "abs": abs_(x) - y,
+        "atan2": atan2(y, x) - 1.0,
+        "rpow": rpow(x, y) - 2.0,
+        "div": x / (y + 3.0) - 1.0,
+        "exp": exp(x) * y - 1.0,
+    }[op]
+    system = System(["x", "y"], np.array([[-np.inf, np.inf]] * 2), [expr, x - 2.0 * y])
+    csys = CompiledSystem(system)
+    inf = np.inf
+    boxes = [([-inf, -inf], [inf, inf]), ([0.5, -inf], [inf, 3.0]), ([0.5, 1.0], [2.0, inf])]
+    rng = np.random.default_rng(3)
+    for lo, hi in boxes:
+        lo, hi = np.array(lo), np.array(hi)
+        F = affine_forms(csys.f, lo[None], hi[None])
+        assert not (np.isfinite(F.c0[0, 0]) and np.isfinite(F.e[0, 0]))
+        for _ in range(5):
+            x0 = np.clip(rng.normal(scale=5.0, size=2), lo, hi)
+            _check(csys, lo, hi, x0)

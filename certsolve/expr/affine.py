@@ -212,8 +212,17 @@ class _Rounding:
         self.under = (1.0 + np.sum(r, axis=1)) * 2.0**-960
 
     def radius(self, a):
-        """An upper bound of ``R = Σ|c_j| r_j + e``."""
-        return (np.einsum("kbn,bn->kb", np.abs(a[1]), self.r) + a[2]) * self.big + self.under
+        """An upper bound of ``R = Σ|c_j| r_j + e`` (``inf`` where it is NaN: ``0·inf``
+        in an unbounded box)."""
+        R = (np.einsum("kbn,bn->kb", np.abs(a[1]), self.r) + a[2]) * self.big + self.under
+        return np.where(np.isnan(R), np.inf, R)
+
+    def range(self, a):
+        """An interval ``c₀ ± R`` holding ``u`` (the whole line where it is not a number:
+        no interval function may then turn a NaN bound into a finite one)."""
+        rad = self.radius(a)
+        lo, hi = -up(rad - a[0]), up(a[0] + rad)
+        return np.where(np.isnan(lo), -np.inf, lo), np.where(np.isnan(hi), np.inf, hi)
 
     def close(self, e_terms, mag0, mag, k: int):
         """``e`` from its exact terms and the rounding of a rule of ``k`` operations per
@@ -251,25 +260,22 @@ class _Rounding:
         a0 = a[0]
         ra = self.radius(a)
         flo, fhi = f(a0, a0, None, None, param)
-        dlo, dhi = df(-up(ra - a0), up(a0 + ra), param)
+        dlo, dhi = df(*self.range(a), param)
         c0, frad = _mid_rad(flo, fhi)
         alpha = 0.5 * dlo + 0.5 * dhi
         dev = up(np.maximum(dhi - alpha, alpha - dlo))
         C = alpha[:, :, None] * a[1]
         e_terms = frad + np.abs(alpha) * a[2] + dev * ra
-        return c0, C, self.close(e_terms, np.zeros_like(c0), np.abs(C), 1)
+        e = self.close(e_terms, np.zeros_like(c0), np.abs(C), 1)
+        return c0, C, np.where(np.isfinite(a0), e, np.nan)  # f(NaN) may look finite
 
     def interval(self, a, b, f, param):
         """No rule: the interval of ``f`` on the arguments' ranges ``c₀ ± R``, without
         coefficients (sound; it forgets the dependence on the variables)."""
 
-        def rng(x):
-            rad = self.radius(x)
-            return -up(rad - x[0]), up(x[0] + rad)
-
         if b is None:
-            zlo, zhi = f(*rng(a), None, None, param)
+            zlo, zhi = f(*self.range(a), None, None, param)
         else:
-            zlo, zhi = f(*rng(a), *rng(b), param)
+            zlo, zhi = f(*self.range(a), *self.range(b), param)
         c0, rad = _mid_rad(zlo, zhi)
         return c0, np.zeros_like(a[1]), rad
