@@ -2,13 +2,15 @@
 worker processes.
 
     python benchmarks/solver_bench.py [--runs 3] [--workers 1,2] [--timeout 300]
-                                      [--cid-vars 1,auto,all] [--dir DIR] [names...]
+                                      [--cid-vars 1,auto,all] [--affine on,off]
+                                      [--dir DIR] [names...]
 
 ``--dir`` reads ``*.mbx`` and ``*.bch`` files of another folder (IBEX's benchmarks);
 ``--cid-vars`` compares settings of :class:`~certsolve.solver.Solver`'s ``cid_vars`` (1,
-K, ``all``, ``auto``).  Prints one row per system, setting and worker count: variables,
-status, solutions, undecided, boxes, median wall time and CPU time (of the main process)
-over ``--runs`` runs.  Run it on an otherwise idle machine; note the machine in any report.
+K, ``all``, ``auto``); ``--affine`` the relaxation with and without the affine-form rows
+(:class:`~certsolve.solver.relaxation.PolytopeHull`'s ``affine``).  Prints one row per
+system, setting and worker count: variables, status, solutions, undecided, boxes, median
+wall time and CPU time (of the main process) over ``--runs`` runs.  Run it on an otherwise idle machine; note the machine in any report.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ def main() -> None:
     ap.add_argument("--timeout", type=float, default=300.0)
     ap.add_argument("--eps", type=float, default=1e-8)
     ap.add_argument("--cid-vars", default="auto", help="comma-separated: auto, 1, K, all")
+    ap.add_argument("--affine", default="on", help="comma-separated: on, off")
     ap.add_argument("--dir", type=Path, default=HERE, help="folder of Minibex files")
     args = ap.parse_args()
     files = sorted(p for p in args.dir.iterdir() if p.suffix in (".mbx", ".bch"))
@@ -42,26 +45,32 @@ def main() -> None:
     workers = [int(w) for w in args.workers.split(",")]
     settings = {"all": None, "auto": "auto"}
     cids = [(c, settings.get(c) if c in settings else int(c)) for c in args.cid_vars.split(",")]
+    affines = [a == "on" for a in args.affine.split(",")]
     print(
         f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
         f"python {platform.python_version()}; median of {args.runs} runs"
     )
     print(
-        f"{'system':<20} {'vars':>4} {'cid':>4} {'w':>2} {'status':<10} {'sols':>4} {'und':>4} "
+        f"{'system':<20} {'vars':>4} {'cid':>4} {'aff':>3} {'w':>2} {'status':<10} "
+        f"{'sols':>4} {'und':>4} "
         f"{'boxes':>8} {'wall s':>8} {'cpu s':>8}"
     )
     for f in files:
         system = load_minibex(f)
-        for (cid_name, cid), w in ((c, w) for c in cids for w in workers):
+        settings_ = ((c, a, w) for c in cids for a in affines for w in workers)
+        for (cid_name, cid), affine, w in settings_:
             walls, cpus, res = [], [], None
             for _ in range(args.runs):
                 solver = Solver(system, eps=args.eps, cid_vars=cid)
+                if solver.relax is not None:
+                    solver.relax.affine = affine
                 t, c = time.perf_counter(), time.process_time()
                 res = solver.solve(workers=w, timeout=args.timeout)
                 walls.append(time.perf_counter() - t)
                 cpus.append(time.process_time() - c)
             print(
-                f"{f.stem:<20} {system.n:>4} {cid_name:>4} {w:>2} {res.status:<10} "
+                f"{f.stem:<20} {system.n:>4} {cid_name:>4} {'on' if affine else 'off':>3} {w:>2} "
+                f"{res.status:<10} "
                 f"{len(res.solutions):>4} {len(res.undecided):>4} {res.stats.boxes:>8} "
                 f"{statistics.median(walls):>8.3f} {statistics.median(cpus):>8.3f}",
                 flush=True,
