@@ -10,7 +10,8 @@ worker processes.
 K, ``all``, ``auto``); ``--affine`` the relaxation with and without the affine-form rows
 (:class:`~certsolve.solver.relaxation.PolytopeHull`'s ``affine``).  Prints one row per
 system, setting and worker count: variables, status, solutions, undecided, boxes, median
-wall time and CPU time (of the main process) over ``--runs`` runs.  Run it on an otherwise idle machine; note the machine in any report.
+wall time and CPU time (of the main process) over ``--runs`` runs.  Run it on an otherwise
+idle machine; note the machine in any report.
 """
 
 from __future__ import annotations
