@@ -90,12 +90,13 @@ class Solver:
         ``None``: all of them; ``"auto"`` (default): the count learnt during the search
         (:class:`~.shaving.AdaptiveCount`, IBEX's ACID rule; the learnt state is the
         search's, :attr:`SearchState.acid`).  Measured against 1 (batches of 1024, one
-        process, CPU s): on IBEX's benchmarks up to 8x fewer boxes and half the time or
-        less on the hard files (Brent-10 152,065 -> 19,257 boxes, 23 -> 13 s; transistor
-        235,364 -> 63,852 boxes, 27 -> 16 s; Discrete-Integral-6 119,805 -> 19,016 boxes,
-        8.2 -> 2.2 s), but 1.1-1.25x the time on medium systems of ``examples/systems``
-        (katsura-6 51,246 -> 46,397 boxes, 4.9 -> 5.2 s; eco-7 0.90 -> 1.12 s; kin2-6r
-        0.97 -> 1.18 s); searches of fewer than ~950 boxes never learn, so cost the same.
+        process, CPU s, with the affine relaxation): on IBEX's benchmarks up to 8x fewer
+        boxes and half the time or less on the hard files (Brent-10 141,814 -> 17,998
+        boxes, 22.1 -> 11.8 s; transistor 216,437 -> 60,385 boxes, 27.3 -> 13.2 s;
+        Discrete-Integral-6 118,067 -> 18,463 boxes, 7.8 -> 2.2 s), but 1.07-1.25x the
+        time on medium systems (katsura-6 22,122 -> 21,705 boxes, 2.21 -> 2.37 s; eco-7
+        0.87 -> 1.10 s; Eco9 2.8 -> 3.3 s); searches of fewer than ~950 boxes never learn,
+        so cost the same.
         ``None`` against 1: 2-9x fewer boxes, 1.3-2x the CPU time on ``examples/systems``.
     subsystems:
         square sub-systems ``(equations, variables)`` also contracted by partial Newton.
