@@ -16,10 +16,16 @@ The rules, with ``R(v) = Σ_j |c_j| r_j + e`` the radius of a form:
 * ``u ± v``, ``-u``, ``u + p``, ``p·u``: exact on the forms;
 * ``u·v``: ``(u₀v₀, u₀c_v + v₀c_u, |u₀|e_v + |v₀|e_u + R(u)R(v))``;
 * ``u²``: ``(u₀² + R²/2, 2u₀c_u, 2|u₀|e_u + R²/2)`` (the quadratic term lies in ``[0, R²]``);
-* any other operation (division, powers other than 2, elementary functions): the interval
-  the operation gives on its arguments' ranges ``c₀ ± R``, as a form without coefficients
-  (sound, but it forgets the dependence: the X-Taylor rows of :mod:`certsolve.solver.
-  relaxation` cover those systems).
+* ``f(u)`` for division (``u · (1/v)``), the other integer powers and every elementary
+  function with a derivative: the mean value at the centre, ``f(u₀) + f'(ξ)(u - u₀)``: its
+  slope is the midpoint ``α`` of the interval derivative ``f'(U)`` over the range
+  ``U = u₀ ± R`` of ``u``, and ``max|f'(U) - α|·R`` goes into ``e``.  ``f'(U)`` is infinite
+  wherever ``U`` reaches outside ``f``'s domain (0 for log and sqrt, ±1 for asin ...), so
+  no form is made there;
+* ``abs``, ``sign``, ``min``, ``max``, ``atan2``, real powers: the interval the operation
+  gives on its arguments' ranges ``c₀ ± R``, as a form without coefficients (sound, but it
+  forgets the dependence; the X-Taylor rows of :mod:`certsolve.solver.relaxation` still
+  see it).
 
 **Rounding.**  Every coefficient is one floating-point expression of at most three
 operations on the operands' coefficients, so it differs from its exact value by at most
@@ -38,18 +44,12 @@ import numpy as np
 
 from ..interval import arith as A
 from ..interval import elementary as EL
-from ..interval.rounding import EPS, up
+from ..interval.linalg import gamma as _gamma
+from ..interval.rounding import up
 from .ops import FORWARD
 from .program import Program
 
 __all__ = ["AffineForms", "affine_forms"]
-
-_U = EPS / 2
-
-
-def _gamma(k: int) -> float:
-    """``k u / (1 - k u)`` rounded up generously (Higham's ``γ_k``)."""
-    return 1.01 * k * _U / (1.0 - k * _U)
 
 
 @dataclass(kw_only=True)
