@@ -94,8 +94,8 @@ class Solver:
         boxes and half the time or less on the hard files (Brent-10 141,814 -> 17,998
         boxes, 22.1 -> 11.8 s; transistor 216,437 -> 60,385 boxes, 27.3 -> 13.2 s;
         Discrete-Integral-6 118,067 -> 18,463 boxes, 7.8 -> 2.2 s), but 1.07-1.25x the
-        time on medium systems (katsura-6 22,122 -> 21,705 boxes, 2.21 -> 2.37 s; eco-7
-        0.87 -> 1.10 s; Eco9 2.8 -> 3.3 s); searches of fewer than ~950 boxes never learn,
+        time on medium systems (katsura-6 22,121 -> 21,680 boxes, 2.09 -> 2.27 s; eco-7
+        0.81 -> 1.12 s; Eco9 2.8 -> 3.3 s); searches of fewer than ~950 boxes never learn,
         so cost the same.
         ``None`` against 1: 2-9x fewer boxes, 1.3-2x the CPU time on ``examples/systems``.
     subsystems:
