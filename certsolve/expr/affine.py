@@ -45,6 +45,7 @@ import numpy as np
 from ..interval import arith as A
 from ..interval import elementary as EL
 from ..interval.linalg import gamma as _gamma
+from ..interval.linalg import mr_from_bounds
 from ..interval.rounding import up
 from .ops import FORWARD
 from .program import Program
@@ -108,7 +109,7 @@ def affine_forms(prog: Program, lo: np.ndarray, hi: np.ndarray, plo=None, phi=No
             elif op == "sqr" or (op == "pow" and g.param == 2):
                 c0[s], C[s], E[s] = ctx.sqr(a)
             elif op == "div":
-                c0[s], C[s], E[s] = ctx.mul(a, ctx.smooth(b, _RECIP, _DERIV["recip"], None))
+                c0[s], C[s], E[s] = ctx.mul(a, ctx.smooth(b, _recip_forward, _DERIV["recip"], None))
             elif op in _DERIV:
                 c0[s], C[s], E[s] = ctx.smooth(a, FORWARD[op], _DERIV[op], g.param)
             else:
@@ -124,15 +125,9 @@ def affine_forms(prog: Program, lo: np.ndarray, hi: np.ndarray, plo=None, phi=No
 
 def _const_rows(c0, E, rows: slice, lo: np.ndarray, hi: np.ndarray) -> None:
     """Constants and parameters ``[lo, hi]``: the midpoint and the radius, rounded up."""
-    m = 0.5 * lo + 0.5 * hi
+    m, rad = mr_from_bounds(lo, hi)
     c0[rows] = m[:, None]
-    E[rows] = up(np.maximum(hi - m, m - lo))[:, None]
-
-
-def _mid_rad(lo, hi):
-    """``(m, ρ)`` with ``[lo, hi] ⊆ m ± ρ`` (``ρ`` rounded up)."""
-    m = 0.5 * lo + 0.5 * hi
-    return m, up(np.maximum(hi - m, m - lo))
+    E[rows] = rad[:, None]
 
 
 def _shifted_sqr(lo, hi, sign: float, c: float):
@@ -196,7 +191,8 @@ _DERIV = {
 }
 
 
-def _RECIP(lo, hi, b, c, p):
+def _recip_forward(lo, hi, b, c, p):
+    """``1 / [u]`` with the signature of :data:`.ops.FORWARD` (division is ``u · (1/v)``)."""
     return A.recip(lo, hi)
 
 
@@ -261,7 +257,7 @@ class _Rounding:
         ra = self.radius(a)
         flo, fhi = f(a0, a0, None, None, param)
         dlo, dhi = df(*self.range(a), param)
-        c0, frad = _mid_rad(flo, fhi)
+        c0, frad = mr_from_bounds(flo, fhi)
         alpha = 0.5 * dlo + 0.5 * dhi
         dev = up(np.maximum(dhi - alpha, alpha - dlo))
         C = alpha[:, :, None] * a[1]
@@ -272,10 +268,9 @@ class _Rounding:
     def interval(self, a, b, f, param):
         """No rule: the interval of ``f`` on the arguments' ranges ``c₀ ± R``, without
         coefficients (sound; it forgets the dependence on the variables)."""
-
         if b is None:
             zlo, zhi = f(*self.range(a), None, None, param)
         else:
             zlo, zhi = f(*self.range(a), *self.range(b), param)
-        c0, rad = _mid_rad(zlo, zhi)
+        c0, rad = mr_from_bounds(zlo, zhi)
         return c0, np.zeros_like(a[1]), rad
