@@ -39,6 +39,7 @@ import numpy as np
 
 from ..expr.compiled import CompiledSystem
 from ..expr.node import to_string
+from ..expr.polynomial import reduce_degree as lower_degree
 from ..expr.system import System
 from ..interval.core import splittable_width
 from ..interval.reductions import all_last
@@ -102,6 +103,15 @@ class Solver:
         square sub-systems ``(equations, variables)`` also contracted by partial Newton.
     max_undecided, max_pending:
         caps on the undecided and pending hulls listed in the result (:mod:`.summary`).
+    reduce_degree:
+        solve the equivalent system of :func:`~certsolve.expr.polynomial.reduce_degree`:
+        exact linear combinations of polynomial equations that cancel their leading
+        monomials replace equations (same solutions, each as unique).  Results and
+        checkpoints name the given system; ``verify`` re-proves the certificates on the
+        searched one.  Only with a :class:`~certsolve.expr.system.System` and no
+        ``subsystems``.  Among IBEX's files it changes Dietmaier (two linear equations:
+        459,140 -> 271,252 boxes, 137 -> 83 CPU s on one worker) and ExtendedFreud-0010
+        (97 -> 67 boxes); no forward-kinematics system.
     relax:
         contract with the polytope hull of the X-Taylor and affine-form linear relaxation
         (:class:`~.relaxation.PolytopeHull`) after Newton.  Measured on
@@ -127,6 +137,7 @@ class Solver:
         max_undecided: int = MAX_LISTED,
         max_pending: int = MAX_LISTED,
         relax: bool = True,
+        reduce_degree: bool = True,
     ):
         if not eps > 0:
             raise ValueError("eps must be positive")
@@ -134,8 +145,14 @@ class Solver:
             raise ValueError("max_undecided must be >= 0 and max_pending >= 1")
         self.max_undecided = int(max_undecided)
         self.max_pending = int(max_pending)
-        self.csys = system if isinstance(system, CompiledSystem) else CompiledSystem(system)
-        self.system = self.csys.system
+        if isinstance(system, CompiledSystem):
+            self.csys, self.system = system, system.system
+        else:
+            solved = lower_degree(system) if reduce_degree and not subsystems else system
+            #: the system searched; :attr:`system` is the one given (they differ when
+            #: ``reduce_degree`` replaced equations)
+            self.csys = CompiledSystem(solved)
+            self.system = system
         #: the box searched by :meth:`solve` (the system's; see :meth:`on_domain`)
         self.domain = self.system.domain
         self.n = self.csys.n
@@ -228,7 +245,7 @@ class Solver:
         if verify:
             from .verify import verify_solutions
 
-            verify_solutions(self.csys, result.solutions)
+            verify_solutions(self.csys, result.solutions)  # the system the search proved
         return result
 
     def on_domain(self, domain) -> Solver:
@@ -270,6 +287,8 @@ class Solver:
             f"partial: {[(p.S.tolist(), p.V.tolist()) for p in self.partial]}",
             f"bisector: {type(self.bisector).__name__} {_settings(self.bisector)}",
         ]
+        if c.system is not sysm:
+            parts += [f"solved as: {to_string(e)}" for e in c.system.equations]
         return "\n".join(parts)
 
     def start(self, known: bytes | None = None) -> SearchState:

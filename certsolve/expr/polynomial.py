@@ -1,0 +1,330 @@
+"""Polynomial equations: exact expansion, and an equivalent system of lower degree.
+
+Many systems hold fewer distinct leading monomials than equations.  Dietmaier's Stewart
+platform (12 quadratic equations in the 12 coordinates of four points) is the plain case:
+every equation is a distance, so its quadratic part is a combination of the 10 Gram
+products ``b_i . b_j``, and two combinations of the 12 equations are *linear*.  An interval
+solver sees none of that: each equation is contracted alone, and the cancellation happens
+only in exact arithmetic.
+
+:func:`expand` writes an expression as ``sum_m c_m x^m`` with exact rational interval
+coefficients ``c_m = [lo, hi]`` (a constant of the system is an interval, so its expansion
+encloses every polynomial the constants allow).  :func:`reduce_degree` runs Gauss-Jordan
+elimination, in exact rationals, on the midpoints of the coefficient matrix (columns ordered
+by decreasing degree), so each reduced row ``r = sum_k T_rk f_k`` cancels its leading
+monomials exactly.  A row of lower degree than the equations it combines replaces one of
+them.  The new system ``g = A f`` (``A`` = identity except the replaced rows, whose entries
+are ``T``) has
+
+* the same zeros: ``A`` is nonsingular, checked exactly (the submatrix ``T[rows, replaced]``
+  has full rank in rationals);
+* a unique zero in a box exactly when ``f`` has one, so Krawczyk's proof on ``g`` certifies
+  a solution of ``f``;
+* enclosures: each coefficient of ``g`` is ``sum_k T_rk [c_k]`` in exact rational interval
+  arithmetic, rounded outward to binary64 -- so ``g``'s expression encloses ``A f`` for
+  every value the constants may take.
+
+Equations that are not polynomial in the variables (a parameter, a transcendental
+function, a division by a non-constant, more than ``max_terms`` monomials) keep their form
+and take no part in the elimination.
+"""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+
+from .node import Expr, const, esum, pow, var
+from .system import System
+
+__all__ = ["expand", "degree_reductions", "reduce_degree", "Polynomial"]
+
+#: exact interval [lo, hi] of rationals
+Coefficient = tuple[Fraction, Fraction]
+#: exponent tuple (one per variable) -> coefficient
+Polynomial = dict[tuple[int, ...], Coefficient]
+
+_ONE = (Fraction(1), Fraction(1))
+
+
+def _mul_c(a: Coefficient, b: Coefficient) -> Coefficient:
+    if a[0] == a[1] and b[0] == b[1]:
+        p = a[0] * b[0]
+        return (p, p)
+    ps = (a[0] * b[0], a[0] * b[1], a[1] * b[0], a[1] * b[1])
+    return (min(ps), max(ps))
+
+
+def _add_into(out: Polynomial, m: tuple[int, ...], c: Coefficient) -> None:
+    old = out.get(m)
+    out[m] = c if old is None else (old[0] + c[0], old[1] + c[1])
+
+
+def _scale(p: Polynomial, c: Coefficient) -> Polynomial:
+    return {m: _mul_c(c, v) for m, v in p.items()}
+
+
+def _mul(p: Polynomial, q: Polynomial) -> Polynomial:
+    out: Polynomial = {}
+    for m1, c1 in p.items():
+        for m2, c2 in q.items():
+            _add_into(out, tuple(a + b for a, b in zip(m1, m2, strict=True)), _mul_c(c1, c2))
+    return out
+
+
+def _constant_value(p: Polynomial) -> Coefficient | None:
+    """The value of a polynomial without variables, else ``None``."""
+    if any(any(m) for m in p):
+        return None
+    return next(iter(p.values()), (Fraction(0), Fraction(0)))
+
+
+def expand(expr: Expr, variables: list[str], max_terms: int = 400) -> Polynomial | None:
+    """``expr`` as an exact polynomial in ``variables``, or ``None`` if it is not one.
+
+    Handles variables, finite constants, ``+ - *``, ``neg``, ``sqr``, non-negative integer
+    powers and division by a constant interval without zero; anything else (or more than
+    ``max_terms`` monomials at any node) gives ``None``.
+    """
+    index = {v: i for i, v in enumerate(variables)}
+    zero = (0,) * len(variables)
+    memo: dict[int, Polynomial | None] = {}
+
+    def go(e: Expr) -> Polynomial | None:
+        key = id(e)
+        if key in memo:
+            return memo[key]
+        memo[key] = res = _node(e)
+        if res is not None and len(res) > max_terms:
+            memo[key] = res = None
+        return res
+
+    def _node(e: Expr) -> Polynomial | None:
+        op = e.op
+        if op == "var":
+            k = index[e.param]
+            return {zero[:k] + (1,) + zero[k + 1 :]: _ONE}
+        if op == "const":
+            lo, hi = e.param
+            if not (math.isfinite(lo) and math.isfinite(hi)):
+                return None
+            return {zero: (Fraction(lo), Fraction(hi))}
+        maybe = [go(a) for a in e.args]
+        args = [a for a in maybe if a is not None]
+        if len(args) < len(maybe):
+            return None
+        if op in ("add", "sub"):
+            out = dict(args[0])
+            sign = 1 if op == "add" else -1
+            for m, (lo, hi) in args[1].items():
+                _add_into(out, m, (lo, hi) if sign == 1 else (-hi, -lo))
+            return out
+        if op == "neg":
+            return {m: (-hi, -lo) for m, (lo, hi) in args[0].items()}
+        if op == "mul":
+            return _mul(args[0], args[1])
+        if op == "sqr":
+            return _mul(args[0], args[0])
+        if op == "pow" and isinstance(e.param, int) and e.param >= 0:
+            out = {zero: _ONE}
+            for _ in range(e.param):
+                out = _mul(out, args[0])
+                if len(out) > max_terms:
+                    return None
+            return out
+        if op == "cadd":
+            out = dict(args[0])
+            c = Fraction(float(e.param))
+            _add_into(out, zero, (c, c))
+            return out
+        if op == "cmul":
+            c = Fraction(float(e.param))
+            return _scale(args[0], (c, c))
+        if op == "div":
+            d = _constant_value(args[1])
+            if d is None or d[0] <= 0 <= d[1]:
+                return None
+            return _scale(args[0], (1 / d[1], 1 / d[0]))
+        return None
+
+    return go(expr)
+
+
+def _degree(p: Polynomial) -> int:
+    return max((sum(m) for m, (lo, hi) in p.items() if lo != 0 or hi != 0), default=0)
+
+
+def _round_down(q: Fraction) -> float:
+    f = float(q)
+    return math.nextafter(f, -math.inf) if Fraction(f) > q else f
+
+
+def _round_up(q: Fraction) -> float:
+    f = float(q)
+    return math.nextafter(f, math.inf) if Fraction(f) < q else f
+
+
+def _to_expr(p: Polynomial, variables: list[str]) -> Expr:
+    """``sum_m [c_m] x^m``, each coefficient rounded outward to binary64.
+
+    Terms whose coefficient straddles 0 (``|c_m| <= r_m``: their midpoints cancelled, only
+    the constants' uncertainty is left) of even degree ``d`` are bounded together by
+    weighted AM-GM, ``|x^m| <= sum_i (m_i / d) x_i^d <= S_d = sum_i x_i^d``::
+
+        sum_m c_m x^m  in  [-R_d, R_d] * S_d,   R_d = sum_m r_m,
+
+    one product per degree instead of one per monomial, and ``S_d`` is the same node in
+    every equation over the same variables.
+    """
+    terms = []
+    cancelled: dict[int, tuple[Fraction, set[int]]] = {}
+    for m, (lo, hi) in sorted(p.items(), key=lambda t: (-sum(t[0]), t[0])):
+        if lo == 0 and hi == 0:
+            continue
+        d = sum(m)
+        if d and d % 2 == 0 and lo < 0 < hi:
+            r, used = cancelled.get(d, (Fraction(0), set()))
+            cancelled[d] = (r + max(-lo, hi), used | {i for i, k in enumerate(m) if k})
+            continue
+        c = const(_round_down(lo), _round_up(hi))
+        mono = _monomial(m, variables)
+        terms.append(c if mono is None else mono if (lo, hi) == _ONE else c * mono)
+    for d, (r, used) in sorted(cancelled.items()):
+        s_d = esum([pow(var(variables[i]), d) for i in sorted(used)])
+        bound = _round_up(r)
+        terms.append(const(-bound, bound) * s_d)
+    return esum(terms)
+
+
+def _monomial(m: tuple[int, ...], variables: list[str]) -> Expr | None:
+    factors = [var(v) if k == 1 else pow(var(v), k) for v, k in zip(variables, m, strict=True) if k]
+    if not factors:
+        return None
+    mono = factors[0]
+    for f in factors[1:]:
+        mono = mono * f
+    return mono
+
+
+def _rank(rows: list[list[Fraction]]) -> int:
+    """Rank in exact rational arithmetic."""
+    a = [list(r) for r in rows]
+    rank = 0
+    for col in range(len(a[0]) if a else 0):
+        piv = next((i for i in range(rank, len(a)) if a[i][col] != 0), None)
+        if piv is None:
+            continue
+        a[rank], a[piv] = a[piv], a[rank]
+        for i in range(rank + 1, len(a)):
+            if a[i][col] != 0:
+                f = a[i][col] / a[rank][col]
+                a[i] = [x - f * y for x, y in zip(a[i], a[rank], strict=True)]
+        rank += 1
+    return rank
+
+
+def degree_reductions(
+    system: System, max_equations: int = 40, max_terms: int = 400
+) -> dict[int, dict[int, Fraction]]:
+    """The combinations that lower a degree: ``{replaced equation: {equation: T_k}}``.
+
+    Gauss-Jordan elimination, in exact rationals, of the midpoints of the polynomial
+    equations' coefficients (columns by decreasing degree, so a reduced row has cancelled
+    every leading monomial it could).  A reduced row ``sum_k T_k f_k`` of degree ``d`` below
+    that of some ``f_k`` it combines replaces the one of them with the most monomials that
+    keeps the submatrix ``T[rows, replaced]`` of full rank (exact), so the new system is
+    ``A f`` with ``A`` nonsingular.  Lowest degrees first.  Empty when nothing lowers a
+    degree, or with fewer than 2 or more than ``max_equations`` polynomial equations.
+    """
+    names = system.variables
+    polys = {}
+    for k, eq in enumerate(system.equations):
+        p = expand(eq, names, max_terms)
+        if p is not None:
+            polys[k] = p
+    eqs = sorted(polys)
+    if not 2 <= len(eqs) <= max_equations:
+        return {}
+    monos = sorted({m for p in polys.values() for m in p}, key=lambda m: (-sum(m), m))
+    col = {m: j for j, m in enumerate(monos)}
+    ne, nm = len(eqs), len(monos)
+    # [M_mid | I]: Gauss-Jordan keeps T (the combination) in the right block
+    rows = []
+    for i, k in enumerate(eqs):
+        r = [Fraction(0)] * (nm + ne)
+        for m, (lo, hi) in polys[k].items():
+            r[col[m]] = (lo + hi) / 2
+        r[nm + i] = Fraction(1)
+        rows.append(r)
+    top = 0
+    for j in range(nm):
+        piv = next((i for i in range(top, ne) if rows[i][j] != 0), None)
+        if piv is None:
+            continue
+        rows[top], rows[piv] = rows[piv], rows[top]
+        rows[top] = [x / rows[top][j] for x in rows[top]]
+        for i in range(ne):
+            if i != top and rows[i][j] != 0:
+                f = rows[i][j]
+                rows[i] = [x - f * y for x, y in zip(rows[i], rows[top], strict=True)]
+        top += 1
+        if top == ne:
+            break
+    degree = [_degree(polys[k]) for k in eqs]
+    candidates = []
+    for r in rows:
+        lead = next((j for j in range(nm) if r[j] != 0), None)
+        if lead is None:
+            continue  # the equations are dependent here: leave them
+        d, t = sum(monos[lead]), r[nm:]
+        if any(t[i] != 0 and degree[i] > d for i in range(ne)):
+            candidates.append((d, t))
+    candidates.sort(key=lambda c: c[0])
+    replaced: list[int] = []  # positions in eqs
+    chosen: list[list[Fraction]] = []
+    for d, t in candidates:
+        order = sorted(
+            (i for i in range(ne) if t[i] != 0 and degree[i] > d and i not in replaced),
+            key=lambda i: (-len(polys[eqs[i]]), -degree[i], i),
+        )
+        for i in order:
+            cols = [*replaced, i]
+            if _rank([[row[c] for c in cols] for row in [*chosen, t]]) == len(cols):
+                chosen.append(t)
+                replaced.append(i)
+                break
+    return {
+        eqs[i]: {eqs[j]: t[j] for j in range(ne) if t[j] != 0}
+        for i, t in zip(replaced, chosen, strict=True)
+    }
+
+
+def reduce_degree(system: System, max_equations: int = 40, max_terms: int = 400) -> System:
+    """The equivalent system where :func:`degree_reductions` replace equations.
+
+    Returns ``system`` itself when nothing lowers a degree.  A replaced equation is
+    ``sum_k T_k f_k`` expanded, its coefficients computed in exact rational interval
+    arithmetic and rounded outward, so it encloses the combination for every value the
+    constants allow (see the module docstring).
+    """
+    names = system.variables
+    reductions = degree_reductions(system, max_equations, max_terms)
+    if not reductions:
+        return system
+    new_eqs = list(system.equations)
+    for k, combination in reductions.items():
+        total: Polynomial = {}
+        for j, t in combination.items():
+            p = expand(system.equations[j], names, max_terms)
+            assert p is not None  # degree_reductions expanded it
+            for m, v in p.items():
+                _add_into(total, m, _mul_c((t, t), v))
+        new_eqs[k] = _to_expr(total, names)
+    return System(
+        names,
+        system.domain,
+        new_eqs,
+        list(system.constraints),
+        system.name,
+        dict(system.parameters),
+    )
