@@ -4,7 +4,9 @@
 points; six distances fix those up to a reflection, so the system's real solutions are the
 postures of the platform and of its mirror image.  Dietmaier (1998) built the geometry to
 have 40 real postures: exactly 40 certified solutions must have the platform's handedness.
-About 75 s with two worker processes: ``slow``.
+The solver searches with two linear combinations of the equations in place of the last two
+(:func:`~certsolve.expr.polynomial.reduce_degree`).  About 50 s with two worker processes:
+``slow``.
 """
 
 from pathlib import Path

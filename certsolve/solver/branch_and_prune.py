@@ -1,7 +1,9 @@
 """The branch-and-prune solver: contract, certify, bisect -- a batch of boxes at a time.
 
 :class:`Solver` is the *step* of the search driver (:mod:`.search`): the driver owns the
-buffer, the limits, progress and the executor; :meth:`Solver.process` takes a batch of up to
+buffer, the limits, progress and the executor.  The system searched is the given one, or
+the equivalent one of lower degree (:func:`~certsolve.expr.polynomial.reduce_degree`).
+:meth:`Solver.process` takes a batch of up to
 ``batch_size`` boxes and, for all of them at once:
 
 1. drops boxes inside the unicity box of a known solution;
