@@ -34,6 +34,8 @@ from __future__ import annotations
 import math
 from fractions import Fraction
 
+import numpy as np
+
 from .node import Expr, const, esum, pow, var
 from .system import System
 
@@ -99,6 +101,10 @@ def expand(expr: Expr, variables: list[str], max_terms: int = 400) -> Polynomial
             memo[key] = res = None
         return res
 
+    def product(p: Polynomial, q: Polynomial) -> Polynomial | None:
+        # bounds the work as well as the result: at most 16 max_terms products
+        return _mul(p, q) if len(p) * len(q) <= 16 * max_terms else None
+
     def _node(e: Expr) -> Polynomial | None:
         op = e.op
         if op == "var":
@@ -122,16 +128,16 @@ def expand(expr: Expr, variables: list[str], max_terms: int = 400) -> Polynomial
         if op == "neg":
             return {m: (-hi, -lo) for m, (lo, hi) in args[0].items()}
         if op == "mul":
-            return _mul(args[0], args[1])
+            return product(args[0], args[1])
         if op == "sqr":
-            return _mul(args[0], args[0])
+            return product(args[0], args[0])
         if op == "pow" and isinstance(e.param, int) and e.param >= 0:
-            out = {zero: _ONE}
+            power: Polynomial | None = {zero: _ONE}
             for _ in range(e.param):
-                out = _mul(out, args[0])
-                if len(out) > max_terms:
+                power = product(power, args[0]) if power is not None else None
+                if power is None or len(power) > max_terms:
                     return None
-            return out
+            return power
         if op == "cadd":
             out = dict(args[0])
             c = Fraction(float(e.param))
@@ -223,6 +229,35 @@ def _rank(rows: list[list[Fraction]]) -> int:
     return rank
 
 
+def _may_lower(polys: dict[int, Polynomial]) -> bool:
+    """Whether some combination may lower a degree (a cheap screen in floating point).
+
+    If ``sum_k T_k f_k`` has degree below ``D``, the largest degree of the ``f_k`` it
+    combines, the degree-``D`` monomials of the degree-``D`` equations cancel: their rows
+    (over those monomials) are dependent.  So when, for every degree ``D``, those rows are
+    clearly independent (smallest singular value above ``1e-6`` of the largest, rows scaled
+    to unit norm), nothing lowers a degree and the exact elimination is skipped.
+    """
+    by_degree: dict[int, list[Polynomial]] = {}
+    for p in polys.values():
+        by_degree.setdefault(_degree(p), []).append(p)
+    for d, group in by_degree.items():
+        monos = sorted({m for p in group for m in p if sum(m) == d})
+        if len(group) > len(monos):
+            return True
+        col = {m: j for j, m in enumerate(monos)}
+        a = np.zeros((len(group), len(monos)))
+        for i, p in enumerate(group):
+            for m, (lo, hi) in p.items():
+                if sum(m) == d:
+                    a[i, col[m]] = float((lo + hi) / 2)
+        a /= np.maximum(np.linalg.norm(a, axis=1, keepdims=True), 1e-300)
+        sv = np.linalg.svd(a, compute_uv=False)
+        if not np.all(np.isfinite(sv)) or sv[-1] <= 1e-6 * sv[0]:
+            return True
+    return False
+
+
 def degree_reductions(
     system: System, max_equations: int = 40, max_terms: int = 400
 ) -> dict[int, dict[int, Fraction]]:
@@ -243,7 +278,7 @@ def degree_reductions(
         if p is not None:
             polys[k] = p
     eqs = sorted(polys)
-    if not 2 <= len(eqs) <= max_equations:
+    if not 2 <= len(eqs) <= max_equations or not _may_lower(polys):
         return {}
     monos = sorted({m for p in polys.values() for m in p}, key=lambda m: (-sum(m), m))
     col = {m: j for j, m in enumerate(monos)}
