@@ -181,13 +181,16 @@ def test_solver_with_mixed_newton_matches_reference(name):
         assert sum(holds(s.lo, s.hi, p) for s in res.solutions) == 1
 
 
+@pytest.mark.parametrize("stacked", [0, 10**9], ids=["sequence", "side-by-side"])
 @pytest.mark.parametrize("name", NAMES)
-def test_cid_on_several_variables_keeps_solutions(name):
-    """The solver's CID before bisection (chosen variable, then the others by smear score)
-    never loses a reference point, and contracts at least as much as CID on one variable."""
+def test_cid_on_several_variables_keeps_solutions(name, stacked):
+    """The solver's CID before bisection (chosen variable, then the others by smear score,
+    one after the other or side by side) never loses a reference point, and contracts at
+    least as much as CID on one variable."""
     csys, _ = compiled(name)
     rng = np.random.default_rng(5)
     every = Solver(csys, cid_vars=None)  # CID on all the variables
+    every.stacked_cid_pairs = stacked
     one = Solver(csys, cid_vars=1)  # the chosen variable only
     assert every.cid_vars == csys.n and one.cid_vars == 1
     gains = []
@@ -227,6 +230,7 @@ def test_cid_on_several_variables_is_the_sequence_box_by_box(name):
     positive smear score, best first."""
     csys, pts = compiled(name)
     solver = Solver(csys, cid_vars=None)
+    solver.stacked_cid_pairs = 0  # one variable after the other
     rng = np.random.default_rng(6)
     lo, hi = random_boxes(pts, csys.system.domain, rng, count=60)
     _, _, jlo, jhi = csys.eval_fj(lo, hi)
@@ -244,6 +248,36 @@ def test_cid_on_several_variables_is_the_sequence_box_by_box(name):
         if not e[0]:
             assert np.allclose(blo[k], a[0], rtol=1e-9, atol=1e-12), (k, blo[k] - a[0])
             assert np.allclose(bhi[k], b[0], rtol=1e-9, atol=1e-12), (k, bhi[k] - b[0])
+
+
+@pytest.mark.parametrize("name", ["eco-6", "kin2-6r"])
+def test_cid_side_by_side_is_the_intersection_box_by_box(name):
+    """A small batch shaves its extra variables side by side: CID on the chosen variable,
+    then the intersection of CID on each other variable with a positive smear score."""
+    csys, pts = compiled(name)
+    solver = Solver(csys, cid_vars=None)
+    rng = np.random.default_rng(7)
+    lo, hi = random_boxes(pts, csys.system.domain, rng, count=20)
+    assert lo.shape[0] * (csys.n - 1) <= solver.stacked_cid_pairs
+    _, _, jlo, jhi = csys.eval_fj(lo, hi)
+    var = rng.integers(csys.n, size=lo.shape[0])
+    blo, bhi, bemp = solver._cid(lo, hi, jlo, jhi, var)
+    for k in range(lo.shape[0]):
+        a, b, e = solver.cid.contract(lo[k : k + 1], hi[k : k + 1], var[k : k + 1])
+        score = smear_scores(lo[k : k + 1], hi[k : k + 1], jlo[k : k + 1], jhi[k : k + 1])[0]
+        score[var[k]] = -1.0
+        ilo, ihi, iemp = a[0].copy(), b[0].copy(), bool(e[0])
+        for v in np.flatnonzero(score > 0.0):
+            if e[0]:
+                break
+            c, d, f = solver.cid.contract(a, b, np.array([v]))
+            iemp |= bool(f[0])
+            ilo, ihi = np.maximum(ilo, c[0]), np.minimum(ihi, d[0])
+        iemp |= bool(np.any(ilo > ihi))
+        assert bemp[k] == iemp
+        if not iemp:
+            assert np.allclose(blo[k], ilo, rtol=1e-9, atol=1e-12), (k, blo[k] - ilo)
+            assert np.allclose(bhi[k], ihi, rtol=1e-9, atol=1e-12), (k, bhi[k] - ihi)
 
 
 def test_adaptive_count_learns_the_mean_need():

@@ -44,7 +44,7 @@ from ..expr.node import to_string
 from ..expr.polynomial import reduce_degree as lower_degree
 from ..expr.system import System
 from ..interval.core import splittable_width
-from ..interval.reductions import all_last
+from ..interval.reductions import all_last, any_last
 from .bisectors import SmearSumRelative, smear_scores, split
 from .buffer import BoxStack
 from .certify import Certifier, SolutionSet, box_difference
@@ -181,6 +181,13 @@ class Solver:
             raise ValueError("cid_vars must be >= 1, None (all variables) or 'auto'")
         #: variables CID contracts before a bisection (chosen first, then by smear score)
         self.cid_vars = self.n if cid_vars in (None, "auto") else min(int(cid_vars), self.n)
+        #: a batch that plans at most this many (box, extra variable) CID calls shaves them
+        #: side by side in one call (:meth:`_stacked_cid`), else one variable after the
+        #: other.  Measured (CPU s, one worker, median of 3; 0 = always one after the
+        #: other): Brent-8 5.36 -> 3.56, Brent-10 12.0 -> 9.4, eco-7 1.08 -> 0.90,
+        #: transistor 14.3 -> 13.4; Trigo1-0012 3.77 -> 4.02, Discrete-Integral-6 2.11 ->
+        #: 2.22; side by side on every batch loses on the large ones (Katsura-14, Brent-8).
+        self.stacked_cid_pairs = 512
         #: polytope hull of the linear relaxation, after Newton (None: off)
         self.relax = PolytopeHull(self.csys) if relax else None
         #: variables the bisector may split (None: all); the others are auxiliary
@@ -456,8 +463,10 @@ class Solver:
         decreasing smear score over the box (``J`` is its enclosure from Newton).
 
         Each round is one batched CID call on the boxes that still have a variable to
-        contract; every call is sound (:class:`~.shaving.CID`), so is the sequence.  A box
-        proven empty stays empty.  Returns ``(lo, hi, empty)``.
+        contract; every call is sound (:class:`~.shaving.CID`), so is the sequence.  A
+        small batch shaves its extra variables side by side instead
+        (:meth:`_stacked_cid`, :attr:`stacked_cid_pairs`).  A box proven empty stays
+        empty.  Returns ``(lo, hi, empty)``.
         """
         assert self.cid is not None  # called only with CID on
         clo, chi, cemp = self.cid.contract(lo, hi, var)
@@ -475,6 +484,9 @@ class Solver:
             order = np.argsort(-score, axis=1, kind="stable")[:, :extra]
             useful = np.take_along_axis(score, order, axis=1) > 0.0
             useful &= np.arange(order.shape[1]) < (limit - 1)[:, None]
+            if np.count_nonzero(useful) <= self.stacked_cid_pairs:
+                self._stacked_cid(clo, chi, cemp, order, useful, learns, needed, acid)
+                order = order[:, :0]
             for k in range(order.shape[1]):
                 act = np.flatnonzero(useful[:, k] & ~cemp)
                 if act.size == 0:
@@ -489,6 +501,31 @@ class Solver:
         if acid is not None:
             acid.done(needed[learns], B)
         return clo, chi, cemp
+
+    def _stacked_cid(self, clo, chi, cemp, order, useful, learns, needed, acid) -> None:
+        """The extra variables of :meth:`_cid` side by side: one CID call on a copy of each
+        box per variable, the results intersected (in place).
+
+        Each copy's CID keeps every solution of the box, so their intersection does too, and
+        an empty one (or an empty intersection) proves the box empty.  The sequence shaves
+        each variable of an already shaved box, so it contracts more per box; side by side
+        costs one call instead of one per variable, which wins when the batch is small (a
+        numpy call costs nearly the same for 50 rows as for 500).  ACID learns from each
+        variable's gain over the same starting box.
+        """
+        assert self.cid is not None
+        box, k = np.nonzero(useful & ~cemp[:, None])
+        if box.size == 0:
+            return
+        nlo, nhi, emp = self.cid.contract(clo[box], chi[box], order[box, k])
+        if acid is not None:
+            gain = log_volume_ratio(clo[box], chi[box], nlo, nhi)
+            shrank = learns[box] & (emp | (gain < acid.threshold))
+            np.maximum.at(needed, box[shrank], k[shrank] + 2)
+        np.maximum.at(clo, box, nlo)
+        np.minimum.at(chi, box, nhi)
+        np.logical_or.at(cemp, box, emp)
+        cemp |= any_last(clo > chi)
 
     def _record(self, state: SearchState, elo, ehi, ulo, uhi, tight: bool = True) -> None:
         """Record proven solutions; existence boxes are tightened only for new ones."""
