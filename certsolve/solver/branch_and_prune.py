@@ -98,8 +98,9 @@ class Solver:
         boxes, 22.1 -> 11.8 s; transistor 216,437 -> 60,385 boxes, 27.3 -> 13.2 s;
         Discrete-Integral-6 118,067 -> 18,463 boxes, 7.8 -> 2.2 s), but 1.07-1.25x the
         time on medium systems (katsura-6 22,121 -> 21,680 boxes, 2.09 -> 2.27 s; eco-7
-        0.81 -> 1.12 s; Eco9 2.8 -> 3.3 s); searches of fewer than ~950 boxes never learn,
-        so cost the same.
+        0.81 -> 1.12 s, 0.91 -> 1.0 s since the extra variables of small batches are
+        shaved side by side; Eco9 2.8 -> 3.3 s); searches of fewer than ~950 boxes never
+        learn, so cost the same.
         ``None`` against 1: 2-9x fewer boxes, 1.3-2x the CPU time on ``examples/systems``.
     subsystems:
         square sub-systems ``(equations, variables)`` also contracted by partial Newton.
@@ -183,10 +184,11 @@ class Solver:
         self.cid_vars = self.n if cid_vars in (None, "auto") else min(int(cid_vars), self.n)
         #: a batch that plans at most this many (box, extra variable) CID calls shaves them
         #: side by side in one call (:meth:`_stacked_cid`), else one variable after the
-        #: other.  Measured (CPU s, one worker, median of 3; 0 = always one after the
-        #: other): Brent-8 5.36 -> 3.56, Brent-10 12.0 -> 9.4, eco-7 1.08 -> 0.90,
-        #: transistor 14.3 -> 13.4; Trigo1-0012 3.77 -> 4.02, Discrete-Integral-6 2.11 ->
-        #: 2.22; side by side on every batch loses on the large ones (Katsura-14, Brent-8).
+        #: other.  Measured against always one after the other (CPU s, one worker, median
+        #: of 5 runs interleaved): Brent-8 5.56 -> 3.90, Brent-10 13.5 -> 10.2, eco-7 1.15
+        #: -> 0.98, transistor 15.3 -> 15.1, Caprasse 0.61 -> 0.59; Discrete-Integral-6
+        #: 2.36 -> 2.46, katsura-6 2.49 -> 2.55; the others within 2 %.  Side by side on
+        #: every batch (no limit) loses on the large ones (Katsura-14, Brent-8, 1 run).
         self.stacked_cid_pairs = 512
         #: polytope hull of the linear relaxation, after Newton (None: off)
         self.relax = PolytopeHull(self.csys) if relax else None
