@@ -223,16 +223,20 @@ def test_cid_vars_needs_fewer_boxes_and_keeps_the_solutions():
         Solver(system, cid_vars=0)
 
 
+@pytest.mark.parametrize("side_by_side", [False, True], ids=["sequence", "side-by-side"])
 @pytest.mark.parametrize("name", ["eco-6", "kin2-6r"])
-def test_cid_on_several_variables_is_the_sequence_box_by_box(name):
+def test_cid_on_several_variables_box_by_box(name, side_by_side):
     """The batched rounds equal CID applied to one box at a time (to rounding: a batch and
     a single box may round differently): the chosen variable, then every other one with a
-    positive smear score, best first."""
+    positive smear score -- one after the other, best first (a large batch), or each on the
+    box the chosen one left, the results intersected (a small batch)."""
     csys, pts = compiled(name)
     solver = Solver(csys, cid_vars=None)
-    solver.stacked_cid_pairs = 0  # one variable after the other
     rng = np.random.default_rng(6)
     lo, hi = random_boxes(pts, csys.system.domain, rng, count=60)
+    if not side_by_side:
+        solver.stacked_cid_pairs = 0
+    assert (lo.shape[0] * (csys.n - 1) <= solver.stacked_cid_pairs) == side_by_side
     _, _, jlo, jhi = csys.eval_fj(lo, hi)
     var = rng.integers(csys.n, size=lo.shape[0])
     blo, bhi, bemp = solver._cid(lo, hi, jlo, jhi, var)
@@ -240,42 +244,20 @@ def test_cid_on_several_variables_is_the_sequence_box_by_box(name):
         a, b, e = solver.cid.contract(lo[k : k + 1], hi[k : k + 1], var[k : k + 1])
         score = smear_scores(lo[k : k + 1], hi[k : k + 1], jlo[k : k + 1], jhi[k : k + 1])[0]
         score[var[k]] = -1.0
+        ilo, ihi, empty = a[0].copy(), b[0].copy(), bool(e[0])
         for v in np.argsort(-score, kind="stable"):
-            if e[0] or score[v] <= 0.0:
-                break
-            a, b, e = solver.cid.contract(a, b, np.array([v]))
-        assert bemp[k] == e[0]
-        if not e[0]:
-            assert np.allclose(blo[k], a[0], rtol=1e-9, atol=1e-12), (k, blo[k] - a[0])
-            assert np.allclose(bhi[k], b[0], rtol=1e-9, atol=1e-12), (k, bhi[k] - b[0])
-
-
-@pytest.mark.parametrize("name", ["eco-6", "kin2-6r"])
-def test_cid_side_by_side_is_the_intersection_box_by_box(name):
-    """A small batch shaves its extra variables side by side: CID on the chosen variable,
-    then the intersection of CID on each other variable with a positive smear score."""
-    csys, pts = compiled(name)
-    solver = Solver(csys, cid_vars=None)
-    rng = np.random.default_rng(7)
-    lo, hi = random_boxes(pts, csys.system.domain, rng, count=20)
-    assert lo.shape[0] * (csys.n - 1) <= solver.stacked_cid_pairs
-    _, _, jlo, jhi = csys.eval_fj(lo, hi)
-    var = rng.integers(csys.n, size=lo.shape[0])
-    blo, bhi, bemp = solver._cid(lo, hi, jlo, jhi, var)
-    for k in range(lo.shape[0]):
-        a, b, e = solver.cid.contract(lo[k : k + 1], hi[k : k + 1], var[k : k + 1])
-        score = smear_scores(lo[k : k + 1], hi[k : k + 1], jlo[k : k + 1], jhi[k : k + 1])[0]
-        score[var[k]] = -1.0
-        ilo, ihi, iemp = a[0].copy(), b[0].copy(), bool(e[0])
-        for v in np.flatnonzero(score > 0.0):
-            if e[0]:
+            if e[0] or empty or score[v] <= 0.0:
                 break
             c, d, f = solver.cid.contract(a, b, np.array([v]))
-            iemp |= bool(f[0])
-            ilo, ihi = np.maximum(ilo, c[0]), np.minimum(ihi, d[0])
-        iemp |= bool(np.any(ilo > ihi))
-        assert bemp[k] == iemp
-        if not iemp:
+            if side_by_side:  # each from the box CID on the chosen variable left
+                empty |= bool(f[0])
+                ilo, ihi = np.maximum(ilo, c[0]), np.minimum(ihi, d[0])
+            else:
+                a, b, e = c, d, f
+                ilo, ihi, empty = c[0], d[0], bool(f[0])
+        empty |= bool(np.any(ilo > ihi))
+        assert bemp[k] == empty
+        if not empty:
             assert np.allclose(blo[k], ilo, rtol=1e-9, atol=1e-12), (k, blo[k] - ilo)
             assert np.allclose(bhi[k], ihi, rtol=1e-9, atol=1e-12), (k, bhi[k] - ihi)
 
