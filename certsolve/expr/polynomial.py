@@ -212,21 +212,25 @@ def _monomial(m: tuple[int, ...], variables: list[str]) -> Expr | None:
     return mono
 
 
-def _rank(rows: list[list[Fraction]]) -> int:
-    """Rank in exact rational arithmetic."""
-    a = [list(r) for r in rows]
-    rank = 0
-    for col in range(len(a[0]) if a else 0):
-        piv = next((i for i in range(rank, len(a)) if a[i][col] != 0), None)
+def _gauss_jordan(rows: list[list[Fraction]], cols: int) -> int:
+    """Reduce ``rows`` in place (exact rationals) on their first ``cols`` columns: each
+    pivot row scaled to a leading 1, its column cleared in every other row.  Returns the
+    number of pivots (the rank over those columns)."""
+    top = 0
+    for j in range(cols):
+        piv = next((i for i in range(top, len(rows)) if rows[i][j] != 0), None)
         if piv is None:
             continue
-        a[rank], a[piv] = a[piv], a[rank]
-        for i in range(rank + 1, len(a)):
-            if a[i][col] != 0:
-                f = a[i][col] / a[rank][col]
-                a[i] = [x - f * y for x, y in zip(a[i], a[rank], strict=True)]
-        rank += 1
-    return rank
+        rows[top], rows[piv] = rows[piv], rows[top]
+        rows[top] = [x / rows[top][j] for x in rows[top]]
+        for i in range(len(rows)):
+            if i != top and rows[i][j] != 0:
+                f = rows[i][j]
+                rows[i] = [x - f * y for x, y in zip(rows[i], rows[top], strict=True)]
+        top += 1
+        if top == len(rows):
+            break
+    return top
 
 
 def _may_lower(polys: dict[int, Polynomial]) -> bool:
@@ -271,12 +275,21 @@ def degree_reductions(
     ``A f`` with ``A`` nonsingular.  Lowest degrees first.  Empty when nothing lowers a
     degree, or with fewer than 2 or more than ``max_equations`` polynomial equations.
     """
-    names = system.variables
+    return _reductions(_polynomials(system, max_terms), max_equations)
+
+
+def _polynomials(system: System, max_terms: int) -> dict[int, Polynomial]:
+    """The expansions of the system's polynomial equations, by equation index."""
     polys = {}
     for k, eq in enumerate(system.equations):
-        p = expand(eq, names, max_terms)
+        p = expand(eq, system.variables, max_terms)
         if p is not None:
             polys[k] = p
+    return polys
+
+
+def _reductions(polys: dict[int, Polynomial], max_equations: int) -> dict[int, dict[int, Fraction]]:
+    """:func:`degree_reductions` of the expanded equations ``polys``."""
     eqs = sorted(polys)
     if not 2 <= len(eqs) <= max_equations or not _may_lower(polys):
         return {}
@@ -291,20 +304,7 @@ def degree_reductions(
             r[col[m]] = (lo + hi) / 2
         r[nm + i] = Fraction(1)
         rows.append(r)
-    top = 0
-    for j in range(nm):
-        piv = next((i for i in range(top, ne) if rows[i][j] != 0), None)
-        if piv is None:
-            continue
-        rows[top], rows[piv] = rows[piv], rows[top]
-        rows[top] = [x / rows[top][j] for x in rows[top]]
-        for i in range(ne):
-            if i != top and rows[i][j] != 0:
-                f = rows[i][j]
-                rows[i] = [x - f * y for x, y in zip(rows[i], rows[top], strict=True)]
-        top += 1
-        if top == ne:
-            break
+    _gauss_jordan(rows, nm)
     degree = [_degree(polys[k]) for k in eqs]
     candidates = []
     for r in rows:
@@ -324,7 +324,8 @@ def degree_reductions(
         )
         for i in order:
             cols = [*replaced, i]
-            if _rank([[row[c] for c in cols] for row in [*chosen, t]]) == len(cols):
+            block = [[row[c] for c in cols] for row in [*chosen, t]]
+            if _gauss_jordan(block, len(cols)) == len(cols):
                 chosen.append(t)
                 replaced.append(i)
                 break
@@ -342,21 +343,19 @@ def reduce_degree(system: System, max_equations: int = 40, max_terms: int = 400)
     arithmetic and rounded outward, so it encloses the combination for every value the
     constants allow (see the module docstring).
     """
-    names = system.variables
-    reductions = degree_reductions(system, max_equations, max_terms)
+    polys = _polynomials(system, max_terms)
+    reductions = _reductions(polys, max_equations)
     if not reductions:
         return system
     new_eqs = list(system.equations)
     for k, combination in reductions.items():
         total: Polynomial = {}
         for j, t in combination.items():
-            p = expand(system.equations[j], names, max_terms)
-            assert p is not None  # degree_reductions expanded it
-            for m, v in p.items():
+            for m, v in polys[j].items():
                 _add_into(total, m, _mul_c((t, t), v))
-        new_eqs[k] = _to_expr(total, names)
+        new_eqs[k] = _to_expr(total, system.variables)
     return System(
-        names,
+        system.variables,
         system.domain,
         new_eqs,
         list(system.constraints),
