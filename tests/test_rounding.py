@@ -1,10 +1,14 @@
 """Outward rounding: both code paths (nextafter for small arrays, arithmetic for large ones)
 must bound every real that rounds to the given float."""
 
+from fractions import Fraction
+
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
-from certsolve.interval.rounding import down, up
+from certsolve.interval.rounding import down, rational_enclosure, up
 
 MAX = np.finfo(float).max
 SPECIALS = [
@@ -63,3 +67,16 @@ def test_overflowed_values_stay_valid_bounds():
     assert np.all(up(big) == -MAX)  # -inf came from an overflow: -max is an upper bound
     assert np.all(down(np.full(100, np.inf)) == MAX)
     assert np.all(up(np.full(100, np.inf)) == np.inf)
+
+
+@given(st.fractions(min_value=-1e300, max_value=1e300))
+def test_rational_enclosure_is_the_tightest_float_interval(q):
+    lo, hi = rational_enclosure(q)
+    assert Fraction(lo) <= q <= Fraction(hi)
+    assert lo == hi or np.nextafter(lo, np.inf) == hi
+    assert (lo == hi) == (Fraction(lo) == q)
+
+
+def test_rational_enclosure_beyond_the_float_range_raises():
+    with pytest.raises(OverflowError):
+        rational_enclosure(Fraction(10) ** 400)

@@ -36,6 +36,7 @@ from fractions import Fraction
 
 import numpy as np
 
+from ..interval.rounding import rational_enclosure
 from .node import Expr, const, esum, pow, var
 from .system import System
 
@@ -160,16 +161,6 @@ def _degree(p: Polynomial) -> int:
     return max((sum(m) for m, (lo, hi) in p.items() if lo != 0 or hi != 0), default=0)
 
 
-def _round_down(q: Fraction) -> float:
-    f = float(q)
-    return math.nextafter(f, -math.inf) if Fraction(f) > q else f
-
-
-def _round_up(q: Fraction) -> float:
-    f = float(q)
-    return math.nextafter(f, math.inf) if Fraction(f) < q else f
-
-
 def _to_expr(p: Polynomial, variables: list[str]) -> Expr:
     """``sum_m [c_m] x^m``, each coefficient rounded outward to binary64.
 
@@ -192,12 +183,12 @@ def _to_expr(p: Polynomial, variables: list[str]) -> Expr:
             r, used = cancelled.get(d, (Fraction(0), set()))
             cancelled[d] = (r + max(-lo, hi), used | {i for i, k in enumerate(m) if k})
             continue
-        c = const(_round_down(lo), _round_up(hi))
+        c = const(rational_enclosure(lo)[0], rational_enclosure(hi)[1])
         mono = _monomial(m, variables)
         terms.append(c if mono is None else mono if (lo, hi) == _ONE else c * mono)
     for d, (r, used) in sorted(cancelled.items()):
         s_d = esum([pow(var(variables[i]), d) for i in sorted(used)])
-        bound = _round_up(r)
+        bound = rational_enclosure(r)[1]
         terms.append(const(-bound, bound) * s_d)
     return esum(terms)
 

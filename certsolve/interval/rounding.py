@@ -14,6 +14,8 @@ functions; this is what makes an interval result a proof.
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import numpy as np
 
 __all__ = [
@@ -23,6 +25,7 @@ __all__ = [
     "up_inplace",
     "widen_down",
     "widen_up",
+    "rational_enclosure",
     "LIBM_ULPS",
     "EPS",
     "TINY",
@@ -112,3 +115,19 @@ def widen_up(x):
     with np.errstate(over="ignore", invalid="ignore"):
         r = x + (np.abs(x) * (LIBM_ULPS * EPS) + 2.0**-1020)
     return np.where(np.isnan(r), x, up(r))
+
+
+def rational_enclosure(q: Fraction) -> tuple[float, float]:
+    """The tightest float interval containing the exact rational ``q``.
+
+    ``float(q)`` is ``q`` rounded to nearest; compared exactly with ``q``, it is one bound
+    and its neighbour the other.  Raises ``OverflowError`` when ``q`` is beyond the float
+    range (as ``float(q)`` does).
+    """
+    x = float(q)
+    fx = Fraction(x)
+    if fx == q:
+        return x, x
+    if fx < q:
+        return x, float(np.nextafter(x, _POS_INF))
+    return float(np.nextafter(x, _NEG_INF)), x

@@ -28,6 +28,7 @@ from typing import NoReturn
 
 import numpy as np
 
+from ...interval.rounding import rational_enclosure
 from .. import node as N
 from ..node import Expr
 from ..ops import FORWARD
@@ -96,17 +97,9 @@ def _small(f: Fraction) -> bool:
 def enclosure(f: Fraction, at: Token) -> tuple[float, float]:
     """Tightest float interval containing the exact rational ``f``."""
     try:
-        x = float(f)
+        return rational_enclosure(f)
     except OverflowError:
-        x = math.inf
-    if math.isinf(x):
         fail("a constant is beyond the double-precision range", at)
-    fx = Fraction(x)
-    if fx == f:
-        return x, x
-    if fx < f:
-        return x, float(np.nextafter(x, np.inf))
-    return float(np.nextafter(x, -np.inf)), x
 
 
 def as_expr(v, at: Token) -> Expr:
