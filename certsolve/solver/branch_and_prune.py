@@ -488,18 +488,17 @@ class Solver:
             useful &= np.arange(order.shape[1]) < (limit - 1)[:, None]
             if np.count_nonzero(useful) <= self.stacked_cid_pairs:
                 self._stacked_cid(clo, chi, cemp, order, useful, learns, needed, acid)
-                order = order[:, :0]
-            for k in range(order.shape[1]):
-                act = np.flatnonzero(useful[:, k] & ~cemp)
-                if act.size == 0:
-                    break  # scores are sorted: no box has a k-th (or later) variable left
-                nlo, nhi, emp = self.cid.contract(clo[act], chi[act], order[act, k])
-                if acid is not None:
-                    gain = log_volume_ratio(clo[act], chi[act], nlo, nhi)
-                    shrank = learns[act] & (emp | (gain < acid.threshold))
-                    needed[act[shrank]] = k + 2  # the chosen variable, then k + 1 others
-                clo[act], chi[act] = nlo, nhi
-                cemp[act] |= emp
+            else:
+                for k in range(order.shape[1]):
+                    act = np.flatnonzero(useful[:, k] & ~cemp)
+                    if act.size == 0:
+                        break  # scores are sorted: no box has a k-th (or later) variable
+                    nlo, nhi, emp = self.cid.contract(clo[act], chi[act], order[act, k])
+                    if acid is not None:
+                        shrank = _learnt(acid, learns[act], clo[act], chi[act], nlo, nhi, emp)
+                        needed[act[shrank]] = k + 2  # the chosen variable, then k + 1 others
+                    clo[act], chi[act] = nlo, nhi
+                    cemp[act] |= emp
         if acid is not None:
             acid.done(needed[learns], B)
         return clo, chi, cemp
@@ -521,8 +520,7 @@ class Solver:
             return
         nlo, nhi, emp = self.cid.contract(clo[box], chi[box], order[box, k])
         if acid is not None:
-            gain = log_volume_ratio(clo[box], chi[box], nlo, nhi)
-            shrank = learns[box] & (emp | (gain < acid.threshold))
+            shrank = _learnt(acid, learns[box], clo[box], chi[box], nlo, nhi, emp)
             np.maximum.at(needed, box[shrank], k[shrank] + 2)
         np.maximum.at(clo, box, nlo)
         np.minimum.at(chi, box, nhi)
@@ -607,6 +605,12 @@ class SearchState:
     stats: Stats  # the step's counters: bisections, certified, duplicates
     mark: int = 0  # solutions[:mark] were known when the state started
     acid: AdaptiveCount | None = None  # the learnt CID count (``cid_vars="auto"``)
+
+
+def _learnt(acid: AdaptiveCount, learns, lo, hi, nlo, nhi, empty) -> np.ndarray:
+    """The learning boxes a CID call contracted enough to count for ACID: proven empty, or
+    their log-volume dropped below ``acid.threshold``."""
+    return learns & (empty | (log_volume_ratio(lo, hi, nlo, nhi) < acid.threshold))
 
 
 def solve(
