@@ -188,6 +188,18 @@ def test_nothing_to_lower_returns_the_system():
     assert reduce_degree(system) is system
 
 
+def test_coefficients_beyond_the_float_range_leave_the_system_as_given():
+    """An expansion (1e400 x) or a combination (f2 - 1e600 f1) beyond the float range
+    cannot be written as a float expression: the system is searched as given."""
+    dom = {"x": (-3, 3), "y": (-3, 3)}
+    tiny, huge = const(1e-300) * const(1e-300), const(1e200) * const(1e200)
+    circle = sqr(_X) + sqr(_Y) + _Y - 2
+    for first in (tiny * (sqr(_X) + sqr(_Y)) - 1, huge * _X + sqr(_X) + sqr(_Y)):
+        system = System.build(dom, [first, circle])
+        assert reduce_degree(system) is system
+        assert Solver(system).csys.system is system
+
+
 @pytest.mark.parametrize("build, count", [(_spheres, 2), (_cubics, None)])
 def test_solver_finds_the_same_solutions_on_the_lowered_system(build, count):
     system = build()

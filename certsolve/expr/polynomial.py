@@ -48,6 +48,7 @@ Coefficient = tuple[Fraction, Fraction]
 Polynomial = dict[tuple[int, ...], Coefficient]
 
 _ONE = (Fraction(1), Fraction(1))
+_FLOAT_MAX = Fraction(float(np.finfo(float).max))
 
 
 def _mul_c(a: Coefficient, b: Coefficient) -> Coefficient:
@@ -270,11 +271,12 @@ def degree_reductions(
 
 
 def _polynomials(system: System, max_terms: int) -> dict[int, Polynomial]:
-    """The expansions of the system's polynomial equations, by equation index."""
+    """The expansions of the system's polynomial equations, by equation index (those with
+    a coefficient beyond the float range left out)."""
     polys = {}
     for k, eq in enumerate(system.equations):
         p = expand(eq, system.variables, max_terms)
-        if p is not None:
+        if p is not None and all(max(-lo, hi) <= _FLOAT_MAX for lo, hi in p.values()):
             polys[k] = p
     return polys
 
@@ -344,7 +346,12 @@ def reduce_degree(system: System, max_equations: int = 40, max_terms: int = 400)
         for j, t in combination.items():
             for m, v in polys[j].items():
                 _add_into(total, m, _mul_c((t, t), v))
-        new_eqs[k] = _to_expr(total, system.variables)
+        try:
+            new_eqs[k] = _to_expr(total, system.variables)
+        except OverflowError:
+            # a coefficient beyond the float range: keep the given system (replacing only
+            # the other rows could leave A singular)
+            return system
     return System(
         system.variables,
         system.domain,
