@@ -18,7 +18,7 @@ from ..robot.elastic import tension
 from ..robot.geometry import euler_zyx
 from ..robot.model import Robot
 from ..solver import SearchStatus, Solver
-from ..solver.bisectors import Prioritized
+from ..solver.bisectors import Prioritized, SmearSumRelative
 from ..solver.result import SolveResult
 from .fk_systems import (
     FKFormulation,
@@ -172,7 +172,8 @@ class FKSolver:
             mask[j] = False
         sub = self.form.info.get("translation")
         subsystems = [(sub["equations"], sub["variables"])] if sub else []
-        bisector = None
+        # smear: the FK systems' figures (docs/fk-cost.md) were measured with it
+        bisector = SmearSumRelative()
         if self.form.kind == "frame":
             # orientation (edge vectors) first; the reference point only while it is wide
             names = self.form.system.variables

@@ -4,7 +4,8 @@
 * :mod:`.contractors`     -- :class:`HC4`, :class:`IntervalNewton`, partial Newton
 * :mod:`.shaving`         -- CID on the bisection variable
 * :mod:`.certify`         -- Krawczyk proofs with inflation, existence boxes, de-duplication
-* :mod:`.bisectors`       -- smear-sum-relative, prioritized and largest-first bisection
+* :mod:`.bisectors`       -- smear-sum-relative, smear/curvature mix, prioritized and
+  largest-first bisection
 * :mod:`.buffer`          -- the box stack
 * :mod:`.search`          -- the search driver shared by every branch-and-prune loop (solver,
   forward kinematics, workspace paving, IK search): buffer, limits, cancellation,

@@ -18,7 +18,8 @@ the equivalent one of lower degree (:func:`~certsolve.expr.polynomial.reduce_deg
 5. sends boxes that shrank at least as much as a bisection would (log-volume of the
    variables the bisector may split: auxiliary ones follow the others) back for another
    round, reports boxes narrower than ``eps`` as *undecided*, and bisects the rest
-   (:class:`~.bisectors.SmearSumRelative`), after CID contractions
+   (:class:`~.bisectors.SmearCurvatureMix`: smear, or curvature for half of the boxes),
+   after CID contractions
    (:class:`~.shaving.CID`) on the chosen variable and, with ``cid_vars``, on the other
    variables in decreasing smear order (IBEX's ACID applies CID to the first variables of
    that order).
@@ -45,7 +46,7 @@ from ..expr.polynomial import reduce_degree as lower_degree
 from ..expr.system import System
 from ..interval.core import splittable_width
 from ..interval.reductions import all_last, any_last
-from .bisectors import SmearSumRelative, smear_scores, split
+from .bisectors import SmearCurvatureMix, smear_scores, split
 from .buffer import BoxStack
 from .certify import Certifier, SolutionSet, box_difference
 from .checkpoint import Checkpoint
@@ -167,7 +168,7 @@ class Solver:
                 raise ValueError("newton_groups: 'variables', None or a list of masks")
             newton_groups = list(np.eye(self.n, dtype=bool))
         self.newton = IntervalNewton(self.csys, newton_groups)
-        self.bisector = bisector or SmearSumRelative()
+        self.bisector = bisector or SmearCurvatureMix()
         self.certifier = certifier or Certifier(self.csys)
         #: square sub-systems ``(equations, variables)`` contracted by partial Newton
         self.partial = [PartialNewton(self.csys, e, v) for e, v in subsystems]

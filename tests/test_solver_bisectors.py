@@ -1,0 +1,88 @@
+"""Bisectors: the curvature score, the box coin and the smear/curvature mix.
+
+The scores are checked on hand-computed Jacobian enclosures; the coin for its share and
+for not depending on the batch a box is in; the mix for taking smear's choice on one side
+of the coin and curvature's on the other.  That the default solver (the mix) loses no
+solution is checked by every solver test on the reference systems, and on a quadratic
+eigenvalue problem in ``test_solver_geneig.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from certsolve.solver.bisectors import (
+    SmearCurvatureMix,
+    SmearSumRelative,
+    box_coin,
+    curvature_scores,
+    smear_scores,
+)
+
+
+def bilinear_box():
+    """``f = (x y - 1, x + y - 3, z - x)`` on ``x in [1, 2], y in [0.5, 3], z in [0, 4]``:
+    ``J = [[y, x, 0], [1, 1, 0], [-1, 0, 1]]`` enclosed over the box."""
+    lo = np.array([[1.0, 0.5, 0.0]])
+    hi = np.array([[2.0, 3.0, 4.0]])
+    jlo = np.array([[[0.5, 1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 0.0, 1.0]]])
+    jhi = np.array([[[3.0, 2.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 0.0, 1.0]]])
+    return lo, hi, jlo, jhi
+
+
+def test_curvature_score_by_hand():
+    lo, hi, jlo, jhi = bilinear_box()
+    # row 1: w(J_xx)·w_x = 2.5·1 and w(J_xy)·w_y = 1·2.5, over the smear |y| w_x + |x| w_y = 3 + 5
+    # rows 2 and 3 are linear: no curvature
+    assert curvature_scores(lo, hi, jlo, jhi)[0] == pytest.approx([2.5 / 8, 2.5 / 8, 0.0])
+    # smear: row 1 (3/8, 5/8, 0), row 2 (1/3.5, 2.5/3.5, 0), row 3 (1/5, 0, 4/5)
+    expect = [3 / 8 + 1 / 3.5 + 1 / 5, 5 / 8 + 2.5 / 3.5, 4 / 5]
+    assert smear_scores(lo, hi, jlo, jhi)[0] == pytest.approx(expect)
+    # the mask and eps exclude variables in both
+    for scores in (curvature_scores, smear_scores):
+        assert scores(lo, hi, jlo, jhi, mask=np.array([True, False, True]))[0, 1] == -1.0
+        assert scores(lo, hi, jlo, jhi, eps=1.5)[0, 0] == -1.0
+
+
+def test_box_coin_share_and_independence_of_the_batch():
+    rng = np.random.default_rng(7)
+    lo = rng.normal(size=(20000, 5))
+    hi = lo + rng.random((20000, 5))
+    for share in (0.25, 1 / 3, 0.5):
+        coin = box_coin(lo, hi, share)
+        assert abs(coin.mean() - share) < 0.02
+        # a box draws the same coin alone, in another batch, or in another order
+        alone = np.array([box_coin(lo[k : k + 1], hi[k : k + 1], share)[0] for k in range(50)])
+        assert np.array_equal(alone, coin[:50])
+        perm = rng.permutation(len(lo))
+        assert np.array_equal(box_coin(lo[perm], hi[perm], share), coin[perm])
+    assert not box_coin(lo, hi, 0.0).any() and box_coin(lo, hi, 1.0).all()
+    # the two halves of a split draw unrelated coins
+    mid = (lo[:, 0] + hi[:, 0]) / 2
+    left, right = hi.copy(), lo.copy()
+    left[:, 0], right[:, 0] = mid, mid
+    agree = box_coin(lo, left, 0.5) == box_coin(right, hi, 0.5)
+    assert abs(agree.mean() - 0.5) < 0.02
+
+
+def test_mix_takes_smear_or_curvature_by_the_coin():
+    rng = np.random.default_rng(3)
+    B, n = 400, 4
+    lo = rng.normal(size=(B, n))
+    hi = lo + rng.random((B, n))
+    jlo = rng.normal(size=(B, n, n))
+    jhi = jlo + rng.random((B, n, n)) * (rng.random((B, n, n)) < 0.5)
+    jhi[:40] = jlo[:40]  # constant Jacobian: no curvature anywhere, smear decides
+    mix = SmearCurvatureMix(share=0.5)
+    var = mix.choose(lo, hi, jlo, jhi)
+    coin = box_coin(lo, hi, 0.5)
+    smear = SmearSumRelative().choose(lo, hi, jlo, jhi)
+    curv = np.argmax(curvature_scores(lo, hi, jlo, jhi), axis=1)
+    linear = np.arange(B) < 40
+    assert np.array_equal(var[~coin | linear], smear[~coin | linear])
+    assert np.array_equal(var[coin & ~linear], curv[coin & ~linear])
+    assert np.any(var[coin & ~linear] != smear[coin & ~linear])  # the two do differ
+    # a mask is obeyed on both sides of the coin
+    mask = np.array([True, False, True, False])
+    assert set(mix.choose(lo, hi, jlo, jhi, mask=mask)) <= {0, 2}
