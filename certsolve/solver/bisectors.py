@@ -3,8 +3,8 @@
 :class:`SmearSumRelative` (IBEX's ``SmearSumRelative``, the ``ibexsolve`` default) scores
 variable ``j`` by ``Σ_i |J_ij| w_j / Σ_k |J_ik| w_k`` -- how much of each equation's
 variation over the box comes from ``x_j`` -- and splits the best one.
-:class:`SmearCurvatureMix` (the :class:`~.branch_and_prune.Solver`'s default) splits half of
-the boxes by that score and the other half by the *curvature* score
+:class:`SmearCurvatureMix` (the :class:`~.branch_and_prune.Solver`'s default) splits two
+boxes in three by that score and the third by the *curvature* score
 ``Σ_i w(J_ij) w_j / Σ_k |J_ik| w_k``, the share of each equation's variation that interval
 Newton cannot absorb (see :func:`curvature_scores`).
 :class:`LargestFirst` splits the widest variable.  All split at ``lo + ratio * w`` with
@@ -144,12 +144,13 @@ class SmearCurvatureMix:
     Smear alone splits the variables that move the equations most, and can leave a variable
     that multiplies many others too wide for Newton ever to converge: on IBEX's Geneig-icse
     (a quadratic eigenvalue problem, ``x_j λ`` and ``x_j λ²`` as auxiliary variables) the
-    wide ``x_j`` keep being split while ``λ`` stays ~0.3 wide; 140k boxes in 60 s found 5 of
-    its 10 solutions.  Curvature alone splits ``λ`` down to ``eps`` and stalls where the
-    ``x_j`` are still symmetric about 0 (the midpoint Jacobian is singular there).  Half and
-    half: 10 solutions in ~4k boxes, and within a few percent of smear's boxes elsewhere
-    (``docs/minibex.md``).  The coin is a hash of the box, so a search is reproducible and
-    does not depend on batch sizes or workers.
+    wide ``x_j`` keep being split while ``λ`` stays ~0.3 wide: 110k boxes in 60 s found 5 of
+    its 10 solutions.  Curvature alone splits ``λ`` and ``λ²`` down to 1e-6 and below and
+    stalls where the ``x_j`` are still symmetric about 0 (the midpoint Jacobian is singular
+    there, Newton has no preconditioner).  Mixed: 10 solutions in ~6.5k boxes with a third
+    by curvature (~4k with half), and within ±10 % of smear's boxes on the other systems
+    measured (``benchmarks/solver_bench.py --bisector mix,smear``).  The coin is a hash of
+    the box, so a search is reproducible and does not depend on batch sizes or workers.
     """
 
     def __init__(self, share: float = 1 / 3, ratio: float = 0.45):
