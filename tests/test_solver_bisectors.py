@@ -86,3 +86,16 @@ def test_mix_takes_smear_or_curvature_by_the_coin():
     # a mask is obeyed on both sides of the coin
     mask = np.array([True, False, True, False])
     assert set(mix.choose(lo, hi, jlo, jhi, mask=mask)) <= {0, 2}
+
+
+@pytest.mark.parametrize("bisector", [SmearSumRelative(), SmearCurvatureMix(share=1.0)])
+def test_no_information_splits_the_widest_allowed_variable(bisector):
+    lo = np.zeros((2, 3))
+    hi = np.array([[1.0, 3.0, 2.0], [1.0, 3.0, 2.0]])
+    zero = np.zeros((2, 3, 3))  # a Jacobian of zeros: every score is 0
+    assert bisector.choose(lo, hi, zero, zero).tolist() == [1, 1]
+    assert bisector.choose(lo, hi, zero, zero, mask=np.array([True, False, True])).tolist() == [
+        2,
+        2,
+    ]
+    assert bisector.choose(lo, hi, zero, zero, eps=2.5).tolist() == [1, 1]

@@ -97,14 +97,15 @@ def _relative_scores(lo, hi, jlo, jhi, eps, mask, curvature: bool) -> np.ndarray
     return np.where(allowed, score, -1.0)
 
 
-def _best(score, w, allowed) -> np.ndarray:
-    """The best-scoring variable per box; the widest allowed one where no score is positive
-    (all zero, or an infinite Jacobian)."""
+def _best(score, lo, hi) -> np.ndarray:
+    """The best-scoring variable per box; the widest allowed one (score >= 0: the scores
+    are -1 exactly where a variable is not allowed) where no score is positive (all zero,
+    or an infinite Jacobian)."""
     best = np.argmax(score, axis=1)
     stuck = max_last(score) <= 0.0
     if np.any(stuck):
-        wa = np.where(allowed[stuck], w[stuck], -1.0)
-        best[stuck] = np.argmax(wa, axis=1)
+        w = splittable_width(lo[stuck], hi[stuck])
+        best[stuck] = np.argmax(np.where(score[stuck] >= 0.0, w, -1.0), axis=1)
     return best
 
 
@@ -132,9 +133,7 @@ class SmearSumRelative:
 
     def choose(self, lo, hi, jlo, jhi, eps: float = 0.0, mask=None) -> np.ndarray:
         """Variable to split per box; ``mask`` (n,) restricts the choice (default: all)."""
-        w = splittable_width(lo, hi)
-        allowed = w > eps if mask is None else (w > eps) & mask
-        return _best(smear_scores(lo, hi, jlo, jhi, eps, mask), w, allowed)
+        return _best(smear_scores(lo, hi, jlo, jhi, eps, mask), lo, hi)
 
 
 class SmearCurvatureMix:
@@ -158,15 +157,13 @@ class SmearCurvatureMix:
         self.ratio = ratio
 
     def choose(self, lo, hi, jlo, jhi, eps: float = 0.0, mask=None) -> np.ndarray:
-        w = splittable_width(lo, hi)
-        allowed = w > eps if mask is None else (w > eps) & mask
         score = smear_scores(lo, hi, jlo, jhi, eps, mask)
         rows = np.flatnonzero(box_coin(lo, hi, self.share))
         if rows.size:
             curv = curvature_scores(lo[rows], hi[rows], jlo[rows], jhi[rows], eps, mask)
             linear = max_last(curv) <= 0.0  # no curvature left: smear decides
             score[rows[~linear]] = curv[~linear]
-        return _best(score, w, allowed)
+        return _best(score, lo, hi)
 
 
 class Prioritized:

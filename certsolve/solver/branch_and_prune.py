@@ -18,7 +18,7 @@ the equivalent one of lower degree (:func:`~certsolve.expr.polynomial.reduce_deg
 5. sends boxes that shrank at least as much as a bisection would (log-volume of the
    variables the bisector may split: auxiliary ones follow the others) back for another
    round, reports boxes narrower than ``eps`` as *undecided*, and bisects the rest
-   (:class:`~.bisectors.SmearCurvatureMix`: smear, or curvature for half of the boxes),
+   (:class:`~.bisectors.SmearCurvatureMix`: smear, or curvature for a third of the boxes),
    after CID contractions
    (:class:`~.shaving.CID`) on the chosen variable and, with ``cid_vars``, on the other
    variables in decreasing smear order (IBEX's ACID applies CID to the first variables of
