@@ -25,7 +25,7 @@ from test_solver_contractors import (
 from certsolve.expr.compiled import CompiledSystem
 from certsolve.expr.minibex import load_minibex
 from certsolve.solver import solve
-from certsolve.solver.lp import dual_active_set
+from certsolve.solver.lp import StallRule, dual_active_set
 from certsolve.solver.relaxation import PolytopeHull, proven_lower_bounds, xtaylor_rows
 
 
@@ -38,10 +38,11 @@ def _programs(rng, S, n, m, slack_low):
     return G, rho, w
 
 
-def _solve_all(G, rho, w, max_iter, long_step=False, cutoff=False):
+def _solve_all(G, rho, w, max_iter, long_step=False, cutoff=False, stall=None):
     """Both programs (min and max) of every variable, as PolytopeHull sets them up
     (``long_step``: with the bound-flipping ratio test; ``cutoff``: a set stops once one of
-    its programs passes the far side of the box)."""
+    its programs passes the far side of the box; ``stall``: a :class:`StallRule`, the
+    variable's width as each program's scale)."""
     S, m, n = G.shape
     eye = np.eye(n)
     GA = np.concatenate([G, np.broadcast_to(eye, (S, n, n)), np.broadcast_to(-eye, (S, n, n))], 1)
@@ -64,6 +65,8 @@ def _solve_all(G, rho, w, max_iter, long_step=False, cutoff=False):
         np.abs(c),
         pair=PolytopeHull._pair(m, n) if long_step else None,
         cutoff=np.where(sign > 0, wj, 0.0) + 1e-9 * wj if cutoff else None,
+        stall=stall,
+        scale=wj,
         max_iter=max_iter,
     )
     bound = proven_lower_bounds(G, rho, w, lp.y[:, :m], sign, np.where(lp.infeasible, -1, j))
@@ -110,6 +113,34 @@ def test_lp_iteration_cap_only_weakens_bounds(long_step):
     _, full, _, _ = _solve_all(G, rho, w, max_iter=60, long_step=long_step)
     _, capped, _, _ = _solve_all(G, rho, w, max_iter=2, long_step=long_step)
     assert np.all(capped <= full + 1e-9 * (1.0 + np.abs(full)))
+
+
+def test_lp_stall_rule_only_weakens_bounds():
+    """Programs stopped because their objective crept stay sound (below the optimum); a lax
+    rule stops some of them early; before its first check the rule changes nothing."""
+    rng = np.random.default_rng(5)
+    G, rho, w = _programs(rng, 30, 8, 32, slack_low=0.05)  # all feasible
+    full, opt, _, _ = _solve_all(G, rho, w, max_iter=80, long_step=True)
+    lax = StallRule(start=2, window=1, fraction=0.2, few=0)
+    stopped, capped, _, _ = _solve_all(G, rho, w, max_iter=80, long_step=True, stall=lax)
+    assert np.all(capped <= opt + 1e-9 * (1.0 + np.abs(opt)))
+    assert np.any(capped < opt - 1e-6 * (1.0 + np.abs(opt)))  # the rule did stop some
+    late = StallRule(start=full.iterations + 1, window=1, fraction=0.2, few=0)
+    _, same, _, _ = _solve_all(G, rho, w, max_iter=80, long_step=True, stall=late)
+    np.testing.assert_array_equal(same, opt)
+
+
+def test_lp_stops_a_tail_of_few_programs():
+    """Past ``few_after`` iterations the batch stops once fewer than ``few`` programs run;
+    the bounds stay sound."""
+    rng = np.random.default_rng(5)
+    G, rho, w = _programs(rng, 30, 8, 32, slack_low=0.05)
+    full, opt, _, _ = _solve_all(G, rho, w, max_iter=80, long_step=True)
+    assert full.iterations > 6
+    rule = StallRule(start=100, few=10**6, few_after=3)  # a tail from the 4th iteration on
+    cut, capped, _, _ = _solve_all(G, rho, w, max_iter=80, long_step=True, stall=rule)
+    assert cut.iterations == 4
+    assert np.all(capped <= opt + 1e-9 * (1.0 + np.abs(opt)))
 
 
 def test_long_step_converges_in_fewer_iterations():

@@ -119,9 +119,12 @@ class Solver:
     relax:
         contract with the polytope hull of the X-Taylor and affine-form linear relaxation
         (:class:`~.relaxation.PolytopeHull`) after Newton.  Measured on
-        ``examples/systems``: 2-40x fewer boxes; forward kinematics turns it off: with 19
-        variables its LPs cost more than the boxes they save (general-19 at 10 N: 128,672
-        -> 48,484 boxes, but 11.3 -> 19.3 CPU s).
+        ``examples/systems``: 2-40x fewer boxes.  Forward kinematics turns it off: a box's
+        LPs cost ~10x the rest of its work there, which general-19 repays (at 10 N 128,672
+        -> 12,196 boxes, 13.2 -> 9.3 CPU s; at 60 N u~S(2) 156,910 -> 15,413, 12.8 -> 10.4 s)
+        but T-16 does not (60 N u=2: 271,875 -> 92,523 boxes, 18.5 -> 45.4 s; random-T-0
+        6.1 -> 11.3 s), nor general-19's open case (random-general-0 at 60 N, 60 pivots:
+        294k boxes in 300 s, against all 2.83M in ~230 s without).
     """
 
     def __init__(

@@ -20,6 +20,9 @@ increases.  One iteration then moves a vertex across the whole box where the pla
 needs one pivot per bound; on katsura-6 the median program needs ~7 iterations instead of
 ~11 (and the plain test cycles on some programs).  With ``cutoff`` the programs of a set stop
 as soon as one of them proves it empty (a Farkas ray, or a dual objective past the cutoff).
+A :class:`StallRule` (with ``stall``) stops the programs whose objective has stopped moving:
+the dual objective only grows, and the last iterations of a program that creeps (degenerate
+pivots, or 22 variables where the optimum is ~60 pivots away) buy little bound for their cost.
 
 Nothing here needs to be exact: the caller turns the multipliers into *rigorous* bounds
 (any ``y >= 0`` gives a valid bound, Neumaier & Shcherbina 2004), so rounding, cycling or
@@ -37,7 +40,26 @@ import numpy as np
 
 from ..interval.reductions import all_last, any_last, count_last, max_last
 
-__all__ = ["LPBatch", "dual_active_set"]
+__all__ = ["LPBatch", "StallRule", "dual_active_set"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class StallRule:
+    """When programs stop before optimality (their multipliers as they are: valid, only
+    less tight).
+
+    From iteration ``start`` on, every ``window`` iterations, a program whose objective
+    ``c·x`` grew by less than ``fraction · scale`` since the previous check stops.  After
+    ``few_after`` iterations the whole batch stops once fewer than ``few`` programs run: an
+    iteration costs ~25 numpy calls whatever its size, so a long tail of a few programs
+    costs a small search (Brown-10: ~5 boxes a round) more than its bounds save.
+    """
+
+    start: int = 20
+    window: int = 5
+    fraction: float = 0.005
+    few: int = 64
+    few_after: int = 15
 
 
 @dataclass(kw_only=True)
@@ -59,6 +81,8 @@ def dual_active_set(
     *,
     pair: np.ndarray | None = None,
     cutoff: np.ndarray | None = None,
+    stall: StallRule | None = None,
+    scale: np.ndarray | None = None,
     max_iter: int = 15,
     tol: float = 1e-9,
 ) -> LPBatch:
@@ -74,7 +98,9 @@ def dual_active_set(
     set) or -1; given, the ratio test flips bounds (see the module doc).  ``cutoff``
     ``(L,)``: a program whose dual objective ``c·x`` (a lower bound of its minimum) exceeds
     its cutoff proves its set empty for the caller; the set's other programs then stop, their
-    multipliers as they are (valid, only less tight).
+    multipliers as they are (valid, only less tight).  ``stall`` with ``scale`` ``(L,)``
+    (each program's yardstick, the width of the variable it bounds): programs that creep
+    stop (:class:`StallRule`); without them, programs run to optimality or ``max_iter``.
     """
     L, n = c.shape
     S, M, _ = G.shape
@@ -97,16 +123,24 @@ def dual_active_set(
     infeasible = np.zeros(L, dtype=bool)
     done = ~np.all(np.isfinite(Ninv), axis=(1, 2))
     proven = np.zeros(S, dtype=bool)  # a program of the set proved it empty: all stop
+    checked = None  # the objectives at the last stall check
     iterations = 0
     with np.errstate(all="ignore"):
         while iterations < max_iter:
             iterations += 1
+            obj = np.einsum("li,li->l", c, x)
             if cutoff is not None:
-                over = (np.einsum("li,li->l", c, x) > cutoff) & ~done
-                proven[box[over]] = True
+                proven[box[(obj > cutoff) & ~done]] = True
             done |= proven[box]
+            if stall is not None and scale is not None and iterations >= stall.start:
+                if (iterations - stall.start) % stall.window == 0:
+                    if checked is not None:
+                        done |= ~(obj - checked > stall.fraction * scale)
+                    checked = obj
             act = np.flatnonzero(~done)
             if act.size == 0:
+                break
+            if stall is not None and iterations > stall.few_after and act.size < stall.few:
                 break
             # normalised violations; the most violated constraint enters
             if 3 * act.size > L:

@@ -32,6 +32,16 @@ their two programs: every program can prove the box empty, and on ``examples/sys
 directions cost a third of all ``2n`` programs for 5-10% more boxes.  The relaxation needs
 ``f`` differentiable on ``X``: boxes where ``f`` is not defined everywhere or an enclosure is
 not finite are left unchanged.
+
+**Iterations.**  A program starts at a corner of the box and needs about one pivot per row
+active at its optimum: with 12 variables (Dietmaier) 74 % of the programs were still running
+after 15 iterations, the median one converged near 20, and a bound cut off half-way is a
+weak one.  So the programs run up to ``max_iter = 40`` pivots, and a :class:`.lp.StallRule`
+stops those whose bound has stopped moving (from the 20th pivot, less than 0.5 % of the
+variable's width in 5 pivots: a 22-variable program can creep for 60).  Against 15 pivots
+(one worker): Dietmaier 263,840 -> 106,860 boxes, Katsura-14 4,532 -> 2,215, Trigo1-0012
+13,439 -> 7,366, Geneig-icse 6,527 -> 4,936; systems whose programs converge within 15
+pivots do not change.
 """
 
 from __future__ import annotations
@@ -44,11 +54,13 @@ from ..interval.linalg import gamma
 from ..interval.reductions import all_last, any_last, to_front
 from ..interval.rounding import down, up
 from .bisectors import smear_scores
-from .lp import dual_active_set
+from .lp import StallRule, dual_active_set
 
 __all__ = ["PolytopeHull", "affine_rows", "xtaylor_rows", "proven_lower_bounds"]
 
 _TINY = 2.0**-1000
+#: when the programs stop before optimality (see the module doc, *Iterations*)
+_STALL = StallRule()
 
 
 def xtaylor_rows(csys: CompiledSystem, lo, hi):
@@ -176,12 +188,19 @@ class PolytopeHull:
     (:func:`affine_rows`)."""
 
     def __init__(
-        self, csys: CompiledSystem, directions: int = 3, max_iter: int = 15, affine: bool = True
+        self,
+        csys: CompiledSystem,
+        directions: int = 3,
+        max_iter: int = 40,
+        affine: bool = True,
+        stall: StallRule | None = _STALL,
     ):
         self.csys = csys
         self.affine = bool(affine)
         self.directions = int(directions)
         self.max_iter = int(max_iter)
+        #: programs still creeping after ``stall.start`` iterations stop (None: never)
+        self.stall = stall
 
     @staticmethod
     def _pair(m: int, n: int) -> np.ndarray:
@@ -243,6 +262,7 @@ class PolytopeHull:
             cutoff = np.where(sign > 0, wj, 0.0) + 1e-9 * wj
             lp = dual_active_set(
                 GA, betaA, c, W0, lam0, N0inv, pair=self._pair(m, n), cutoff=cutoff,
+                stall=self.stall, scale=wj,
                 max_iter=self.max_iter,
             )  # fmt: skip
             bound = proven_lower_bounds(
