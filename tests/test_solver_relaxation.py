@@ -122,7 +122,7 @@ def test_lp_stall_rule_only_weakens_bounds():
     G, rho, w = _programs(rng, 30, 8, 32, slack_low=0.05)  # all feasible
     full, opt, _, _ = _solve_all(G, rho, w, max_iter=80, long_step=True)
     lax = StallRule(start=2, window=1, fraction=0.2, few=0)
-    stopped, capped, _, _ = _solve_all(G, rho, w, max_iter=80, long_step=True, stall=lax)
+    _, capped, _, _ = _solve_all(G, rho, w, max_iter=80, long_step=True, stall=lax)
     assert np.all(capped <= opt + 1e-9 * (1.0 + np.abs(opt)))
     assert np.any(capped < opt - 1e-6 * (1.0 + np.abs(opt)))  # the rule did stop some
     late = StallRule(start=full.iterations + 1, window=1, fraction=0.2, few=0)

@@ -38,9 +38,10 @@ active at its optimum: with 12 variables (Dietmaier) 74 % of the programs were s
 after 15 iterations, the median one converged near 20, and a bound cut off half-way is a
 weak one.  So the programs run up to ``max_iter = 40`` pivots, and a :class:`.lp.StallRule`
 stops those whose bound has stopped moving (from the 20th pivot, less than 0.5 % of the
-variable's width in 5 pivots: a 22-variable program can creep for 60).  Against 15 pivots
-(one worker): Dietmaier 263,840 -> 106,860 boxes, Katsura-14 4,532 -> 2,215, Trigo1-0012
-13,439 -> 7,366, Geneig-icse 6,527 -> 4,936; systems whose programs converge within 15
+variable's width in 5 pivots: a 22-variable program can creep for 60), as does a batch
+whose last few programs would cost a small search more than they save.  Against 15 pivots
+(one worker): Dietmaier 263,840 -> 108,192 boxes, Katsura-14 4,532 -> 2,330, Trigo1-0012
+13,439 -> 7,359, Geneig-icse 6,527 -> 6,072; systems whose programs converge within 15
 pivots do not change.
 """
 
