@@ -143,9 +143,13 @@ def test_cancel_of_a_job_that_never_reads_its_flag_restarts_its_worker(service, 
     assert service.delete(f"/v1/jobs/{job_id}").status_code == 202
     j = wait(service, job_id)
     assert j["status"] == "cancelled" and "dropped" in j["error"], j
-    # its worker process was restarted by its nanny: the thread is gone with it
+    # its worker process was restarted by its nanny: the thread is gone with it (a worker
+    # that goes away while being asked is left out of the answer, not an error)
     deadline = time.monotonic() + 60
-    while pid in dask_client.run(os.getpid).values() or len(dask_client.nthreads()) < 2:
+    while (
+        pid in dask_client.run(os.getpid, on_error="ignore").values()
+        or len(dask_client.nthreads()) < 2
+    ):
         assert time.monotonic() < deadline, "the worker was not restarted"
         time.sleep(0.2)
     other = wait(service, submit(service, {"kind": "sleep", "params": {"seconds": 0.1}}))
