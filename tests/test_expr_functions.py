@@ -96,6 +96,50 @@ def test_hc4_keeps_the_zero(k, a, b, wa, wb):
     assert np.all(nlo[0] <= pt) and np.all(pt <= nhi[0])
 
 
+TRIG = [N.sin(x) + N.cos(2 * y), N.cos(x) * N.sin(y) - N.sin(x - y)]
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.floats(-20, 20),
+    st.floats(-20, 20),
+    st.floats(0, 4),
+    st.floats(0, 4),
+    st.floats(0, 1),
+    st.floats(0, 1),
+)
+def test_hc4_through_sin_and_cos_keeps_the_zero(a, b, wa, wb, s, t):
+    """sin and cos are inverted over up to two monotone branches: a zero anywhere in a box
+    of width up to 4 (about 1.3 periods) is never removed."""
+    dom = ((a - wa, a + wa), (b - wb, b + wb))
+    pt = np.array([dom[0][0] + s * 2 * wa, dom[1][0] + t * 2 * wb])
+    base = CompiledSystem(system(TRIG, dom))
+    vlo, vhi = base.f_point(pt)
+    eqs = [e - const(float(lo_), float(hi_)) for e, lo_, hi_ in zip(TRIG, vlo, vhi)]
+    csys = CompiledSystem(system(eqs, dom))
+    lo, hi = np.array(dom).T[None, 0], np.array(dom).T[None, 1]
+    for _ in range(3):
+        lo, hi, empty = csys.hc4_revise(lo, hi)
+        assert not empty[0]
+        assert np.all(lo[0] <= pt) and np.all(pt <= hi[0])
+
+
+def test_hc4_inverts_sin_near_a_pole():
+    """IBEX's AOL-legentil: y within 8e-9 of the pole asin(0.7) of 1/(3.5 - 5 sin y); the
+    equation pins ``sin y`` and so ``y``, on one side of the pole (it once stayed put)."""
+    sys_ = System(
+        ["y"],
+        np.array([[0.7753974918039738, 0.7753974997037314]]),
+        [1 / (3.5 - 5 * N.sin(var("y"))) - 1e9],
+    )
+    lo, hi, empty = CompiledSystem(sys_).hc4_revise(
+        sys_.domain[None, :, 0], sys_.domain[None, :, 1]
+    )
+    assert not empty[0]
+    assert hi[0, 0] - lo[0, 0] < 1e-12
+    assert hi[0, 0] < np.arcsin(0.7)  # 3.5 - 5 sin y = 1e-9 > 0
+
+
 NOT_SMOOTH = {
     # expression of x, box where it is not smooth somewhere, box where it is
     "tan": (N.tan(x), (1.5, 1.6), (1.4, 1.5)),

@@ -44,6 +44,19 @@ def interval_with_point_in(draw, lo, hi, dlo, dhi):
     return a, b, draw(floats(c, d))
 
 
+@st.composite
+def near_branch_ends(draw, max_width=7.0):
+    """An interval of width up to ``max_width`` (at any scale down to 1e-12), often starting
+    or ending within a few ulps of a multiple of π/2 (where sin and cos change branch), and a
+    point of it."""
+    k = draw(st.integers(-2000, 2000))
+    jitter = draw(st.one_of(st.just(0.0), floats(-1e-12, 1e-12), floats(-3.0, 3.0)))
+    start = k * math.pi / 2 + jitter
+    width = draw(st.one_of(floats(0.0, max_width), st.sampled_from([1e-12, 1e-9, 1e-6, 1e-3])))
+    lo, hi = sorted((start, start + draw(st.sampled_from([1.0, -1.0])) * width))
+    return lo, hi, draw(floats(lo, hi))
+
+
 UNARY = {
     "tan": (E.tan, mpmath.tan, interval_and_point(floats(-1e5, 1e5))),
     "sinh": (E.sinh, mpmath.sinh, interval_and_point(floats(-800, 800))),
@@ -148,6 +161,8 @@ def tight(z):
 
 
 BWD = {
+    "sin": (P.bwd_sin, mpmath.sin, near_branch_ends()),
+    "cos": (P.bwd_cos, mpmath.cos, near_branch_ends()),
     "tan": (P.bwd_tan, mpmath.tan, interval_and_point(floats(-50, 50))),
     "sinh": (P.bwd_sinh, mpmath.sinh, interval_and_point(floats(-700, 700))),
     "cosh": (P.bwd_cosh, mpmath.cosh, interval_and_point(floats(-700, 700))),
@@ -190,6 +205,21 @@ def test_rpow_projection_keeps_the_preimage(xa, ya):
     assert nylo <= y <= nyhi
 
 
+@pytest.mark.parametrize("name", ["sin", "cos"])
+@given(data=st.data())
+def test_sine_projection_keeps_the_preimage_of_an_interval(name, data):
+    """[z] an interval around f(x) (or reaching past [-1, 1]): x stays in the projection."""
+    bwd, exact, _ = BWD[name]
+    lo, hi, x = data.draw(near_branch_ends())
+    fx = exact(M(x))
+    below = data.draw(st.one_of(floats(0.0, 2.5), st.sampled_from([0.0, 1e-15, 1e-9])))
+    above = data.draw(st.one_of(floats(0.0, 2.5), st.sampled_from([0.0, 1e-15, 1e-9])))
+    zlo, _ = tight(fx - below)
+    _, zhi = tight(fx + above)
+    nlo, nhi = bwd(f64(zlo), f64(zhi), f64(lo), f64(hi))
+    assert nlo <= x <= nhi
+
+
 def test_projections_contract():
     """Not only sound: the inverse images are used (x in [-10, 10] narrowed)."""
     lo, hi = P.bwd_sinh(f64(1.0), f64(1.0), f64(-10.0), f64(10.0))
@@ -198,6 +228,17 @@ def test_projections_contract():
     assert abs(lo - (math.pi / 4 + math.pi)) < 1e-12 and abs(hi - lo) < 1e-12
     lo, hi = P.bwd_cosh(f64(2.0), f64(2.0), f64(0.0), f64(10.0))
     assert abs(lo - math.acosh(2.0)) < 1e-12
+    lo, hi = P.bwd_sin(f64(0.9), f64(1.0), f64(0.5), f64(2.5))  # two branches, split at π/2
+    assert abs(lo - math.asin(0.9)) < 1e-12 and abs(hi - (math.pi - math.asin(0.9))) < 1e-12
+    lo, hi = P.bwd_cos(f64(0.5), f64(0.5), f64(-1.5), f64(1.5))  # x = ±π/3
+    assert abs(lo + math.pi / 3) < 1e-12 and abs(hi - math.pi / 3) < 1e-12
+    lo, hi = P.bwd_cos(f64(-0.2), f64(0.3), f64(3.5), f64(6.0))  # cos increasing on [π, 2π]
+    assert abs(lo - (2 * math.pi - math.acos(-0.2))) < 1e-12
+    assert abs(hi - (2 * math.pi - math.acos(0.3))) < 1e-12
+    lo, hi = P.bwd_sin(f64(2.0), f64(3.0), f64(0.0), f64(1.0))  # outside [-1, 1]: empty
+    assert lo > hi
+    lo, hi = P.bwd_sin(f64(0.5), f64(0.5), f64(-10.0), f64(10.0))  # several periods: unchanged
+    assert lo == -10.0 and hi == 10.0
     lo, hi, _, _ = P.bwd_rpow(f64(2.0), f64(2.0), f64(-5.0), f64(10.0), f64(0.5), f64(0.5))
     assert abs(lo - 4.0) < 1e-12 and abs(hi - 4.0) < 1e-12
     lo, hi = P.bwd_sign(f64(1.0), f64(1.0), f64(-3.0), f64(3.0))

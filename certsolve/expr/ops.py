@@ -98,6 +98,8 @@ BACKWARD = {
     "log": _bwd_unary(P.bwd_log),
     "abs": _bwd_unary(P.bwd_abs),
     "sign": _bwd_unary(P.bwd_sign),
+    "sin": _bwd_unary(P.bwd_sin),
+    "cos": _bwd_unary(P.bwd_cos),
     "tan": _bwd_unary(P.bwd_tan),
     "sinh": _bwd_unary(P.bwd_sinh),
     "cosh": _bwd_unary(P.bwd_cosh),
@@ -110,7 +112,7 @@ BACKWARD = {
     "atanh": _bwd_unary(P.bwd_atanh),
     "cadd": lambda z0, z1, a, b, c, d, p: P.bwd_shift(z0, z1, a, b, p),
     "cmul": lambda z0, z1, a, b, c, d, p: P.bwd_scale(z0, z1, a, b, p),
-    # sin, cos, atan2, hull: no contraction of the arguments (sound)
+    # atan2, hull: no contraction of the arguments (sound)
 }
 
 FLOAT = {

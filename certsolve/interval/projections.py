@@ -7,13 +7,12 @@ exists.  All bounds are outward rounded, so the projections never lose a solutio
 
 Naming follows IBEX (``bwd_add``, ``bwd_mul``, ...).  ``bwd_mul`` and ``bwd_div`` keep the
 gap of the extended division (:func:`mul_inverse`) before taking the hull, as IBEX does.
-``bwd_sin`` and ``bwd_cos`` contract only through their range (``[z] ∩ [-1, 1]``) and
-leave the argument unchanged: sound, and cheap; interval Newton does the rest.
-
 The other elementary functions are inverted on their monotone branches: ``bwd_sinh``,
 ``bwd_tanh``, ``bwd_asinh``, ``bwd_atanh``, ``bwd_atan``, ``bwd_asin``, ``bwd_acos``,
-``bwd_acosh`` (one branch), ``bwd_cosh`` (two, ``±acosh(z)``), ``bwd_tan`` (when the argument
-lies between two consecutive poles; otherwise no contraction), ``bwd_rpow`` (``x = z^(1/y)``
+``bwd_acosh`` (one branch), ``bwd_cosh`` (two, ``±acosh(z)``), ``bwd_sin`` and ``bwd_cos``
+(the two monotone branches ``[x]`` meets first, split where they join; an argument wider than
+about π is left unchanged), ``bwd_tan`` (when the argument lies between two consecutive poles;
+otherwise no contraction), ``bwd_rpow`` (``x = z^(1/y)``
 for an exponent away from 0, and ``x >= 0`` always) and ``bwd_sign``.  ``atan2`` has no
 projection (no contraction of its arguments: sound).
 """
@@ -43,6 +42,8 @@ __all__ = [
     "bwd_min",
     "bwd_max",
     "bwd_tan",
+    "bwd_sin",
+    "bwd_cos",
     "bwd_sinh",
     "bwd_cosh",
     "bwd_tanh",
@@ -401,6 +402,54 @@ def bwd_tan(zlo, zhi, xlo, xhi):
         blo, bhi = arith.add(alo, ahi, klo, khi)
     lo, hi = _meet(xlo, xhi, blo, bhi)
     return np.where(inside, lo, xlo), np.where(inside, hi, xhi)
+
+
+def _sine_branches(zlo, zhi, xlo, xhi, parity: int):
+    """Preimage in ``[x]`` of ``[z]`` by ``sin`` (``parity`` 0) or ``cos`` (``parity`` 1).
+
+    Both are monotone on the branches ``B_m = [c_m - π/2, c_m + π/2]`` centred at
+    ``c_m = m π/2`` with ``m ≡ parity (mod 2)``, where ``f(c_m + t) = σ_m sin t``
+    (``σ_m = ±1``, and ``σ_{m+2} = -σ_m``): so ``x ∈ B_m`` and ``f(x) ∈ [z]`` give
+    ``x ∈ c_m + asin(σ_m [z])``.  The branch ``B_m`` of ``x̲`` and the next one ``B_{m+2}``
+    are inverted, each on its part of ``[x]`` (split at the common end ``c_m + π/2``), and the
+    hull of the two pieces is kept.  ``[x]`` reaching past ``B_{m+2}`` (wider than about π),
+    or not provably inside the two branches, is left unchanged (sound).  The centres and the
+    common end are outward-rounded enclosures; ``asin`` is the outward-rounded one of
+    :mod:`.elementary`, and ``-asin(s)`` encloses ``asin(-s)`` (an odd function).
+    """
+    with np.errstate(all="ignore"):
+        k = np.floor((xlo - parity * _HALF_PI) / _PI_LO + 0.5)  # x̲ ∈ B_m, m = 2k + parity
+        k = np.where(np.abs(k) < 1e8, k, 0.0)  # also NaN / inf bounds
+        c0lo, c0hi = _times_half_pi(2.0 * k + parity)
+        c1lo, c1hi = down(c0lo + _PI_LO), up(c0hi + _PI_HI)  # c_{m+2} = c_m + π
+        half = 0.5 * _PI_LO  # <= π/2 (exact halving)
+        inside = (xlo > up(c0hi - half)) & (xhi < down(c1lo + half))
+        if not np.any(inside):  # every [x] wider than the two branches: nothing to do
+            return xlo, xhi
+        odd = (k - 2.0 * np.floor(0.5 * k)) != parity  # σ_m = -1
+        slo, shi = np.where(odd, -zhi, zlo), np.where(odd, -zlo, zhi)  # σ_m [z]
+        alo, ahi = elementary.asin(slo, shi)
+        p0lo, p0hi = down(c0lo + alo), np.minimum(up(c0hi + ahi), up(c0hi + 0.5 * _PI_HI))
+        p1lo, p1hi = np.maximum(down(c1lo - ahi), down(c0lo + half)), up(c1hi - alo)
+        lo, hi = _hull_of_meets(xlo, xhi, p0lo, p0hi, p1lo, p1hi)
+    return np.where(inside, lo, xlo), np.where(inside, hi, xhi)
+
+
+def _times_half_pi(m):
+    """An enclosure of ``m π/2`` for integer-valued floats ``m`` (``|m| < 2^52``)."""
+    a = m * (0.5 * _PI_LO)
+    b = m * (0.5 * _PI_HI)
+    return down(np.minimum(a, b)), up(np.maximum(a, b))
+
+
+def bwd_sin(zlo, zhi, xlo, xhi):
+    """z = sin(x): x ∈ mπ + (-1)^m asin(z) on the branch around mπ (two branches at most)."""
+    return _sine_branches(zlo, zhi, xlo, xhi, 0)
+
+
+def bwd_cos(zlo, zhi, xlo, xhi):
+    """z = cos(x): x ∈ (m+1/2)π - (-1)^m asin(z) on the branch around (m+1/2)π (two at most)."""
+    return _sine_branches(zlo, zhi, xlo, xhi, 1)
 
 
 def bwd_rpow(zlo, zhi, xlo, xhi, ylo, yhi):
