@@ -99,6 +99,47 @@ def test_tan_near_poles(k, off, w):
             assert inside(lo, hi, mpmath.tan(M(x)))
 
 
+@given(st.integers(-10000, 10000), st.sampled_from([1e-10, 1e-12, 1e-14]), floats(0, 1e-8))
+def test_tan_is_finite_next_to_a_pole(k, gap, w):
+    """An interval ending ``gap`` before a pole (IBEX's AOL-legentil: x <= π/2 - 1e-10) is
+    bounded; the poles are located with an outward-rounded enclosure of (k + 1/2)π, not with
+    a relative slack (1e-9 once made ``tan`` unbounded there)."""
+    pole = (mpmath.mpf(k) + mpmath.mpf(1) / 2) * mpmath.pi
+    hi = float(pole - gap * max(1, abs(k)))
+    lo = hi - w
+    assume(M(hi) < pole)
+    tlo, thi = E.tan(f64(lo), f64(hi))
+    assert np.isfinite(tlo) and np.isfinite(thi)
+    assert inside(tlo, thi, mpmath.tan(M(lo))) and inside(tlo, thi, mpmath.tan(M(hi)))
+
+
+ULPS = st.sampled_from([-3, -1, 0, 1, 3, 1000, 10**5, 10**7])
+
+
+@given(st.integers(-10000, 10000), st.sampled_from(["tan", "sin", "cos"]), ULPS, ULPS)
+def test_critical_points_near_a_bound(k, name, below, above):
+    """Intervals from ``below`` ulps under a pole of tan (or an extremum of sin or cos) to
+    ``above`` ulps over it: bounds within the 1e-9 relative slack of the point are decided by
+    the enclosures of ``(k + 1/2)π``.  A pole inside gives the whole line, an extremum
+    inside its value ±1, and the values at both bounds are enclosed."""
+    fn, exact = {"tan": (E.tan, mpmath.tan), "sin": (E.sin, mpmath.sin)}.get(
+        name, (E.cos, mpmath.cos)
+    )
+    point = (mpmath.mpf(k) + (0 if name == "cos" else mpmath.mpf(1) / 2)) * mpmath.pi
+    c = float(point)
+    lo, hi = c - below * math.ulp(c), c + above * math.ulp(c)
+    assume(lo <= hi)
+    rlo, rhi = fn(f64(lo), f64(hi))
+    if M(lo) <= point <= M(hi):
+        if name == "tan":
+            assert rlo == -np.inf and rhi == np.inf
+        else:
+            assert inside(rlo, rhi, exact(point))
+    for x in (lo, hi):
+        if M(x) != point:
+            assert inside(rlo, rhi, exact(M(x)))
+
+
 @given(interval_and_point(floats(-1e6, 1e6)), interval_and_point(floats(-1e6, 1e6)))
 def test_atan2_encloses(ya, xa):
     ylo, yhi, y = ya

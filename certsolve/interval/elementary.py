@@ -12,12 +12,14 @@ an interval is the image of its intersection with the function's domain (``log([
   points; a bound that overflows stays a valid (finite) bound.
 * ``sin``, ``cos`` and ``cosh`` are monotone between critical points.  A bound is the extreme
   value (``±1``, or ``cosh(0) = 1``) whenever a critical point may lie in the interval; for
-  ``sin``/``cos`` the test ``kπ/2 ∈ [a, b]`` is made on the interval enlarged by a relative
-  ``1e-9`` so that the inexact value of π in floating point can never hide a critical point (a
-  false positive only loses tightness).  Intervals wider than ``2π``, or with huge bounds, map to
-  ``[-1, 1]``.
+  ``sin``/``cos`` the critical points ``kπ/2`` are tested with outward-rounded enclosures
+  (:func:`half_pi_multiple`), so the inexact value of π in floating point can never hide one
+  (a false positive, within an ulp or so, only loses tightness).  Intervals wider than ``2π``,
+  or with huge bounds, map to ``[-1, 1]``.
 * ``tan`` is increasing between its poles ``π/2 + kπ``; an interval that may contain a pole (same
-  enlarged test) maps to ``(-inf, inf)``, the hull of the two half-lines.
+  test) maps to ``(-inf, inf)``, the hull of the two half-lines.  (A relative slack of 1e-9
+  once stood for the enclosure: every box within 1e-9 of a pole then got ``(-inf, inf)``, and
+  IBEX's AOL-legentil, whose domain ends 1e-10 before ``π/2``, could not be decided there.)
 * ``atan2(y, x)`` (the angle of the point ``(x, y)``, in ``(-π, π]``, undefined at the origin) is
   continuous off the half-line ``{y = 0, x < 0}``; on a box that does not cross it, the angle is
   extreme at a corner, since a box is convex and the directions of a convex set seen from a point
@@ -34,7 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .rounding import widen_down, widen_up
+from .rounding import down, up, widen_down, widen_up
 
 __all__ = [
     "exp",
@@ -53,6 +55,7 @@ __all__ = [
     "atanh",
     "atan2",
     "rpow",
+    "half_pi_multiple",
 ]
 
 _INF = np.inf
@@ -61,6 +64,7 @@ _HUGE = 1e8  # beyond this, return [-1, 1] for sin/cos ((-inf, inf) for tan)
 _MAX = float(np.finfo(np.float64).max)
 _HALF_PI_UP = float(np.nextafter(0.5 * np.pi, np.inf))  # > π/2 (float(π/2) is below it)
 _PI_UP = float(np.nextafter(np.pi, np.inf))  # > π
+_PI_LO = float(np.pi)  # < π
 
 
 def exp(alo, ahi):
@@ -81,11 +85,46 @@ def log(alo, ahi):
     return lo, hi
 
 
-def _has_point(alo, ahi, offset):
-    """Does ``[alo, ahi]`` (slightly enlarged) contain ``offset + 2kπ`` for an integer k?"""
-    slack = 1e-9 * np.maximum(1.0, np.maximum(np.abs(alo), np.abs(ahi)))
-    k = np.ceil((alo - slack - offset) / _TWO_PI)
-    return offset + k * _TWO_PI <= ahi + slack
+def half_pi_multiple(m):
+    """An enclosure ``[lo, hi]`` of ``m π/2`` for integer-valued floats ``m`` (``|m| < 2^52``):
+    the products with the floats around π/2, rounded outward."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        a = m * (0.5 * _PI_LO)
+        b = m * (0.5 * _PI_UP)
+    return down(np.minimum(a, b)), up(np.maximum(a, b))
+
+
+def _may_hold(alo, ahi, first: int, step: int):
+    """May ``[alo, ahi]`` (narrower than ``step π/2``) contain ``(first + step k) π/2`` for an
+    integer ``k``?
+
+    The nearest candidate above ``alo`` is computed in floats and compared with a relative
+    slack of 1e-9 (far more than its rounding error): that settles every interval except
+    those with a bound within the slack of the candidate.  Those are decided with
+    outward-rounded enclosures of the candidates next to ``alo`` (:func:`half_pi_multiple`),
+    so a point is found however close to a bound it lies, and a bound 1e-10 before a pole is
+    not taken for the pole.
+    """
+    alo, ahi = np.broadcast_arrays(np.asarray(alo, dtype=float), np.asarray(ahi, dtype=float))
+    with np.errstate(invalid="ignore", over="ignore"):
+        slack = 1e-9 * np.maximum(1.0, np.maximum(np.abs(alo), np.abs(ahi)))
+        k = np.ceil(((alo - slack) / (0.5 * np.pi) - first) / step)
+        p = (first + step * k) * (0.5 * np.pi)
+        hit = p <= ahi + slack
+        near = hit & ((p < alo + slack) | (p > ahi - slack))
+        if not np.any(near):
+            return hit
+        idx = np.flatnonzero(near)
+        lo, hi = alo.ravel()[idx], ahi.ravel()[idx]
+        k = np.floor((lo / (0.5 * _PI_LO) - first) / step)
+        k = np.where(np.abs(k) < 2**50, k, 0.0)  # NaN / inf / huge: decided by the caller
+        exact = np.zeros(idx.size, dtype=bool)
+        for d in (0.0, 1.0, 2.0):
+            plo, phi = half_pi_multiple(first + step * (k + d))
+            exact |= (plo <= hi) & (phi >= lo)
+    hit = hit.copy().ravel()
+    hit[idx] = exact
+    return hit.reshape(alo.shape)
 
 
 def cos(alo, ahi):
@@ -95,8 +134,8 @@ def cos(alo, ahi):
         lo = widen_down(np.minimum(ca, cb))
         hi = widen_up(np.maximum(ca, cb))
         wide = ~(ahi - alo < _TWO_PI) | ~(np.maximum(np.abs(alo), np.abs(ahi)) < _HUGE)
-        has_max = wide | _has_point(alo, ahi, 0.0)
-        has_min = wide | _has_point(alo, ahi, np.pi)
+        has_max = wide | _may_hold(alo, ahi, 0, 4)  # 2kπ
+        has_min = wide | _may_hold(alo, ahi, 2, 4)  # π + 2kπ
     lo = np.where(has_min, -1.0, np.maximum(lo, -1.0))
     hi = np.where(has_max, 1.0, np.minimum(hi, 1.0))
     return _keep_empty(lo, hi, alo, ahi)
@@ -109,8 +148,8 @@ def sin(alo, ahi):
         lo = widen_down(np.minimum(sa, sb))
         hi = widen_up(np.maximum(sa, sb))
         wide = ~(ahi - alo < _TWO_PI) | ~(np.maximum(np.abs(alo), np.abs(ahi)) < _HUGE)
-        has_max = wide | _has_point(alo, ahi, 0.5 * np.pi)
-        has_min = wide | _has_point(alo, ahi, -0.5 * np.pi)
+        has_max = wide | _may_hold(alo, ahi, 1, 4)  # π/2 + 2kπ
+        has_min = wide | _may_hold(alo, ahi, 3, 4)  # -π/2 + 2kπ
     lo = np.where(has_min, -1.0, np.maximum(lo, -1.0))
     hi = np.where(has_max, 1.0, np.minimum(hi, 1.0))
     return _keep_empty(lo, hi, alo, ahi)
@@ -161,9 +200,7 @@ def tan(alo, ahi):
         tb = np.tan(ahi)
         lo = widen_down(ta)
         hi = widen_up(tb)
-        slack = 1e-9 * np.maximum(1.0, np.maximum(np.abs(alo), np.abs(ahi)))
-        k = np.ceil((alo - slack - 0.5 * np.pi) / np.pi)
-        pole = 0.5 * np.pi + k * np.pi <= ahi + slack
+        pole = _may_hold(alo, ahi, 1, 2)  # π/2 + kπ
         wide = ~(ahi - alo < np.pi) | ~(np.maximum(np.abs(alo), np.abs(ahi)) < _HUGE)
         full = pole | wide | ~(lo <= hi)
     lo = np.where(full, -_INF, lo)

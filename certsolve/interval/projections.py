@@ -420,7 +420,7 @@ def _sine_branches(zlo, zhi, xlo, xhi, parity: int):
     with np.errstate(all="ignore"):
         k = np.floor((xlo - parity * _HALF_PI) / _PI_LO + 0.5)  # x̲ ∈ B_m, m = 2k + parity
         k = np.where(np.abs(k) < 1e8, k, 0.0)  # also NaN / inf bounds
-        c0lo, c0hi = _times_half_pi(2.0 * k + parity)
+        c0lo, c0hi = elementary.half_pi_multiple(2.0 * k + parity)
         c1lo, c1hi = down(c0lo + _PI_LO), up(c0hi + _PI_HI)  # c_{m+2} = c_m + π
         half = 0.5 * _PI_LO  # <= π/2 (exact halving)
         inside = (xlo > up(c0hi - half)) & (xhi < down(c1lo + half))
@@ -433,13 +433,6 @@ def _sine_branches(zlo, zhi, xlo, xhi, parity: int):
         p1lo, p1hi = np.maximum(down(c1lo - ahi), down(c0lo + half)), up(c1hi - alo)
         lo, hi = _hull_of_meets(xlo, xhi, p0lo, p0hi, p1lo, p1hi)
     return np.where(inside, lo, xlo), np.where(inside, hi, xhi)
-
-
-def _times_half_pi(m):
-    """An enclosure of ``m π/2`` for integer-valued floats ``m`` (``|m| < 2^52``)."""
-    a = m * (0.5 * _PI_LO)
-    b = m * (0.5 * _PI_HI)
-    return down(np.minimum(a, b)), up(np.maximum(a, b))
 
 
 def bwd_sin(zlo, zhi, xlo, xhi):
