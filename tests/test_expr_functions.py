@@ -113,6 +113,7 @@ def test_hc4_through_sin_and_cos_keeps_the_zero(a, b, wa, wb, s, t):
     of width up to 4 (about 1.3 periods) is never removed."""
     dom = ((a - wa, a + wa), (b - wb, b + wb))
     pt = np.array([dom[0][0] + s * 2 * wa, dom[1][0] + t * 2 * wb])
+    pt = np.clip(pt, [dom[0][0], dom[1][0]], [dom[0][1], dom[1][1]])  # rounding
     base = CompiledSystem(system(TRIG, dom))
     vlo, vhi = base.f_point(pt)
     eqs = [e - const(float(lo_), float(hi_)) for e, lo_, hi_ in zip(TRIG, vlo, vhi)]
