@@ -2,16 +2,21 @@
 
 The scores are checked on hand-computed Jacobian enclosures; the coin for its share and
 for not depending on the batch a box is in; the mix for taking smear's choice on one side
-of the coin and curvature's on the other.  That the default solver (the mix) loses no
+of the coin and curvature's on the other; the fallback where no score is positive for splitting
+the variable widest relative to the domain.  That the default solver (the mix) loses no
 solution is checked by every solver test on the reference systems, and on a quadratic
 eigenvalue problem in ``test_solver_geneig.py``.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
+from certsolve.expr.minibex import parse_minibex
+from certsolve.solver import Solver
 from certsolve.solver.bisectors import (
     SmearCurvatureMix,
     SmearSumRelative,
@@ -99,3 +104,40 @@ def test_no_information_splits_the_widest_allowed_variable(bisector):
         2,
     ]
     assert bisector.choose(lo, hi, zero, zero, eps=2.5).tolist() == [1, 1]
+
+
+@pytest.mark.parametrize("bisector", [SmearSumRelative(), SmearCurvatureMix(share=1.0)])
+def test_no_information_splits_the_widest_relative_to_the_domain(bisector):
+    lo = np.zeros((1, 3))
+    hi = np.array([[1.0, 3.0, 2.0]])
+    zero = np.zeros((1, 3, 3))
+    scale = np.array([0.5, 30.0, 2.0])  # relative widths 2, 0.1, 1
+    assert bisector.choose(lo, hi, zero, zero, scale=scale).tolist() == [0]
+    assert bisector.choose(lo, hi, zero, zero).tolist() == [1]  # absolute without a scale
+
+
+def test_the_solver_scale_is_its_domain():
+    s = parse_minibex("Variables x in [0, 2]; y; z in [1, 1]; Constraints x = 1; y = 1; z = 1; end")
+    solver = Solver(s)
+    assert solver.scale.tolist() == [2.0, 1.0, 1.0]  # unbounded, degenerate: 1
+    assert solver.on_domain(np.array([[0, 4], [0, 1], [1, 1]])).scale.tolist() == [4, 1, 1]
+
+
+POLE = """Variables x in [0, 1.5707963]; y in [0, 2]; z in [-1e8, 1e8];
+Constraints
+  1/(1 - y) + tan(x) = 4;
+  tan(x)*(1 - y) + 1/(1 - y) = 10/3;
+  z*(1/(1 - y) - 2*tan(x)) = 1;
+end"""
+
+
+def test_a_pole_inside_the_domain_and_a_wide_multiplier():
+    """Every equation has the pole y = 1 (an infinite Jacobian on boxes around it), and
+    ``z`` only multiplies: the smear scores say nothing, and the fallback splits the variable
+    widest relative to its domain (6 boxes; the widest in absolute terms, ``z``, took 67).
+    Both solutions, (π/4, 2/3, 1) and (atan(8/3), 1/4, -1/4), and nothing undecided."""
+    r = Solver(parse_minibex(POLE)).solve(timeout=60)
+    assert r.status == "complete" and not r.undecided
+    got = sorted(((s.lo + s.hi) / 2).tolist() for s in r.solutions)
+    want = sorted([[math.pi / 4, 2 / 3, 1.0], [math.atan(8 / 3), 0.25, -0.25]])
+    assert np.allclose(got, want, atol=1e-9)

@@ -46,7 +46,7 @@ from ..expr.polynomial import reduce_degree as lower_degree
 from ..expr.system import System
 from ..interval.core import splittable_width
 from ..interval.reductions import all_last, any_last
-from .bisectors import SmearCurvatureMix, smear_scores, split
+from .bisectors import SmearCurvatureMix, domain_scale, smear_scores, split
 from .buffer import BoxStack
 from .certify import Certifier, SolutionSet, box_difference
 from .checkpoint import Checkpoint
@@ -435,7 +435,9 @@ class Solver:
         if np.any(big):
             lo3, hi3 = lo2[big], hi2[big]
             jlo3, jhi3 = jlo[todo][big], jhi[todo][big]
-            var = self.bisector.choose(lo3, hi3, jlo3, jhi3, self.eps, self.bisect_mask)
+            var = self.bisector.choose(
+                lo3, hi3, jlo3, jhi3, self.eps, self.bisect_mask, scale=self.scale
+            )
             if self.cid is not None:
                 clo, chi, cemp = self._cid(lo3, hi3, jlo3, jhi3, var, state.acid)
                 gain = self._gain(lo3, hi3, clo, chi)
@@ -447,6 +449,12 @@ class Solver:
             (alo, ahi), (blo, bhi) = split(lo3, hi3, var, self.bisector.ratio)
             stats.bisections += lo3.shape[0]
             state.stack.push(np.concatenate([alo, blo]), np.concatenate([ahi, bhi]))
+
+    @property
+    def scale(self) -> np.ndarray:
+        """The domain's widths: a box on which the Jacobian tells the bisector nothing is
+        split along its variable widest relative to them (:func:`~.bisectors.domain_scale`)."""
+        return domain_scale(self.domain)
 
     def _gain(self, lo0, hi0, lo1, hi1) -> np.ndarray:
         """Log-volume change from ``lo0, hi0`` to ``lo1, hi1`` over the variables the
