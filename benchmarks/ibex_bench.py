@@ -63,19 +63,19 @@ show (Kin1, Hayes, Reimer, Puma, Redeco, Trigexp) are not in the set.
 
 ``--eps`` defaults to the CLI's 1e-8; ``ibexsolve``'s ``--eps-min`` is 1e-3 (see
 ``docs/minibex.md``).  On the 2-core machine of this project (2026-11-26, ``--timeout 30
---runs 3``) all 30 parse and 27 complete (Dietmaier 25 s, 54 solutions, 107,696 boxes).  The
-three that do not, measured in-process (one worker, ``Solver(...).solve``):
+--runs 3``) all 30 parse and 28 complete.  AOL-legentil was the third that did not: ``tan``
+took every interval within 1e-9 (relative) of a pole for one containing it, and the domain
+ends 1e-10 before ``π/2``; with the poles located exactly, HC4 inverting ``sin`` and
+``cos``, and the bisector splitting the variable widest *relative to its domain* where the
+Jacobian is infinite (not ``z`` in ``[-1e8, 1e8]`` alone), it completes in 27 boxes: no
+solution.  The two that do not finish, measured in-process (one worker,
+``Solver(...).solve``):
 
 * **Biggs-exp6** (fitting three exponentials ``x3 e^{-t x1} - x4 e^{-t x2} + x6 e^{-t x5}`` to
   six samples): six isolated solutions, the permutations of the three terms, with a Jacobian
   so ill-conditioned that a box of half-width 0.1 around one of them takes 2,156 boxes to
   settle (0.5: 17,647; 2: 110,643).  On ``[-20, 20]^6``: no solution found after 300 s and
   3.05 million boxes (nor in 30 s at ``eps`` 1e-3).
-* **AOL-legentil**: the undecided boxes all sit at one corner, ``x`` at its bound
-  ``pi/2 - 1e-10`` (``tan x`` ~ 1e10) and ``y`` at the pole ``asin(0.7)`` of
-  ``1/(3.5 - 5 sin y)``, where ``x`` and ``y`` are narrower than ``eps`` but the equations
-  do not bound ``z``: ``z`` in ``[-1e8, 1e8]`` is split into eps-boxes without end
-  (396,913 undecided boxes in 30 s).
 * **Butcher8-a**: one solution (``a = -1.11411...``) after 59 s and 362,780 boxes; the
   pending boxes follow the curve of the last equation (in ``a`` and ``b`` only) with
   ``b1 .. b3`` still wide.
