@@ -105,23 +105,23 @@ def _may_hold(alo, ahi, first: int, step: int):
     so a point is found however close to a bound it lies, and a bound 1e-10 before a pole is
     not taken for the pole.
     """
-    alo, ahi = np.broadcast_arrays(np.asarray(alo, dtype=float), np.asarray(ahi, dtype=float))
-    with np.errstate(invalid="ignore", over="ignore"):
-        slack = 1e-9 * np.maximum(1.0, np.maximum(np.abs(alo), np.abs(ahi)))
-        k = np.ceil(((alo - slack) / (0.5 * np.pi) - first) / step)
-        p = (first + step * k) * (0.5 * np.pi)
-        hit = p <= ahi + slack
-        near = hit & ((p < alo + slack) | (p > ahi - slack))
-        if not np.any(near):
-            return hit
-        idx = np.flatnonzero(near)
-        lo, hi = alo.ravel()[idx], ahi.ravel()[idx]
-        k = np.floor((lo / (0.5 * _PI_LO) - first) / step)
-        k = np.where(np.abs(k) < 2**50, k, 0.0)  # NaN / inf / huge: decided by the caller
-        exact = np.zeros(idx.size, dtype=bool)
-        for d in (0.0, 1.0, 2.0):
-            plo, phi = half_pi_multiple(first + step * (k + d))
-            exact |= (plo <= hi) & (phi >= lo)
+    # the callers ignore invalid operations (inf - inf at unbounded bounds: no hit)
+    slack = 1e-9 * np.maximum(1.0, np.maximum(np.abs(alo), np.abs(ahi)))
+    k = np.ceil(((alo - slack) / (0.5 * np.pi) - first) / step)
+    p = (first + step * k) * (0.5 * np.pi)
+    hit = p <= ahi + slack
+    near = hit & ((p < alo + slack) | (p > ahi - slack))
+    if not near.any():
+        return hit
+    alo, ahi, hit = np.broadcast_arrays(alo, ahi, hit)
+    idx = np.flatnonzero(near)
+    lo, hi = alo.ravel()[idx], ahi.ravel()[idx]
+    k = np.floor((lo / (0.5 * _PI_LO) - first) / step)
+    k = np.where(np.abs(k) < 2**50, k, 0.0)  # NaN / inf / huge: decided by the caller
+    exact = np.zeros(idx.size, dtype=bool)
+    for d in (0.0, 1.0, 2.0):
+        plo, phi = half_pi_multiple(first + step * (k + d))
+        exact |= (plo <= hi) & (phi >= lo)
     hit = hit.copy().ravel()
     hit[idx] = exact
     return hit.reshape(alo.shape)
