@@ -395,7 +395,7 @@ def bwd_tan(zlo, zhi, xlo, xhi):
     with np.errstate(all="ignore"):
         k = np.round((0.5 * xlo + 0.5 * xhi) / _PI_LO)
         k = np.where(np.abs(k) < 1e8, k, 0.0)  # also NaN / inf midpoints
-        klo, khi = arith.mul(k, k, np.float64(_PI_LO), np.float64(_PI_HI))  # ∋ kπ
+        klo, khi = elementary.half_pi_multiple(2.0 * k)  # ∋ kπ
         half = 0.5 * _PI_LO  # <= π/2 (exact halving)
         inside = (xlo > up(khi - half)) & (xhi < down(klo + half))
         alo, ahi = elementary.atan(zlo, zhi)
