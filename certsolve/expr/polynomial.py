@@ -204,7 +204,7 @@ def _monomial(m: tuple[int, ...], variables: list[str]) -> Expr | None:
     return mono
 
 
-def _gauss_jordan(rows: list[list[Fraction]], cols: int) -> int:
+def gauss_jordan(rows: list[list[Fraction]], cols: int) -> int:
     """Reduce ``rows`` in place (exact rationals) on their first ``cols`` columns: each
     pivot row scaled to a leading 1, its column cleared in every other row.  Returns the
     number of pivots (the rank over those columns)."""
@@ -297,7 +297,7 @@ def _reductions(polys: dict[int, Polynomial], max_equations: int) -> dict[int, d
             r[col[m]] = (lo + hi) / 2
         r[nm + i] = Fraction(1)
         rows.append(r)
-    _gauss_jordan(rows, nm)
+    gauss_jordan(rows, nm)
     degree = [_degree(polys[k]) for k in eqs]
     candidates = []
     for r in rows:
@@ -318,7 +318,7 @@ def _reductions(polys: dict[int, Polynomial], max_equations: int) -> dict[int, d
         for i in order:
             cols = [*replaced, i]
             block = [[row[c] for c in cols] for row in [*chosen, t]]
-            if _gauss_jordan(block, len(cols)) == len(cols):
+            if gauss_jordan(block, len(cols)) == len(cols):
                 chosen.append(t)
                 replaced.append(i)
                 break

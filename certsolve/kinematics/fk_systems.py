@@ -63,11 +63,13 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 
 from ..expr import Constraint, System, const, cos, esum, param, sin, sqr, var
 from ..expr.node import Expr
+from ..expr.polynomial import gauss_jordan
 from ..robot.geometry import rotation_2d, rotation_zyx
 from ..robot.model import Robot
 
@@ -126,17 +128,64 @@ class FKFormulation:
 # -- helpers ----------------------------------------------------------------------------------
 
 
+def _exact(a) -> list[list[Fraction]]:
+    """A float matrix (or vector, as one row) in exact rationals: every float is one."""
+    return [[Fraction(float(x)) for x in row] for row in np.atleast_2d(np.asarray(a, dtype=float))]
+
+
+def _matmul(a: list[list[Fraction]], b: list[list[Fraction]]) -> list[list[Fraction]]:
+    return [[sum((x * y for x, y in zip(row, col)), Fraction(0)) for col in zip(*b)] for row in a]
+
+
+def _det(rows: list[list[Fraction]]) -> Fraction:
+    """Exact determinant (Laplace expansion along the first row; 2x2 and 3x3 here)."""
+    if not rows:
+        return Fraction(1)
+    minors = ([r[:j] + r[j + 1 :] for r in rows[1:]] for j in range(len(rows)))
+    return sum(
+        ((-1) ** j * rows[0][j] * _det(m) for j, m in enumerate(minors) if rows[0][j]), Fraction(0)
+    )
+
+
+def _least_squares(a: list[list[Fraction]], b: list[list[Fraction]]) -> list[list[Fraction]]:
+    """The exact least-squares solution ``X`` of ``a X = b`` (``a`` of full column rank):
+    the normal equations ``aᵀa X = aᵀb`` by Gauss-Jordan in rationals.  It is the solution
+    itself when ``a X = b`` has one."""
+    at = [list(col) for col in zip(*a)]
+    n = len(at)
+    rows = [p + q for p, q in zip(_matmul(at, a), _matmul(at, b), strict=True)]
+    if gauss_jordan(rows, n) < n:
+        raise ValueError("the chosen platform points are not affinely independent")
+    return [row[n:] for row in rows]
+
+
+def _rounded(q: list[list[Fraction]]) -> np.ndarray:
+    """Exact rationals rounded to the nearest floats (``float(Fraction)`` rounds correctly)."""
+    return np.array([[float(x) for x in row] for row in q])
+
+
 def _affine_coordinates(Q: np.ndarray, X: np.ndarray) -> np.ndarray:
-    """Coefficients ``l`` with ``X_i = Σ_j l_ij Q_j``, ``Σ_j l_ij = 1`` (exact fit required)."""
+    """Coefficients ``l`` with ``X_i = Σ_j l_ij Q_j``, ``Σ_j l_ij = 1`` (exact fit required).
+
+    Solved in exact rationals from the float coordinates and rounded to nearest, so the
+    coefficients -- and which of them are 0 or 1, which decides the terms and nodes the
+    builders write -- are the same on every CPU.  A least-squares solve with LAPACK left
+    BLAS-kernel noise in them (``1 - 2e-16`` on one kernel, ``1 + 4e-16`` on another; a
+    product by exactly 1 or a shared constant folds in the graph): the planar robot's
+    system had 316 nodes with OpenBLAS's Haswell kernel and 330 with its SkylakeX one.  A
+    platform whose points are exact affine combinations of the chosen ones (every bundled
+    robot) gets its exact coefficients.
+    """
     k = Q.shape[0]
-    M = np.vstack([Q.T, np.ones((1, k))])  # (d+1, k)
-    rhs = np.vstack([X.T, np.ones((1, X.shape[0]))])
-    coef, *_ = np.linalg.lstsq(M, rhs, rcond=None)
-    if np.max(np.abs(M @ coef - rhs)) > 1e-9 * (1.0 + np.max(np.abs(X))):
+    M = _exact(np.vstack([Q.T, np.ones((1, k))]))  # (d+1, k)
+    rhs = _exact(np.vstack([X.T, np.ones((1, X.shape[0]))]))
+    coef = _least_squares(M, rhs)
+    resid = max(abs(r - s) for rr, sr in zip(_matmul(M, coef), rhs) for r, s in zip(rr, sr))
+    if resid > Fraction(1e-9) * (1 + Fraction(float(np.max(np.abs(X))))):
         raise ValueError("a platform point is not an affine combination of the chosen points")
-    coef = coef.T
-    coef[np.abs(coef) < 1e-14] = 0.0
-    return coef
+    out = _rounded(coef).T
+    out[np.abs(out) < 1e-14] = 0.0
+    return out
 
 
 def _snap_rows(L: np.ndarray, robot: Robot) -> np.ndarray:
@@ -161,13 +210,17 @@ def _snap_rows(L: np.ndarray, robot: Robot) -> np.ndarray:
 
 
 def _choose_points(points: np.ndarray, k: int) -> list[int]:
-    """The ``k`` points spanning the largest simplex (best conditioned affine frame)."""
-    best, best_vol = None, -1.0
+    """The ``k`` points spanning the largest simplex (best conditioned affine frame).
+
+    The squared volumes (Gram determinants of the edges) are compared exactly: a
+    symmetric platform has equal simplices, and a float determinant would pick among them
+    by rounding noise."""
+    best, best_vol = None, Fraction(-1)
     for combo in itertools.combinations(range(points.shape[0]), k):
         P = points[list(combo)]
-        E = P[1:] - P[0]
-        vol = abs(np.linalg.det(E @ E.T)) if E.shape[0] else 0.0
-        if vol > best_vol + 1e-12:
+        E = _exact(P[1:] - P[0]) if k > 1 else []
+        vol = _det(_matmul(E, [list(c) for c in zip(*E)])) if E else Fraction(0)
+        if vol > best_vol:  # exact: of equal simplices (a symmetric platform) the first
             best, best_vol = list(combo), vol
     if best is None or best_vol <= 1e-12:
         raise ValueError(f"the platform has no {k} affinely independent attachment points")
@@ -236,8 +289,9 @@ def _fourth_point_constraints(Q, E2, E3, E4) -> list[Constraint]:
     three equalities hold at every proper pose (redundant: contraction only) and fail at
     the mirror ones.  On general-19 at τ <= 60 N they cut the boxes by 1.6x.
     """
-    e = Q[1:] - Q[0]
-    a, b, c = np.linalg.solve(np.stack([e[0], e[1], np.cross(e[0], e[1])], axis=1), e[2])
+    e = _exact(Q[1:] - Q[0])
+    basis = [list(col) for col in zip(e[0], e[1], _cross(e[0], e[1]))]
+    a, b, c = (float(v[0]) for v in _least_squares(basis, [[x] for x in e[2]]))
     cr = _cross(E2, E3)
     return [
         Constraint(
@@ -450,7 +504,7 @@ class _Frame:
         self.rows = [dom]
         for j in range(1, k):
             self.names += [f"e{a}{j + 1}" for a in axes]
-            dj = float(np.linalg.norm(Q[j] - Q[0]))
+            dj = float(np.sqrt(np.sum((Q[j] - Q[0]) ** 2)))
             span = dom[:, 1] - dom[:, 0]
             # |E_j| = d_j bounds each component; widened so that a solution with an edge
             # parallel to an axis is not on the boundary of the search box
@@ -618,7 +672,7 @@ def _platform_formulation(
             signed = esum(E[0][c] * cr[c] for c in range(3))
         else:
             signed = E[0][0] * E[1][1] - E[0][1] * E[1][0]
-        s0 = float(np.linalg.det(Q[1:] - Q[0]))
+        s0 = float(_det(_exact(Q[1:] - Q[0])))
         constraints.append(Constraint(signed, s0, s0, redundant=True))
         constraints.append(
             Constraint(signed, 0.0, np.inf) if s0 > 0 else Constraint(signed, -np.inf, 0.0)
@@ -645,7 +699,7 @@ def _platform_formulation(
         for a, b in zip(members, members[1:]):
             Aa, Ab = A[a], A[b]
             lhs = esum(2.0 * float(Aa[c] - Ab[c]) * co.B[a][c] for c in range(d))
-            const_term = float(np.dot(Aa, Aa) - np.dot(Ab, Ab))
+            const_term = float(np.sum(Aa * Aa) - np.sum(Ab * Ab))
             constraints.append(
                 Constraint(sqr(rho[a]) - sqr(rho[b]) + lhs - const_term, 0.0, 0.0, redundant=True)
             )

@@ -1,9 +1,12 @@
 """Fingerprints of the FK equation systems: graph size and values at random points.
 
 ``python tests/reference/fk_fingerprints.py`` rewrites ``fk_fingerprints.json``.  It was
-written before the FK builders were refactored; ``tests/test_fk_fingerprints.py`` checks
-that every formulation of every bundled robot is still built node for node the same
-(same variables, domain, graph size, equation and constraint values).
+written before the FK builders were refactored, and re-recorded once on purpose when the
+affine coefficients of the attachments became exact rationals rounded to nearest instead
+of a LAPACK least-squares solve (same poses; the graphs lost the nodes of products by
+``1 ± 4e-16``).  ``tests/test_fk_fingerprints.py`` checks that every formulation of every
+bundled robot is still built node for node the same (same variables, domain, graph size,
+constraint bounds; equation and constraint values to rounding).
 """
 
 from __future__ import annotations
