@@ -39,6 +39,9 @@ def test_serve_without_the_service_extra():
         ["isotropic", str(ROBOTS / "krut-3.json"), "--grid", "0,1,0,1,3,3", "--plot", "m.png"],
         ["workspace", str(ROBOTS / "krut-3.json"), "--min-force", "100", "--box",
          "-10,10,-10,10", "--eps", "5", "--plot", "p.png"],
+        ["ik", str(ROBOTS / "planar.json"), "--pose", "85,65,3", "--sweep", "1=0.1:2:5",
+         "--plot", "s.png"],
+        ["design", str(ROOT / "examples/design/krut3-spec.json"), "--plot", "d.png"],
     ],
 )  # fmt: skip
 def test_plot_without_the_plot_extra(argv, tmp_path):

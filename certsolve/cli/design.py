@@ -95,11 +95,14 @@ _SPEC_FIELDS = ("parameters", "workspace", "min_force", "orientation")
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..extras import require
     from ..force.design import design
     from ..force.design_spec import load_design_spec
     from ..jobs.kinds.design import DesignParams
     from ..robot import RobotFileError, load_robot_spec
 
+    if args.plot:  # before any work: --plot needs matplotlib
+        require("plot", "--plot")
     spec = load_design_spec(args.spec)
     try:
         robot = load_robot_spec(spec.robot)

@@ -246,7 +246,11 @@ def format_result(res: IKResult, robot: Robot) -> str:
 
 def run_sweep(args: argparse.Namespace, spec) -> int:
     """``--sweep``: the options are the ik-sweep job's params, checked by its model."""
+    from ..extras import require
     from ..jobs.kinds.ik_sweep import IkSweepParams
+
+    if args.plot:  # before any work: --plot needs matplotlib
+        require("plot", "--plot")
 
     values = {
         "pose": parse_floats(args.pose, "--pose"),
