@@ -6,6 +6,7 @@ from __future__ import annotations
 import re
 import shlex
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -31,8 +32,10 @@ def test_quick_start_installs_the_core_and_runs_fk():
     assert install == "pip install -e ."  # no extra: fk needs none
     argv = shlex.split(run)
     assert argv[:2] == ["certsolve", "fk"]
+    # the certsolve of this interpreter, whether or not its scripts are on PATH
+    cmd = [sys.executable, "-m", "certsolve", *argv[1:]]
     out = subprocess.run(
-        argv, cwd=ROOT, capture_output=True, text=True, timeout=300, check=True
+        cmd, cwd=ROOT, capture_output=True, text=True, timeout=300, check=True
     ).stdout
     assert "complete: 1 certified pose(s), 0 undecided, 0 pending" in out
 
