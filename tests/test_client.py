@@ -125,3 +125,79 @@ def test_cli_sends_the_token_of_token_file(stub, tmp_path, monkeypatch, capsys):
     assert stub.seen[-1][2]["Authorization"] == "Bearer from-the-environment"
     assert main(["status", "--server", url(stub), "--token-file", str(tmp_path / "no")]) == 2
     assert "--token-file" in capsys.readouterr().err
+
+
+# -- certsolve submit --wait / result: the local command's report -------------------------------
+ROBOT = "examples/robots/planar.json"
+U = [0.8, 1.8, -2.5, -3.6]
+
+
+def _fk_result():
+    """A real FK result as the service stores it (a stub serves it)."""
+    from certsolve import forward_kinematics, load_robot
+    from certsolve.jobs.partial import stored_result
+
+    return stored_result(forward_kinematics(load_robot(ROBOT), U, tau_max=60), 1000)
+
+
+def test_result_prints_the_report_of_certsolve_fk(stub, capsys):
+    from certsolve.cli import main
+    from certsolve.cli.fk import format_result
+
+    result = _fk_result()
+    stub.replies["/v1/jobs/j1"] = [(200, {**record("done", result), "kind": "fk"})]
+    assert main(["result", "j1", "--server", url(stub)]) == 0
+    out = capsys.readouterr().out
+    assert out == format_result(result) + "\n"
+    assert out.startswith(
+        "planar: frame-planar-10, u = [ 0.8  1.8 -2.5 -3.6]\ncomplete: 2 certified"
+    )
+    assert "pose 2 [unique]" in out and "rotation" not in out  # no raw JSON
+    # the same report as the local command, timing aside
+    assert main(["fk", ROBOT, "--u", ",".join(map(str, U)), "--tau-max", "60"]) == 0
+    local = capsys.readouterr().out.splitlines()
+    assert [line for k, line in enumerate(local) if k != 1] == [
+        line for k, line in enumerate(out.splitlines()) if k != 1
+    ]
+    # --json: the record as the service sent it
+    assert main(["result", "j1", "--server", url(stub), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["result"] == result
+
+
+def test_submit_wait_prints_the_report_of_certsolve_solve(stub, capsys):
+    from certsolve import solve
+    from certsolve.cli import main
+    from certsolve.cli.solve import format_result
+    from certsolve.jobs.partial import stored_result
+
+    mbx = "examples/systems/circle-line.mbx"
+    result = stored_result(solve(mbx), 1000)
+    stub.replies["/v1/jobs"] = [(202, {"id": "j1", "url": "u", "status": "queued"})]
+    stub.replies["/v1/jobs/j1"] = [(200, record("running")), (200, record("done", result))]
+    assert (
+        main(["submit", "--kind", "solve", "--system", mbx, "--wait", "--server", url(stub)]) == 0
+    )
+    out = capsys.readouterr().out
+    assert out == format_result("job j1", result) + "\n"
+    assert out.startswith("job j1: complete, 2 solution(s), 0 undecided, 0 pending\n")
+    assert "solution 2 [unique]" in out
+
+
+def test_report_counts_what_the_service_did_not_list(stub, capsys):
+    """A stored result cut to its first items says how many there were (``truncated``)."""
+    from certsolve.cli import main
+
+    result = _fk_result()
+    cut = {**result, "solutions": result["solutions"][:1], "truncated": {"solutions": 2}}
+    stub.replies["/v1/jobs/j1"] = [(200, {**record("done", cut), "kind": "fk"})]
+    assert main(["result", "j1", "--server", url(stub)]) == 0
+    out = capsys.readouterr().out
+    assert "complete: 2 certified pose(s)" in out and "pose 2" not in out
+
+
+def test_result_of_a_kind_without_a_report_is_json(stub, capsys):
+    from certsolve.cli import main
+
+    stub.replies["/v1/jobs/j1"] = [(200, {**record("done", {"x": 1}), "kind": "sleep"})]
+    assert main(["result", "j1", "--server", url(stub)]) == 0
+    assert json.loads(capsys.readouterr().out) == {"x": 1}
