@@ -201,3 +201,72 @@ def test_result_of_a_kind_without_a_report_is_json(stub, capsys):
     stub.replies["/v1/jobs/j1"] = [(200, {**record("done", {"x": 1}), "kind": "sleep"})]
     assert main(["result", "j1", "--server", url(stub)]) == 0
     assert json.loads(capsys.readouterr().out) == {"x": 1}
+
+
+def _untimed(text: str) -> list[str]:
+    """The lines of a report with its timings blanked (``0.027 s``, ``0.75 us``)."""
+    import re
+
+    return [re.sub(r"\d+(\.\d+)? (s|us)\b", "T", line) for line in text.splitlines()]
+
+
+KRUT3 = "examples/robots/krut-3.json"
+DESIGN_SPEC = "examples/design/krut3-spec.json"
+
+
+def _workspace():
+    from certsolve import certified_workspace, load_robot
+
+    box = [-100, 100, -100, 100]
+    return certified_workspace(load_robot(KRUT3), 100, box, eps=4, executor="auto")  # as the CLI
+
+
+def _design():
+    from certsolve import design
+
+    return design(spec=DESIGN_SPEC)
+
+
+def _map():
+    import numpy as np
+
+    from certsolve import load_robot
+    from certsolve.force import isotropic_map
+
+    xs, ys = np.linspace(-100, 100, 50), np.linspace(-100, 100, 40)
+    return isotropic_map(load_robot(KRUT3), xs, ys)
+
+
+@pytest.mark.parametrize(
+    "kind, compute, argv, format_name",
+    [
+        (
+            "workspace", _workspace,
+            ["workspace", KRUT3, "--min-force", "100", "--box", "-100,100,-100,100", "--eps", "4"],
+            "force.format_workspace",
+        ),
+        ("design", _design, ["design", DESIGN_SPEC], "design.format_design"),
+        (
+            "isotropic-map", _map,
+            ["isotropic", KRUT3, "--grid", "-100,100,-100,100,50,40"],
+            "force.format_map",
+        ),
+    ],
+)  # fmt: skip
+def test_result_of_force_kinds_prints_the_local_report(
+    stub, capsys, kind, compute, argv, format_name
+):
+    import importlib
+
+    from certsolve.cli import main
+    from certsolve.jobs.partial import stored_result
+
+    module, name = format_name.split(".")
+    report = getattr(importlib.import_module(f"certsolve.cli.{module}"), name)
+    result = stored_result(compute(), 1000)  # the boxes are listed, and cut to 1000
+    stub.replies["/v1/jobs/j1"] = [(200, {**record("done", result), "kind": kind})]
+    assert main(["result", "j1", "--server", url(stub)]) == 0
+    out = capsys.readouterr().out
+    assert out == report(result) + "\n" and not out.lstrip().startswith("{")
+    assert main(argv) == 0
+    assert _untimed(capsys.readouterr().out) == _untimed(out)

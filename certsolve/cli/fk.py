@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Mapping
 
+from ..jobs.jsonutil import plain
 from .common import (
     CliError,
     Deadline,
@@ -222,7 +223,5 @@ def format_track(res) -> str:
     if res.message:
         lines.append(f"note: {res.message}")
     if res.pose is not None:
-        from ..jobs.jsonutil import plain
-
         lines.extend(_pose_lines(plain(res.pose.to_dict())))
     return "\n".join(lines)

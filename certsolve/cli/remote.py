@@ -274,12 +274,17 @@ def _print_result(client, job_id: str, *, wait: bool, poll: float, as_json: bool
 
 def _report(rec: dict) -> Callable[[Any], str] | None:
     """The report the local command prints for a result of this job's kind (``certsolve
-    fk``, ``solve``), from the stored result; None: the kind has none, print JSON."""
-    from . import fk, solve
+    fk``, ``solve``, ``workspace``, ``design``, ``isotropic --grid``), from the stored
+    result; None: the kind has none (``ik`` and ``ik-sweep``, whose reports show the
+    robot's limits: the stored result does not hold them), print JSON."""
+    from . import design, fk, force, solve
 
     reports: dict[str, Callable[[Any], str]] = {
         "fk": fk.format_result,
         "solve": lambda result: solve.format_result(f"job {rec['id']}", result),
+        "workspace": force.format_workspace,
+        "design": design.format_design,
+        "isotropic-map": force.format_map,
     }
     return reports.get(rec.get("kind", ""))
 
