@@ -3,9 +3,14 @@ against the robot, the run context, and the lookup of the library function.
 
 Requests are pydantic models with ``extra="forbid"`` and no NaN / Infinity; every bound
 the validation enforces on a single value (finite, range, length) is written as a
-``Field`` constraint, so the published JSON Schema states it.  What needs the robot (``u``
-has one value per wire, a pose has the robot's length, no wire has zero length at an IK
-pose, the FK equations can be written for the platform ...) is checked in one place:
+``Field`` constraint, so the published JSON Schema states it.  The params of a kind whose
+library function checks its own options derive from that function's options model
+(``FkParams(FkOptions, Params)``: :mod:`certsolve.robot.inputs`,
+:mod:`certsolve.solver.options`), so Python refuses what a job refuses, with the same
+message.  What needs the robot (``u`` has one value per wire, a pose has the robot's
+length, no wire has zero length at an IK pose, the FK equations can be written for the
+platform ...) is checked in one place (``check_wires`` and ``check_pose`` call the
+library's own checks):
 :meth:`Params.check_robot`, called by :class:`Request` for every job and quick call that
 carries a robot -- and by the command line, which builds the same parameter models.  Its
 errors name a params field (``u: ...``) or a robot field (``robot.wires: ...``).  A check
