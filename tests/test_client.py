@@ -125,3 +125,148 @@ def test_cli_sends_the_token_of_token_file(stub, tmp_path, monkeypatch, capsys):
     assert stub.seen[-1][2]["Authorization"] == "Bearer from-the-environment"
     assert main(["status", "--server", url(stub), "--token-file", str(tmp_path / "no")]) == 2
     assert "--token-file" in capsys.readouterr().err
+
+
+# -- certsolve submit --wait / result: the local command's report -------------------------------
+ROBOT = "examples/robots/planar.json"
+U = [0.8, 1.8, -2.5, -3.6]
+
+
+def _fk_result():
+    """A real FK result as the service stores it (a stub serves it)."""
+    from certsolve import forward_kinematics, load_robot
+    from certsolve.jobs.partial import stored_result
+
+    return stored_result(forward_kinematics(load_robot(ROBOT), U, tau_max=60), 1000)
+
+
+def test_result_prints_the_report_of_certsolve_fk(stub, capsys):
+    from certsolve.cli import main
+    from certsolve.cli.fk import format_result
+
+    result = _fk_result()
+    stub.replies["/v1/jobs/j1"] = [(200, {**record("done", result), "kind": "fk"})]
+    assert main(["result", "j1", "--server", url(stub)]) == 0
+    out = capsys.readouterr().out
+    assert out == format_result(result) + "\n"
+    assert out.startswith(
+        "planar: frame-planar-10, u = [ 0.8  1.8 -2.5 -3.6]\ncomplete: 2 certified"
+    )
+    assert "pose 2 [unique]" in out and "rotation" not in out  # no raw JSON
+    # the same report as the local command, timing aside
+    assert main(["fk", ROBOT, "--u", ",".join(map(str, U)), "--tau-max", "60"]) == 0
+    local = capsys.readouterr().out.splitlines()
+    assert [line for k, line in enumerate(local) if k != 1] == [
+        line for k, line in enumerate(out.splitlines()) if k != 1
+    ]
+    # --json: the record as the service sent it
+    assert main(["result", "j1", "--server", url(stub), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["result"] == result
+
+
+def test_submit_wait_prints_the_report_of_certsolve_solve(stub, capsys):
+    from certsolve import solve
+    from certsolve.cli import main
+    from certsolve.cli.solve import format_result
+    from certsolve.jobs.partial import stored_result
+
+    mbx = "examples/systems/circle-line.mbx"
+    result = stored_result(solve(mbx), 1000)
+    stub.replies["/v1/jobs"] = [(202, {"id": "j1", "url": "u", "status": "queued"})]
+    stub.replies["/v1/jobs/j1"] = [(200, record("running")), (200, record("done", result))]
+    assert (
+        main(["submit", "--kind", "solve", "--system", mbx, "--wait", "--server", url(stub)]) == 0
+    )
+    out = capsys.readouterr().out
+    assert out == format_result("job j1", result) + "\n"
+    assert out.startswith("job j1: complete, 2 solution(s), 0 undecided, 0 pending\n")
+    assert "solution 2 [unique]" in out
+
+
+def test_report_counts_what_the_service_did_not_list(stub, capsys):
+    """A stored result cut to its first items says how many there were (``truncated``)."""
+    from certsolve.cli import main
+
+    result = _fk_result()
+    cut = {**result, "solutions": result["solutions"][:1], "truncated": {"solutions": 2}}
+    stub.replies["/v1/jobs/j1"] = [(200, {**record("done", cut), "kind": "fk"})]
+    assert main(["result", "j1", "--server", url(stub)]) == 0
+    out = capsys.readouterr().out
+    assert "complete: 2 certified pose(s)" in out and "pose 2" not in out
+
+
+def test_result_of_a_kind_without_a_report_is_json(stub, capsys):
+    from certsolve.cli import main
+
+    stub.replies["/v1/jobs/j1"] = [(200, {**record("done", {"x": 1}), "kind": "sleep"})]
+    assert main(["result", "j1", "--server", url(stub)]) == 0
+    assert json.loads(capsys.readouterr().out) == {"x": 1}
+
+
+def _untimed(text: str) -> list[str]:
+    """The lines of a report with its timings blanked (``0.027 s``, ``0.75 us``)."""
+    import re
+
+    return [re.sub(r"\d+(\.\d+)? (s|us)\b", "T", line) for line in text.splitlines()]
+
+
+KRUT3 = "examples/robots/krut-3.json"
+DESIGN_SPEC = "examples/design/krut3-spec.json"
+
+
+def _workspace():
+    from certsolve import certified_workspace, load_robot
+
+    box = [-100, 100, -100, 100]
+    return certified_workspace(load_robot(KRUT3), 100, box, eps=4, executor="auto")  # as the CLI
+
+
+def _design():
+    from certsolve import design
+
+    return design(spec=DESIGN_SPEC)
+
+
+def _map():
+    import numpy as np
+
+    from certsolve import load_robot
+    from certsolve.force import isotropic_map
+
+    xs, ys = np.linspace(-100, 100, 50), np.linspace(-100, 100, 40)
+    return isotropic_map(load_robot(KRUT3), xs, ys)
+
+
+@pytest.mark.parametrize(
+    "kind, compute, argv, format_name",
+    [
+        (
+            "workspace", _workspace,
+            ["workspace", KRUT3, "--min-force", "100", "--box", "-100,100,-100,100", "--eps", "4"],
+            "force.format_workspace",
+        ),
+        ("design", _design, ["design", DESIGN_SPEC], "design.format_design"),
+        (
+            "isotropic-map", _map,
+            ["isotropic", KRUT3, "--grid", "-100,100,-100,100,50,40"],
+            "force.format_map",
+        ),
+    ],
+)  # fmt: skip
+def test_result_of_force_kinds_prints_the_local_report(
+    stub, capsys, kind, compute, argv, format_name
+):
+    import importlib
+
+    from certsolve.cli import main
+    from certsolve.jobs.partial import stored_result
+
+    module, name = format_name.split(".")
+    report = getattr(importlib.import_module(f"certsolve.cli.{module}"), name)
+    result = stored_result(compute(), 1000)  # the boxes are listed, and cut to 1000
+    stub.replies["/v1/jobs/j1"] = [(200, {**record("done", result), "kind": kind})]
+    assert main(["result", "j1", "--server", url(stub)]) == 0
+    out = capsys.readouterr().out
+    assert out == report(result) + "\n" and not out.lstrip().startswith("{")
+    assert main(argv) == 0
+    assert _untimed(capsys.readouterr().out) == _untimed(out)

@@ -221,6 +221,7 @@ def test_fk_formulations_are_the_librarys():
     from typing import get_args
 
     from certsolve.kinematics.fk_systems import FORMULATIONS
+    from certsolve.robot.inputs import Formulation
 
     names = fk_kind.FORMULATIONS + fk_kind.PLANAR_FORMULATIONS + fk_kind.SPATIAL_FORMULATIONS
-    assert set(get_args(fk_kind.Formulation)) == set(names) == set(FORMULATIONS)
+    assert set(get_args(Formulation)) == set(names) == set(FORMULATIONS)

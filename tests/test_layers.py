@@ -2,7 +2,7 @@
 
 Layers, lowest first: interval -> expr -> solver -> robot -> kinematics / force -> jobs ->
 client -> api -> cli (``certsolve serve`` starts the api).  Small utilities -- ``lazy``,
-``extras``, ``plotting`` -- sit below everything and import nothing of the package.
+``extras``, ``plotting``, ``inputs`` -- sit below everything and import nothing of the package.
 Imports are read with :mod:`ast`, including those inside functions (a lazy import is still
 a dependency); imports under ``if TYPE_CHECKING:`` are ignored.  ``from pkg import name``
 depends on the module ``pkg.name`` when there is one, else on ``pkg``.
@@ -24,6 +24,7 @@ RANK = {
     "lazy": 0,
     "extras": 0,
     "plotting": 0,
+    "inputs": 0,
     "interval": 1,
     "expr": 2,
     "solver": 3,

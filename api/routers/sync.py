@@ -13,6 +13,7 @@ import anyio.from_thread
 from fastapi import APIRouter, Request
 from fastapi.responses import Response
 
+from certsolve.inputs import InputError
 from certsolve.jobs.kinds import IkCall, IsotropicCall, KindUnavailable, TrackCall
 from certsolve.jobs.quick import Busy, Gone, QuickFailure, TooCostly
 
@@ -55,23 +56,30 @@ def _answer(quick: Any, name: str, req: Any, request: Request) -> Response:
         return Response(status_code=499)  # nobody reads it
     except QuickFailure as exc:
         raise RuntimeError(str(exc)) from None  # a 500, logged
-    except (ValueError, ArithmeticError) as exc:  # the input's fault
-        raise _input_error(str(exc) or type(exc).__name__, req) from None
+    except InputError as exc:  # the input's fault
+        raise _input_error(exc, req) from None
+    except (ValueError, ArithmeticError) as exc:  # pragma: no cover - quick.run sends InputError
+        raise _input_error(InputError("", str(exc) or type(exc).__name__), req) from None
     return Response(text, media_type="application/json")
 
 
-def _input_error(msg: str, req: Any) -> APIError:
-    """The library refused the input: a 422 at the field its message names (``pose:
-    ...`` is ``params.pose``, ``wires[2].k: ...`` is ``robot.wires.2.k``)."""
-    head = msg.split(":", 1)[0].split("[", 1)[0].split(".", 1)[0]
+def _input_error(exc: InputError, req: Any) -> APIError:
+    """The library refused the input: a 422 at the field it named (``exc.field``: ``pose``
+    is ``params.pose``).  Without one, at the field the message starts with (``wires[2].k:
+    ...`` is ``robot.wires.2.k``)."""
+    msg = str(exc)
+    path = [int(p) if p.isdigit() else p for p in exc.field.split(".")] if exc.field else []
+    head = str(path[0]) if path else msg.split(":", 1)[0].split("[", 1)[0].split(".", 1)[0]
     if head in type(req.params).model_fields:
         loc: tuple = ("body", "params")
     elif head in type(req.robot).model_fields:
         loc = ("body", "robot")
     else:
         loc = ("body",)
+    if path and len(loc) > 1:
+        loc, msg = (*loc, *path), exc.message
     detail = validation_details([{"loc": loc, "msg": msg, "type": "value_error"}])
-    return APIError(422, msg, detail)
+    return APIError(422, str(exc), detail)
 
 
 @router.post("/v1/ik")

@@ -17,7 +17,9 @@ the chosen command's module is imported (numpy, scipy, the solver, FastAPI ... c
 it, or later inside its ``run``).  ``certsolve --help`` imports nothing but argparse.
 
 User errors (bad files, bad arguments) print one ``error: ...`` line and exit with status 2,
-never a traceback.
+never a traceback.  That holds for what argparse refuses too (:class:`_Parser`): a missing
+option, a bad value, an unknown option -- with the closest of the command's own options
+(``error: --tau-mx: unknown option (did you mean --tau-max?)``) -- or an unknown command.
 """
 
 from __future__ import annotations
@@ -27,10 +29,13 @@ import time
 _STARTED = time.monotonic()  # before the command imports numpy & co.: time limits count it
 
 import argparse  # noqa: E402
+import difflib  # noqa: E402
 import importlib  # noqa: E402
+import re  # noqa: E402
 import sys  # noqa: E402
 from collections.abc import Iterable, Sequence  # noqa: E402
 from dataclasses import dataclass  # noqa: E402
+from typing import NoReturn  # noqa: E402
 
 from .common import CliError, option_names, user_errors  # noqa: E402
 
@@ -104,6 +109,62 @@ class _Formatter(argparse.HelpFormatter):
         return text
 
 
+def _did_you_mean(word: str, choices: Iterable[str]) -> str:
+    """`` (did you mean --tau-max?)`` for the closest choice (difflib), else ``""``."""
+    close = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]}?)" if close else ""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse's refusals as one line: :class:`CliError` (printed ``error: ...``, exit
+    status 2) instead of a usage block and ``SystemExit``.  Sub-command parsers are of
+    this class too (argparse gives them their parent's)."""
+
+    _words: list[str] = []  # what parse_known_args was given (for the error)
+
+    def parse_known_args(self, args=None, namespace=None):  # type: ignore[override]
+        self._words = list(sys.argv[1:] if args is None else args)
+        return super().parse_known_args(args, namespace)
+
+    def error(self, message: str) -> NoReturn:
+        raise CliError(self._one_line(message))
+
+    def _takes(self, word: str) -> bool:
+        """An option of this parser (or a prefix argparse would expand), or not an option."""
+        if not word.startswith("-") or word == "-" or self._negative_number_matcher.match(word):
+            return True
+        name = word.split("=", 1)[0]
+        options = [s for a in self._actions for s in a.option_strings]
+        return name in options or any(o.startswith(name) for o in options if len(name) > 2)
+
+    def _one_line(self, message: str) -> str:
+        if message.endswith("required") or "are required: " in message:
+            # a misspelt required option is reported as unknown, not as missing
+            unknown = [w for w in self._words if not self._takes(w)]
+            if unknown:
+                return str(self.unknown(unknown))
+        missing = re.match(r"the following arguments are required: (.+)$", message)
+        if missing:
+            return f"{missing.group(1)}: required (see {self.prog} --help)"
+        command = re.match(r"argument COMMAND: invalid choice: '(.*)' \(choose from", message)
+        if command:
+            word = command.group(1)
+            hint = _did_you_mean(word, (c.name for c in COMMANDS))
+            return f"{word}: unknown command{hint or f' (see {self.prog} --help)'}"
+        return re.sub(r"^argument ([^:]+): ", r"\1: ", message)
+
+    def unknown(self, extra: Sequence[str]) -> CliError:
+        """The error for the first word this parser does not take: an option, with the
+        closest of its own options, or a stray argument."""
+        word = next((w for w in extra if w.startswith("-") and w != "-"), None)
+        if word is None:
+            return CliError(f"{extra[0]!r}: unexpected argument (see {self.prog} --help)")
+        name = word.split("=", 1)[0]
+        options = [s for a in self._actions for s in a.option_strings]
+        hint = _did_you_mean(name, options) or f" (see {self.prog} --help)"
+        return CliError(f"{name}: unknown option{hint}")
+
+
 class _Subcommands:
     """What a command module's ``register`` sees: ``add_parser`` with the help of
     :data:`COMMANDS`, so the help line is written once, and defaults in option help."""
@@ -120,7 +181,7 @@ class _Subcommands:
 def build_parser(commands: Iterable[str] | None = None) -> argparse.ArgumentParser:
     """The argument parser with the full options of ``commands`` (every command if None);
     the other commands are listed with their help only (their modules are not imported)."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="certsolve",
         description="Certified interval solving for wire-driven parallel robots.",
     )
@@ -151,10 +212,31 @@ def _chosen(argv: Sequence[str]) -> list[str]:
     return []
 
 
+def _parse(parser: argparse.ArgumentParser, argv: list[str]) -> argparse.Namespace:
+    """``parser.parse_args(argv)``; what argparse refuses raises :class:`CliError`, an
+    unknown option with the closest option of the command it was given to."""
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        sub = _subparser(parser, args.command)
+        raise (sub if isinstance(sub, _Parser) else parser).unknown(extra)  # type: ignore[union-attr]
+    return args
+
+
+def _subparser(parser: argparse.ArgumentParser, command: str | None):
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return action.choices.get(command) if command else None
+    return None
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser(_chosen(argv))
-    args = parser.parse_args(argv)
+    try:
+        args = _parse(parser, argv)
+    except CliError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     args.options = option_names(parser, args.command)
     args.started = _STARTED if argv is None else time.monotonic()
     try:

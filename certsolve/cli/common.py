@@ -26,6 +26,7 @@ __all__ = [
     "add_checkpoint_options",
     "add_executor_options",
     "checkpointing",
+    "count_of",
     "describe_run",
     "executor_from_args",
     "scheduler_from_args",
@@ -34,6 +35,7 @@ __all__ = [
     "validated",
     "parse_floats",
     "print_json",
+    "print_report",
     "print_result",
     "progress_reporter",
 ]
@@ -312,18 +314,18 @@ class checkpointing:  # noqa: N801 - a context manager used like a function
         return 130 if self.interrupted else 0
 
 
-def describe_run(stats) -> str:
-    """``serial`` / ``2 processes, 14 tasks`` / ``dask, 2 workers, 14 tasks``."""
-    if stats.executor == "serial":
+def describe_run(stats: Any) -> str:
+    """``serial`` / ``2 processes, 14 tasks`` / ``dask, 2 workers, 14 tasks``, from the
+    search's :class:`~certsolve.solver.result.Stats` or their JSON form."""
+    st = stats if isinstance(stats, Mapping) else vars(stats)
+    executor, tasks, workers = st["executor"], st["tasks"], st["workers"]
+    if executor == "serial":
         return "serial"
-    if not stats.tasks:
-        return f"{stats.executor}: ended in the serial warm-up, no task run"
-    if stats.executor == "processes":
-        where = f"{stats.workers} processes"
-    else:
-        where = f"{stats.executor}, {stats.workers} workers"
-    lost = f", {stats.resubmitted} resubmitted" if stats.resubmitted else ""
-    return f"{where}, {stats.tasks} tasks{lost}"
+    if not tasks:
+        return f"{executor}: ended in the serial warm-up, no task run"
+    where = f"{workers} processes" if executor == "processes" else f"{executor}, {workers} workers"
+    lost = f", {st['resubmitted']} resubmitted" if st.get("resubmitted") else ""
+    return f"{where}, {tasks} tasks{lost}"
 
 
 def print_json(obj: Any) -> None:
@@ -343,6 +345,24 @@ def print_result(as_json: bool, result: Any, text: Callable[[], str], **extra: A
         print_json(out)
     else:
         print(text())
+
+
+def count_of(result: Mapping[str, Any], key: str) -> int:
+    """How many items the list ``result[key]`` of a result's JSON form had: a job's stored
+    result lists the first ones and records the full count under ``truncated``."""
+    return int((result.get("truncated") or {}).get(key, len(result[key])))
+
+
+def print_report(as_json: bool, data: Mapping[str, Any], report: Callable[[Any], str]) -> None:
+    """A result's JSON form ``data`` (``to_dict()``): as JSON with ``--json``, else the
+    command's readable ``report`` of it -- the function ``certsolve result`` uses for a
+    job's stored result of the same kind, so both print the same report."""
+    from ..jobs.jsonutil import plain
+
+    if as_json:
+        print_json(data)
+    else:
+        print(report(plain(data)))
 
 
 def _default(o):

@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Mapping
 
+from ..jobs.jsonutil import plain
 from .common import (
     CliError,
     add_checkpoint_options,
@@ -158,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
         out.update({"plot": args.plot, "emitted_robot": emitted})
         print_json(out)
     else:
-        print(format_design(res, args.plot, args.emit_robot, emitted))
+        print(format_design(plain(res.to_dict(boxes=False)), args.plot, args.emit_robot, emitted))
     return saving.exit_code
 
 
@@ -166,37 +168,43 @@ def _pct(x: float) -> str:
     return f"{100 * x:.1f} %"
 
 
-def format_design(res, plot=None, emit=None, emitted=None) -> str:
-    ws = " x ".join(f"[{lo:g}, {hi:g}]" for lo, hi in res.workspace)
+def format_design(
+    res: Mapping, plot: str | None = None, emit: str | None = None, emitted: str | None = None
+) -> str:
+    """The report of a design from its JSON form (``to_dict(boxes=False)`` here, the stored
+    result of a ``design`` job for ``certsolve result``)."""
+    ws = " x ".join(f"[{lo:g}, {hi:g}]" for lo, hi in res["workspace"])
     lines = [
-        f"{res.robot}: isotropic force >= {res.min_force:g} N on the workspace {ws} cm: "
-        f"{res.status}"
+        f"{res['robot']}: isotropic force >= {res['min_force']:g} N on the workspace {ws} cm: "
+        f"{res['status']}"
     ]
-    for name, path, mode, r in zip(res.names, res.paths, res.modes, res.ranges):
-        lines.append(f"  parameter {name} ({path}, {mode}) in [{r[0]:g}, {r[1]:g}]")
-    c = {k: len(getattr(res, k)) for k in ("good", "bad", "undecided", "pending")}
+    names = [p["name"] for p in res["parameters"]]
+    for p in res["parameters"]:
+        r = p["range"]
+        lines.append(f"  parameter {p['name']} ({p['path']}, {p['mode']}) in [{r[0]:g}, {r[1]:g}]")
+    c, share = res["counts"], res["shares"]
     lines.append(
-        f"  good {c['good']} boxes ({_pct(res.share('good'))}), bad {c['bad']} "
-        f"({_pct(res.share('bad'))}), undecided {c['undecided']} "
-        f"({_pct(res.share('undecided'))}), pending {c['pending']} ({_pct(res.share('pending'))})"
+        f"  good {c['good']} boxes ({_pct(share['good'])}), bad {c['bad']} "
+        f"({_pct(share['bad'])}), undecided {c['undecided']} "
+        f"({_pct(share['undecided'])}), pending {c['pending']} ({_pct(share['pending'])})"
     )
-    if res.best is not None:
-        b = res.good[res.best]
-        box = ", ".join(f"{n} in [{lo:.6g}, {hi:.6g}]" for n, (lo, hi) in zip(res.names, b))
-        centre = ", ".join(f"{n} = {0.5 * (lo + hi):.6g}" for n, (lo, hi) in zip(res.names, b))
-        m = res.margin[res.best]
+    best = res["best"]
+    if best is not None:
+        box = ", ".join(f"{n} in [{lo:.6g}, {hi:.6g}]" for n, (lo, hi) in zip(names, best["box"]))
+        centre = ", ".join(f"{n} = {v:.6g}" for n, v in zip(names, best["centre"]))
         lines.append(
-            f"  best box: {box}: f_min >= {res.min_force + m:.6g} N proven (margin {m:.4g} N)"
+            f"  best box: {box}: f_min >= {best['min_force_bound']:.6g} N proven "
+            f"(margin {best['margin']:.4g} N)"
         )
         lines.append(f"  its centre: {centre}")
     else:
         lines.append("  no parameter box is proven good")
     lines.append(
-        f"  {res.pairs} (parameter, pose) pairs, {res.parameter_boxes} parameter boxes, "
-        f"eps {res.eps:g} of each range, workspace eps {res.workspace_eps:g} cm, "
-        f"{res.time:.3f} s"
+        f"  {res['pairs']} (parameter, pose) pairs, {res['parameter_boxes']} parameter boxes, "
+        f"eps {res['eps']:g} of each range, workspace eps {res['workspace_eps']:g} cm, "
+        f"{res['time']:.3f} s"
     )
-    lines.extend(f"  note: {n}" for n in res.notes)
+    lines.extend(f"  note: {n}" for n in res["notes"])
     if plot:
         lines.append(f"  wrote {plot}")
     if emit:

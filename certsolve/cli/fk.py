@@ -3,17 +3,21 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Mapping
 
+from ..jobs.jsonutil import plain
 from .common import (
     CliError,
     Deadline,
     add_checkpoint_options,
     add_executor_options,
     checkpointing,
+    count_of,
     describe_run,
     executor_from_args,
     parse_floats,
     print_json,
+    print_report,
     progress_reporter,
     validated,
 )
@@ -124,7 +128,7 @@ def run(args: argparse.Namespace) -> int:
         if args.json:
             print_json(res.to_dict())
         else:
-            print(format_track(robot, res))
+            print(format_track(res))
         return 0
     if args.checkpoint is not None and args.seed_planar:
         raise CliError("--checkpoint: not available with --seed-planar (a search in two phases)")
@@ -154,56 +158,61 @@ def run(args: argparse.Namespace) -> int:
     finally:
         stop()
     deadline.mark(res)
-    if args.json:
-        print_json(res.to_dict())
-    else:
-        print(format_result(robot, res))
+    print_report(args.json, res.to_dict(), format_result)
     return saving.exit_code
 
 
-def _pose_lines(robot, s) -> list[str]:
-    pos = ", ".join(f"{v:.6f}" for v in s.position)
-    ang = ", ".join(f"{v:.4f}" for v in s.euler_deg)
-    names = "yaw, pitch, roll" if robot.dof == 6 else "theta"
+def _pose_lines(s: Mapping) -> list[str]:
+    """A pose of an FK result (its JSON form, :meth:`FKPose.to_dict`)."""
+    spatial = len(s["position"]) == 3
+    pos = ", ".join(f"{v:.6f}" for v in s["position"])
+    ang = ", ".join(f"{v:.4f}" for v in s["euler"])
+    names = "yaw, pitch, roll" if spatial else "theta"
     lines = [
-        f"  position ({'x, y, z' if robot.dof == 6 else 'x, y'}) = ({pos}) cm",
+        f"  position ({'x, y, z' if spatial else 'x, y'}) = ({pos}) cm",
         f"  orientation ({names}) = ({ang}) deg",
         "  wire      rho (cm)    tau (N)    B_i (world, cm)",
     ]
-    for i in range(robot.m):
-        b = ", ".join(f"{v:9.4f}" for v in s.platform_points[i])
-        lines.append(f"  {i + 1:4d}  {s.rho[i]:12.6f}  {s.tau[i]:9.5f}    ({b})")
+    for i, (rho, tau, point) in enumerate(
+        zip(s["rho"], s["tau"], s["platform_points"], strict=True)
+    ):
+        b = ", ".join(f"{v:9.4f}" for v in point)
+        lines.append(f"  {i + 1:4d}  {rho:12.6f}  {tau:9.5f}    ({b})")
     return lines
 
 
-def format_result(robot, res) -> str:
+def format_result(res: Mapping) -> str:
+    """The report of an FK result from its JSON form: :meth:`FKResult.to_dict` here, the
+    stored result of an ``fk`` job for ``certsolve result``."""
     import numpy as np
 
-    st = res.stats
+    st = res["stats"]
+    u = np.array2string(np.asarray(res["u"], dtype=float), precision=4)
     lines = [
-        f"{robot.name}: {res.formulation}, u = {np.array2string(res.u, precision=4)}",
-        f"{res.status}: {len(res.solutions)} certified pose(s), {len(res.undecided)} undecided, "
-        f"{len(res.pending)} pending; {st.boxes} boxes, {st.time:.2f} s, {describe_run(st)}",
+        f"{res['robot']}: {res['formulation']}, u = {u}",
+        f"{res['status']}: {count_of(res, 'solutions')} certified pose(s), "
+        f"{count_of(res, 'undecided')} undecided, {count_of(res, 'pending')} pending; "
+        f"{st['boxes']} boxes, {st['time']:.2f} s, {describe_run(st)}",
     ]
-    if res.seeding:
-        sd = res.seeding
+    if res.get("seeding"):
+        sd = res["seeding"]
         lines.append(
             f"planar seeding: {sd['planar_solutions']} planar solution(s), "
             f"{sd['solutions_in_seeds']} found in the seed boxes after "
             f"{sd['time_to_seeded_solutions']:.2f} s; rest of the domain "
             f"{'searched' if sd['rest_of_domain_searched'] else 'NOT searched'}"
         )
-    lines.extend(f"note: {n}" for n in res.notes if not n.startswith("compiled"))
-    for k, s in enumerate(res.solutions, 1):
-        tag = s.certificate + (" (verified)" if s.verified else "")
+    lines.extend(f"note: {n}" for n in res.get("notes", ()) if not n.startswith("compiled"))
+    for k, s in enumerate(res["solutions"], 1):
+        tag = s["certificate"] + (" (verified)" if s.get("verified") else "")
         lines.append(f"pose {k} [{tag}]")
-        lines.extend(_pose_lines(robot, s))
-    for k, und in enumerate(res.undecided, 1):
-        lines.append(f"undecided {k} ({und.reason}): box {und.box}")
+        lines.extend(_pose_lines(s))
+    for k, und in enumerate(res["undecided"], 1):
+        lines.append(f"undecided {k} ({und['reason']}): box {und['box']}")
     return "\n".join(lines)
 
 
-def format_track(robot, res) -> str:
+def format_track(res) -> str:
     head = (
         f"tracking step: {'certified' if res.certified else 'NOT certified'}, "
         f"{res.iterations} Newton iteration(s), {1e3 * res.time:.3f} ms"
@@ -214,5 +223,5 @@ def format_track(robot, res) -> str:
     if res.message:
         lines.append(f"note: {res.message}")
     if res.pose is not None:
-        lines.extend(_pose_lines(robot, res.pose))
+        lines.extend(_pose_lines(plain(res.pose.to_dict())))
     return "\n".join(lines)

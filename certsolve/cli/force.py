@@ -13,15 +13,18 @@ from __future__ import annotations
 
 import argparse
 import re
+from collections.abc import Mapping
 
 import numpy as np
 
+from ..jobs.jsonutil import plain
 from ..robot import Pose, Robot
 from .common import (
     CliError,
     add_checkpoint_options,
     add_executor_options,
     checkpointing,
+    count_of,
     describe_run,
     executor_from_args,
     parse_floats,
@@ -233,7 +236,12 @@ def run_isotropic(args: argparse.Namespace) -> int:
         from ..force.plots import plot_map
 
         plot_map(res, args.plot, vmax=args.vmax)
-    print_result(args.json, res, lambda: format_map(res, args.plot), plot=args.plot)
+    print_result(
+        args.json,
+        res,
+        lambda: format_map(plain(res.to_dict(values=False)), args.plot),
+        plot=args.plot,
+    )
     return 0
 
 
@@ -279,15 +287,17 @@ def format_isotropic(res, plot: str | None = None) -> str:
     return "\n".join(lines)
 
 
-def format_map(res, plot) -> str:
-    s = res.summary()
+def format_map(res: Mapping, plot: str | None = None) -> str:
+    """The report of an isotropic map from its JSON form (``to_dict(values=False)`` here,
+    the stored result of an ``isotropic-map`` job for ``certsolve result``)."""
+    s = res["summary"]
     lines = [
-        f"{res.robot}: {s['poses']} poses ({len(res.xs)} x {len(res.ys)}"
-        + (f", z = {res.z:g}" if res.z is not None else "")
+        f"{res['robot']}: {s['poses']} poses ({count_of(res, 'xs')} x {count_of(res, 'ys')}"
+        + (f", z = {res['z']:g}" if res["z"] is not None else "")
         + f"), {s['inside']} inside, {s['outside']} outside, {s['degenerate']} degenerate",
         f"  maximum isotropic force: {_fmt(s['max'])} N"
         + (f" at ({s['argmax'][0]:g}, {s['argmax'][1]:g})" if s["argmax"] else ""),
-        f"  {res.time:.3f} s ({1e6 * res.time / max(s['poses'], 1):.2f} us per pose)",
+        f"  {s['time']:.3f} s ({1e6 * s['time'] / max(s['poses'], 1):.2f} us per pose)",
     ]
     if plot:
         lines.append(f"  wrote {plot}")
@@ -345,19 +355,21 @@ def run_workspace(args: argparse.Namespace) -> int:
             out["plot"] = args.plot
         print_json(out)
     else:
-        print(format_workspace(ws, args.plot))
+        print(format_workspace(plain(ws.to_dict(boxes=False)), args.plot))
     return saving.exit_code
 
 
-def format_workspace(ws, plot) -> str:
-    total = ws.total_measure
+def format_workspace(ws: Mapping, plot: str | None = None) -> str:
+    """The report of a certified workspace from its JSON form (``to_dict(boxes=False)``
+    here, the stored result of a ``workspace`` job for ``certsolve result``)."""
+    c = ws["counts"]
     lines = [
-        f"{ws.robot}: certified f_min >= {ws.min_force:g} N, eps {ws.eps:g} cm: {ws.status}",
-        f"  inside {ws.inside_measure:.6g} {ws.unit} ({100 * ws.inside_share:.2f} % of "
-        f"{total:.6g}), {len(ws.inside)} boxes",
-        f"  outside {len(ws.outside)} boxes, boundary {len(ws.boundary)} boxes, "
-        f"pending {len(ws.pending)}",
-        f"  {ws.boxes} boxes processed in {ws.time:.3f} s, {describe_run(ws.stats)}",
+        f"{ws['robot']}: certified f_min >= {ws['min_force']:g} N, eps {ws['eps']:g} cm: "
+        f"{ws['status']}",
+        f"  inside {ws['inside_measure']:.6g} {ws['unit']} ({100 * ws['inside_share']:.2f} % of "
+        f"{ws['total_measure']:.6g}), {c['inside']} boxes",
+        f"  outside {c['outside']} boxes, boundary {c['boundary']} boxes, pending {c['pending']}",
+        f"  {ws['boxes']} boxes processed in {ws['time']:.3f} s, {describe_run(ws['stats'])}",
     ]
     if plot:
         lines.append(f"  wrote {plot}")

@@ -15,6 +15,7 @@ import argparse
 import json
 import os
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -255,7 +256,11 @@ def _print_result(client, job_id: str, *, wait: bool, poll: float, as_json: bool
     if as_json:
         print_json(rec)
     elif rec.get("result") is not None:
-        print_json(rec["result"])
+        report = _report(rec)
+        if report is None:
+            print_json(rec["result"])
+        else:
+            print(report(rec["result"]))
     if status is JobStatus.DONE:
         return 0
     if not status.final:
@@ -265,6 +270,23 @@ def _print_result(client, job_id: str, *, wait: bool, poll: float, as_json: bool
     if not as_json:
         print(f"error: job {job_id} {status}: {rec.get('error')}", file=sys.stderr)
     return 1
+
+
+def _report(rec: dict) -> Callable[[Any], str] | None:
+    """The report the local command prints for a result of this job's kind (``certsolve
+    fk``, ``solve``, ``workspace``, ``design``, ``isotropic --grid``), from the stored
+    result; None: the kind has none (``ik`` and ``ik-sweep``, whose reports show the
+    robot's limits: the stored result does not hold them), print JSON."""
+    from . import design, fk, force, solve
+
+    reports: dict[str, Callable[[Any], str]] = {
+        "fk": fk.format_result,
+        "solve": lambda result: solve.format_result(f"job {rec['id']}", result),
+        "workspace": force.format_workspace,
+        "design": design.format_design,
+        "isotropic-map": force.format_map,
+    }
+    return reports.get(rec.get("kind", ""))
 
 
 def run_result(args: argparse.Namespace) -> int:

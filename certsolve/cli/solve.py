@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Mapping
 
 from ..solver.summary import MAX_LISTED
 from .common import (
@@ -10,9 +11,10 @@ from .common import (
     add_checkpoint_options,
     add_executor_options,
     checkpointing,
+    count_of,
     describe_run,
     executor_from_args,
-    print_json,
+    print_report,
     progress_reporter,
     validated,
 )
@@ -97,41 +99,42 @@ def run(args: argparse.Namespace) -> int:
     finally:
         stop()
     deadline.mark(result)
-    if args.json:
-        print_json(result.to_dict())
-    else:
-        print(format_result(system.name or args.file, result))
+    name = system.name or args.file
+    print_report(args.json, result.to_dict(), lambda data: format_result(name, data))
     return saving.exit_code
 
 
-def format_result(name: str, result) -> str:
-    st = result.stats
-    und = f"{len(result.undecided)} undecided"
-    if result.undecided_total != len(result.undecided) or result.undecided_dropped:
-        und += f" hull(s) of {result.undecided_total} box(es)"
-        if result.undecided_dropped:
-            und += f", {result.undecided_dropped} box(es) not listed"
-    pend = f"{result.pending_total} pending"
-    if result.pending_total > len(result.pending):
-        pend += f" box(es) in {len(result.pending)} hull(s)"
+def format_result(name: str, result: Mapping) -> str:
+    """The report of a solve result from its JSON form: :meth:`SolveResult.to_dict` here,
+    the stored result of a ``solve`` job for ``certsolve result``."""
+    st = result["stats"]
+    listed_und, listed_pend = len(result["undecided"]), len(result["pending"])
+    und = f"{listed_und} undecided"
+    if result["undecided_total"] != listed_und or result["undecided_dropped"]:
+        und += f" hull(s) of {result['undecided_total']} box(es)"
+        if result["undecided_dropped"]:
+            und += f", {result['undecided_dropped']} box(es) not listed"
+    pend = f"{result['pending_total']} pending"
+    if result["pending_total"] > listed_pend:
+        pend += f" box(es) in {listed_pend} hull(s)"
     lines = [
-        f"{name}: {result.status}, {len(result.solutions)} solution(s), {und}, {pend}",
-        f"  {st.boxes} boxes, {st.time:.3f} s, {describe_run(st)}"
-        + (f", stopped by {st.stopped_by}" if st.stopped_by else ""),
+        f"{name}: {result['status']}, {count_of(result, 'solutions')} solution(s), {und}, {pend}",
+        f"  {st['boxes']} boxes, {st['time']:.3f} s, {describe_run(st)}"
+        + (f", stopped by {st['stopped_by']}" if st.get("stopped_by") else ""),
     ]
-    names = result.variables
+    names = result["variables"]
     width = max(len(v) for v in names)
-    for k, s in enumerate(result.solutions, 1):
-        tag = s.certificate + (" (verified)" if s.verified else "")
+    for k, s in enumerate(result["solutions"], 1):
+        tag = s["certificate"] + (" (verified)" if s.get("verified") else "")
         lines.append(f"solution {k} [{tag}]")
-        for v, (lo, hi) in zip(names, s.box, strict=True):
+        for v, (lo, hi) in zip(names, s["box"], strict=True):
             lines.append(f"  {v:<{width}} = {0.5 * lo + 0.5 * hi: .15g}   [{lo!r}, {hi!r}]")
-    for k, u in enumerate(result.undecided, 1):
-        count = f", {u.boxes} boxes" if u.boxes > 1 else ""
+    for k, u in enumerate(result["undecided"], 1):
+        count = f", {u['boxes']} boxes" if u["boxes"] > 1 else ""
         lines.append(
-            f"undecided {k} ({u.reason}{count}): "
+            f"undecided {k} ({u['reason']}{count}): "
             + ", ".join(
-                f"{v} in [{lo:.6g}, {hi:.6g}]" for v, (lo, hi) in zip(names, u.box, strict=True)
+                f"{v} in [{lo:.6g}, {hi:.6g}]" for v, (lo, hi) in zip(names, u["box"], strict=True)
             )
         )
     return "\n".join(lines)

@@ -56,7 +56,9 @@ from math import comb
 
 import numpy as np
 
-from ..robot import Pose, Robot, wrench_matrix
+from ..inputs import check_count, checked
+from ..robot import Robot, wrench_matrix
+from ..robot.inputs import IsotropicOptions, as_pose
 from ..robot.statics import max_margin_tensions
 from .ellipse import CentredEllipsoid, largest_centred_ellipsoid
 from .krut import krut_polytope
@@ -342,16 +344,6 @@ class IsotropicForceResult:
         }
 
 
-def _as_pose(robot: Robot, pose) -> Pose:
-    if isinstance(pose, Pose):
-        return pose
-    if isinstance(pose, str):
-        from ..robot import parse_pose
-
-        return parse_pose(robot.dof, pose)
-    return Pose.from_params(robot.dof, list(np.asarray(pose, dtype=float).reshape(-1)))
-
-
 def isotropic_force(
     robot: Robot,
     pose,
@@ -360,23 +352,25 @@ def isotropic_force(
     section: bool = True,
     ellipse: bool = False,
 ) -> IsotropicForceResult:
-    """The maximum isotropic force at ``pose`` (a :class:`~certsolve.robot.Pose`, or params).
+    """The maximum isotropic force at ``pose`` (a :class:`~certsolve.robot.Pose`, or its
+    parameters as a list, tuple, array or text).
 
     ``algorithm``: ``"shifting"`` (hyperplane shifting, default) or ``"krut"`` (the paper's
     six steps; small ``m`` and ``w`` only).  ``external``: optional extra constant wrench.
     ``section``: for dof 3/6, also compute the force section as a hull of vertices (its
-    facets are reported and its inscribed radius is ``section_check``).
+    facets are reported and its inscribed radius is ``section_check``).  The inputs are
+    checked as ``POST /v1/isotropic`` and ``certsolve isotropic`` check them
+    (:class:`~certsolve.robot.inputs.IsotropicOptions`): a value they refuse raises
+    :class:`~certsolve.inputs.InputError` naming it.
     """
     t0 = time.perf_counter()
-    if algorithm not in ("shifting", "krut"):
-        raise ValueError(f"algorithm: expected 'shifting' or 'krut', got {algorithm!r}")
-    pose = _as_pose(robot, pose)
-    pos = np.asarray(pose.position, dtype=float)
-    rot = np.asarray(pose.rotation, dtype=float)
-    if pos.shape != (robot.dim,) or rot.shape != (robot.dim, robot.dim):
-        raise ValueError(f"pose: expected a {robot.dim}-D position and rotation")
-    if not np.all(np.isfinite(pos)):
-        raise ValueError("pose: coordinates must be finite")
+    pose = as_pose(robot.dof, pose)
+    opts = checked(
+        IsotropicOptions,
+        {"pose": pose.params(robot.dof), "algorithm": algorithm, "external": external},
+    )
+    check_count(opts.external, robot.wrench_dim, "external", "wrench components")
+    pos, rot = pose.position, pose.rotation
     nf = force_rows(robot)
     H = wrench_matrix(robot, pos[None], rot[None])[0]
     w_ext = external_wrench(robot, rot[None], external)[0]

@@ -19,6 +19,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
+from ..inputs import readable
 from .kinds import KINDS
 
 __all__ = ["describe_validation_error", "field_of", "summary", "validation_details"]
@@ -26,8 +27,6 @@ __all__ = ["describe_validation_error", "field_of", "summary", "validation_detai
 _KIND_TAGS = frozenset(KINDS)
 _SKIP = ("function-after", "function-before", "function-wrap", "function-plain")
 _FIELD_MSG = re.compile(r"^((?:[A-Za-z_]\w*(?:\[\d+\])*)(?:\.[A-Za-z_]\w*(?:\[\d+\])*)*): (.+)$")
-_PREFIXES = ("Value error, ", "Assertion failed, ")
-_SHOULD = re.compile(r"^(?:Input|String|List|Tuple|Dictionary|Value) should (be|have) ")
 _POSITION = re.compile(r"^line (\d+), column (\d+): ")
 
 
@@ -78,11 +77,7 @@ def validation_details(errors: Sequence[Mapping[str, Any]], prefix: tuple = ()) 
     out = []
     for e in errors:
         loc = _clean_loc((*prefix, *e.get("loc", ())))
-        msg = str(e.get("msg", "invalid value"))
-        for p in _PREFIXES:
-            if msg.startswith(p):
-                msg = msg[len(p) :]
-        msg = _SHOULD.sub(r"must \1 ", msg)
+        msg = readable(str(e.get("msg", "invalid value")))
         typ = str(e.get("type", "value_error"))
         if typ == "json_invalid":
             ctx = e.get("ctx") or {}

@@ -27,7 +27,8 @@ call of that lane).  The processes are started on first use and die with the ser
 bytes on, so its memory does not grow with the calls it serves.
 
 Errors: :class:`.kinds.KindUnavailable` when this build lacks the library function,
-``ValueError`` for input the library refuses, :class:`Busy`, :class:`TooCostly`,
+:class:`~certsolve.inputs.InputError` (a ``ValueError``; its ``field`` is the one the library
+named, ``""`` if none) for input the library refuses, :class:`Busy`, :class:`TooCostly`,
 :class:`Gone`, :class:`QuickFailure` (a bug in the call: HTTP 500).
 """
 
@@ -45,6 +46,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
+from ..inputs import InputError
 from .settings import ServiceSettings
 
 __all__ = [
@@ -125,8 +127,10 @@ def _serve(conn, memory_mb: int, parent_pid: int) -> None:
             reply = ("unavailable", str(exc))
         except MemoryError:
             reply, exit_after = ("memory", None), True
+        except InputError as exc:  # the input's fault, at a field the library names
+            reply = ("invalid", (exc.field, exc.message))
         except (ValueError, ArithmeticError) as exc:  # the input's fault
-            reply = ("invalid", str(exc) or type(exc).__name__)
+            reply = ("invalid", ("", str(exc) or type(exc).__name__))
         except Exception as exc:
             reply = ("failed", f"{type(exc).__name__}: {exc}"[:500])
         try:
@@ -364,7 +368,7 @@ class QuickCalls:
         if what == "ok":
             return value
         if what == "invalid":
-            raise ValueError(value)
+            raise InputError(*value)
         if what == "unavailable":
             raise KindUnavailable(value)
         if what in ("memory", "costly"):

@@ -10,6 +10,8 @@ from __future__ import annotations
 import time
 from typing import Any
 
+from ..inputs import InputError, checked
+from ..robot.inputs import FkOptions, check_controls
 from ..robot.model import Robot
 from ..solver import resolve_executor
 from .fk_solver import FKPose, FKResult, FKSolver, with_tau_max
@@ -40,6 +42,11 @@ def forward_kinematics(
     """Every equilibrium pose of ``robot`` for the control vector ``u`` (see
     :mod:`.fk_solver`).
 
+    The options are checked as the ``fk`` job and ``certsolve fk`` check them
+    (:class:`~certsolve.robot.inputs.FkOptions`, one value of ``u`` per wire): a value
+    they refuse raises :class:`~certsolve.inputs.InputError` naming it (``tau_max: must be
+    greater than or equal to 0``).
+
     ``tau_max`` overrides every wire's maximum tension; ``seed_planar`` solves the planar
     counterpart first and searches around its solutions before the rest of the domain
     (:func:`.seeding.seeded_forward_kinematics`); ``seeded_only`` skips the rest (the rest
@@ -48,10 +55,25 @@ def forward_kinematics(
     ``checkpoint`` (:class:`~certsolve.solver.checkpoint.Checkpoint`) to the plain search
     only.
     """
+    opts = checked(
+        FkOptions,
+        {
+            "u": u,
+            "eps": eps,
+            "timeout": timeout,
+            "max_boxes": max_boxes,
+            "max_solutions": max_solutions,
+            "tau_max": tau_max,
+            "formulation": formulation,
+            "seed_planar": seed_planar,
+            "seeded_only": seeded_only,
+        },
+    )
+    check_controls(robot.m, opts.u)
     if seeded_only and not seed_planar:
-        raise ValueError("seeded_only needs seed_planar")
+        raise InputError("seeded_only", "needs seed_planar")
     if checkpoint is not None and seed_planar:
-        raise ValueError("checkpoint: not available with seed_planar (a search in two phases)")
+        raise InputError("checkpoint", "not available with seed_planar (a search in two phases)")
     executor = resolve_executor(executor, workers=workers)
     robot = with_tau_max(robot, tau_max)
     search = {

@@ -51,10 +51,12 @@ tensions only).
 
 from __future__ import annotations
 
+from ..inputs import checked
+from ..robot.inputs import IkOptions, as_pose
 from .ik_alg1 import ik_algorithm1
 from .ik_alg2 import ik_algorithm2
 from .ik_first import ik_tension_first
-from .ik_inputs import as_pose, as_robot
+from .ik_inputs import as_robot
 from .ik_result import (
     LIMIT_TOL,
     Certificate,
@@ -85,8 +87,11 @@ def inverse_kinematics(robot, pose, method: str = "tension", **options) -> IKRes
     """Controls (and tensions) holding the platform at ``pose``.
 
     ``robot``: :class:`~certsolve.robot.Robot` (or anything :meth:`Robot.load` accepts);
-    ``pose``: :class:`~certsolve.robot.Pose`, a parameter list (``x,y,z,yaw,pitch,roll`` in
-    cm and degrees; planar ``x,y,theta``; point ``x,y``) or the same as a string.
+    ``pose``: :class:`~certsolve.robot.Pose`, a parameter list, tuple or array
+    (``x,y,z,yaw,pitch,roll`` in cm and degrees; planar ``x,y,theta``; point ``x,y``) or the
+    same as a string.  ``pose`` and ``method`` are checked as the ``ik`` job and
+    ``certsolve ik`` check them (:class:`~certsolve.robot.inputs.IkOptions`): a value they
+    refuse raises :class:`~certsolve.inputs.InputError` naming it.
     ``method``: ``"tension"`` (options ``distribution``, ``check_lp``), ``"alg1"`` (``u_last``,
     ``window``, ``max_boxes``, ``timeout``, ``eps``, ``box_radius``) or ``"alg2"``
     (``fixed_wire``, ``tau_fixed``, ``u_fixed``, ``solve``, ``u_last``, ``window``,
@@ -94,7 +99,8 @@ def inverse_kinematics(robot, pose, method: str = "tension", **options) -> IKRes
     ``"tension"`` (Algorithms 1 and 2 raise :class:`~certsolve.robot.RobotFileError`).
     """
     robot = as_robot(robot)
-    pose = as_pose(robot, pose)
+    pose = as_pose(robot.dof, pose)
+    checked(IkOptions, {"pose": pose.params(robot.dof), "method": method})
     if method == "tension":
         return ik_tension_first(robot, pose, **options)
     if method == "alg1":

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..robot.geometry import Pose
+from ..robot.inputs import as_pose as pose_of
 from ..robot.model import Robot
 from ..robot.schema import RobotFileError
 from .ik_search import control_point
@@ -26,33 +27,9 @@ __all__ = [
 
 
 def as_pose(robot: Robot, pose) -> Pose:
-    """A :class:`Pose` with float64 arrays of the robot's dimension (finiteness is checked
-    by the geometry: a non-finite pose gives an invalid enclosure)."""
-    if isinstance(pose, Pose):
-        p, R = pose.position, pose.rotation
-        d = robot.dim
-        if (
-            type(p) is np.ndarray
-            and type(R) is np.ndarray
-            and p.shape == (d,)
-            and R.shape == (d, d)
-            and p.dtype == np.float64
-            and R.dtype == np.float64
-        ):
-            return pose
-        p = np.asarray(p, dtype=float)
-        R = np.asarray(R, dtype=float)
-        if p.shape != (d,) or R.shape != (d, d):
-            raise ValueError(
-                f"pose: robot {robot.name!r} (dof {robot.dof}) needs a {d}-D position and "
-                f"a {d}x{d} rotation"
-            )
-        return Pose(p, R)
-    if isinstance(pose, str):
-        from ..robot.geometry import parse_pose
-
-        return as_pose(robot, parse_pose(robot.dof, pose))
-    return as_pose(robot, Pose.from_params(robot.dof, list(pose)))
+    """A :class:`Pose` with float64 arrays of the robot's dimension, from a pose, its
+    parameters or their text (:func:`certsolve.robot.inputs.as_pose`)."""
+    return pose_of(robot.dof, pose)
 
 
 def check_pose(pose: Pose, enc) -> None:

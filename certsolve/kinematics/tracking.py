@@ -27,7 +27,9 @@ import numpy as np
 
 from ..expr import esum, sqr, sqrt
 from ..expr.scalar import ScalarProgram
+from ..inputs import checked
 from ..robot.geometry import Pose
+from ..robot.inputs import TrackOptions, as_pose, check_controls
 from ..robot.model import Robot
 from ..solver.newton import KrawczykPoint
 from .fk_solver import FKPose, FKSolver
@@ -139,7 +141,10 @@ class Tracker:
         return False, lo, hi
 
     def step(self, u, near: Pose | FKPose, half_width: float = 0.1) -> TrackResult:
+        """One step from ``near`` (a pose, an FK pose or pose parameters) for controls ``u``."""
         t0 = time.perf_counter()
+        if not isinstance(near, FKPose):
+            near = as_pose(self.robot.dof, near, "near_pose")
         u = np.asarray(u, dtype=float)
         if u.shape != (self.robot.m,):
             raise ValueError(f"u: expected {self.robot.m} values, got {u.size}")
@@ -202,6 +207,19 @@ class Tracker:
         )
 
 
-def track(robot: Robot, u, near, half_width: float = 0.1, formulation: str = "auto"):
-    """One certified tracking step (compiles the system: use :class:`Tracker` in loops)."""
-    return Tracker(robot, formulation).step(u, near, half_width)
+def track(robot: Robot, u, near, half_width: float = 0.1, formulation: str = "auto") -> TrackResult:
+    """One certified tracking step (compiles the system: use :class:`Tracker` in loops).
+
+    ``near``: a :class:`~certsolve.robot.Pose`, an :class:`FKPose` or pose parameters
+    (``[x, y, theta]``, ``[x, y, z, yaw, pitch, roll]``; cm, degrees).  The inputs are
+    checked as ``POST /v1/fk/track`` and ``certsolve fk --near`` check them
+    (:class:`~certsolve.robot.inputs.TrackOptions`): a value they refuse raises
+    :class:`~certsolve.inputs.InputError` naming it.
+    """
+    pose = near if isinstance(near, FKPose) else as_pose(robot.dof, near, "near_pose")
+    opts = checked(
+        TrackOptions,
+        {"u": u, "near_pose": Pose.params(pose, robot.dof), "half_width": half_width},
+    )
+    check_controls(robot.m, opts.u)
+    return Tracker(robot, formulation).step(opts.u, pose, opts.half_width)

@@ -36,14 +36,17 @@ import copy
 import pickle
 from collections.abc import Callable
 from dataclasses import dataclass
+from os import PathLike
 from typing import Any
 
 import numpy as np
 
 from ..expr.compiled import CompiledSystem
+from ..expr.minibex import load_system
 from ..expr.node import to_string
 from ..expr.polynomial import reduce_degree as lower_degree
 from ..expr.system import System
+from ..inputs import checked
 from ..interval.core import splittable_width
 from ..interval.reductions import all_last, any_last
 from .bisectors import SmearCurvatureMix, domain_scale, smear_scores, split
@@ -52,6 +55,7 @@ from .certify import Certifier, SolutionSet, box_difference
 from .checkpoint import Checkpoint
 from .contractors import HC4, IntervalNewton, PartialNewton, log_volume_ratio
 from .executors import resolve_executor
+from .options import SolveOptions
 from .relaxation import PolytopeHull
 from .result import Solution, SolveResult, Stats, Undecided
 from .search import Limits, Progress, SearchRun, SearchStatus, Tally, run_search
@@ -626,7 +630,7 @@ def _learnt(acid: AdaptiveCount, learns, lo, hi, nlo, nhi, empty) -> np.ndarray:
 
 
 def solve(
-    system: System,
+    system: System | str | PathLike,
     *,
     eps: float = 1e-8,
     timeout: float | None = None,
@@ -641,7 +645,23 @@ def solve(
     **options,
 ) -> SolveResult:
     """Find every solution of ``system`` in its domain (see :class:`Solver` and
-    :meth:`Solver.solve`)."""
+    :meth:`Solver.solve`).  ``system``: a :class:`System`, a Minibex file's path, or
+    Minibex text (:func:`~certsolve.expr.minibex.load_system`).  The options are checked
+    as the ``solve`` job and ``certsolve solve`` check them (:class:`~.options.
+    SolveOptions`): a value they refuse raises :class:`~certsolve.inputs.InputError`
+    naming it."""
+    if not isinstance(system, System):
+        system = load_system(system)
+    checked(
+        SolveOptions,
+        {
+            "eps": eps,
+            "timeout": timeout,
+            "max_boxes": max_boxes,
+            "max_solutions": max_solutions,
+            "verify": verify,
+        },
+    )
     solver = Solver(system, eps=eps, **options)
     return solver.solve(
         timeout=timeout,

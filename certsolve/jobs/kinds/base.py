@@ -3,9 +3,14 @@ against the robot, the run context, and the lookup of the library function.
 
 Requests are pydantic models with ``extra="forbid"`` and no NaN / Infinity; every bound
 the validation enforces on a single value (finite, range, length) is written as a
-``Field`` constraint, so the published JSON Schema states it.  What needs the robot (``u``
-has one value per wire, a pose has the robot's length, no wire has zero length at an IK
-pose, the FK equations can be written for the platform ...) is checked in one place:
+``Field`` constraint, so the published JSON Schema states it.  The params of a kind whose
+library function checks its own options derive from that function's options model
+(``FkParams(FkOptions, Params)``: :mod:`certsolve.robot.inputs`,
+:mod:`certsolve.solver.options`), so Python refuses what a job refuses, with the same
+message.  What needs the robot (``u`` has one value per wire, a pose has the robot's
+length, no wire has zero length at an IK pose, the FK equations can be written for the
+platform ...) is checked in one place (``check_wires`` and ``check_pose`` call the
+library's own checks):
 :meth:`Params.check_robot`, called by :class:`Request` for every job and quick call that
 carries a robot -- and by the command line, which builds the same parameter models.  Its
 errors name a params field (``u: ...``) or a robot field (``robot.wires: ...``).  A check
@@ -23,8 +28,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, model_validator
+from pydantic import Field, ValidationInfo, model_validator
 
+from ...inputs import MAX_COORD, MAX_FORCE, Coord, StrictModel, check_count
+from ...robot.inputs import Wrench, as_pose, check_controls
 from ...robot.schema import RobotSpec, array_length, robot_dof_schema
 
 __all__ = [
@@ -62,17 +69,10 @@ __all__ = [
 
 log = logging.getLogger("certsolve.jobs")
 
-MAX_COORD = 1e6  # cm, the robot schema's bound
-MAX_FORCE = 1e9  # N
 POSE_LENGTH = {2: 2, 3: 3, 6: 6}  # pose parameters by dof: x,y / x,y,theta / x,y,z,yaw,pitch,roll
 ANGLES = {2: 0, 3: 1, 6: 3}  # orientation angles by dof
 
-Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD)]
 Angle = Annotated[float, Field(ge=-1e4, le=1e4)]  # degrees
-Wrench = Annotated[
-    list[Annotated[float, Field(ge=-MAX_FORCE, le=MAX_FORCE)]],
-    Field(min_length=2, max_length=6, description="extra constant wrench (N, N*cm)"),
-]
 Orientation = Annotated[
     Angle | list[Angle | tuple[Angle, Angle]] | None,
     Field(description="theta (dof 3) or [yaw, pitch, roll] (dof 6), degrees; [lo, hi] ranges"),
@@ -83,10 +83,8 @@ class KindUnavailable(Exception):
     """The library function behind a kind is missing from this build."""
 
 
-class Model(BaseModel):
+class Model(StrictModel):
     """A strict request model: unknown fields and non-finite numbers are refused."""
-
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 @dataclass(frozen=True)
@@ -204,17 +202,15 @@ class Job(Request):
 
 # -- checks against the robot ---------------------------------------------------------------------
 def check_wires(robot: RobotSpec, u: Sequence[float], name: str) -> None:
-    if len(u) != len(robot.wires):
-        raise ValueError(f"{name}: expected {len(robot.wires)} values (one per wire), got {len(u)}")
+    """One value per wire (the library's own check, :func:`~certsolve.robot.inputs.
+    check_controls`)."""
+    check_controls(len(robot.wires), u, name)
 
 
 def check_pose(robot: RobotSpec, values: Sequence[float], name: str) -> None:
-    from ...robot.geometry import Pose
-
-    try:
-        Pose.from_params(robot.dof, values)
-    except ValueError as exc:
-        raise ValueError(f"{name}: {exc}") from None
+    """A pose of the robot's dof (the library's own check, :func:`~certsolve.robot.inputs.
+    as_pose`)."""
+    as_pose(robot.dof, values, name)
 
 
 def check_wire_lengths(robot: RobotSpec, pose: Sequence[float], name: str) -> None:
@@ -242,12 +238,6 @@ def require_elastic(robot: RobotSpec, what: str, hint: str = "") -> None:
         robot_model(robot).require_elastic(what)
     except RobotFileError as exc:
         raise ValueError(f"robot.{exc}: the robot has no elastic wire model{hint}") from None
-
-
-def check_count(values: Sequence | None, count: int, name: str, what: str) -> None:
-    """``values`` (when given) has ``count`` items; ``what`` says what they are."""
-    if values is not None and len(values) != count:
-        raise ValueError(f"{name}: expected {count} {what}, got {len(values)}")
 
 
 def wrench_dim(robot: RobotSpec) -> int:

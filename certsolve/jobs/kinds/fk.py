@@ -13,13 +13,10 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from pydantic import Field
-
-from ...robot.schema import MAX_WIRES, RobotSpec, robot_dof_schema
+from ...robot.inputs import FkOptions, TrackOptions
+from ...robot.schema import RobotSpec, robot_dof_schema
 from .base import (
-    MAX_FORCE,
     POSE_LENGTH,
-    Coord,
     Job,
     Kind,
     KindUnavailable,
@@ -49,33 +46,13 @@ __all__ = [
 ]
 
 
-# = certsolve.kinematics.fk_systems.FORMULATIONS (tested), by the dof they are written for
+# certsolve.robot.inputs.Formulation by the dof they are written for
 FORMULATIONS = ("auto", "frame", "pose")
 PLANAR_FORMULATIONS = ("planar-10",)
 SPATIAL_FORMULATIONS = ("general-19", "T-16", "almost-planar-13", "points")
-Formulation = Literal[
-    "auto", "frame", "pose", "planar-10", "general-19", "T-16", "almost-planar-13",
-    "points",
-]  # fmt: skip
 
 
-class FkParams(Params):
-    u: list[Coord] = Field(
-        min_length=1, max_length=MAX_WIRES, description="actuator values (cm), one per wire"
-    )
-    eps: float = Field(default=1e-8, gt=0, le=1e9)
-    timeout: float | None = Field(default=None, gt=0, description="time limit (s)")
-    max_boxes: int | None = Field(default=None, ge=1)
-    max_solutions: int | None = Field(
-        default=None, ge=1, le=10**9, description="stop after this many certified poses"
-    )
-    tau_max: float | None = Field(default=None, ge=0, le=MAX_FORCE, description="tension cap")
-    formulation: Formulation = Field(
-        default="auto", description="the FK equations (docs: README, forward kinematics)"
-    )
-    seed_planar: bool = False
-    seeded_only: bool = False
-
+class FkParams(FkOptions, Params):  # the library's options as job params
     @classmethod
     def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
         if dof == 2:
@@ -177,11 +154,7 @@ KIND = Kind(
 
 
 # -- the quick call: one tracking step ------------------------------------------------------------
-class TrackParams(Params):
-    u: list[Coord] = Field(min_length=1, max_length=MAX_WIRES)
-    near_pose: list[Coord] = Field(min_length=2, max_length=6, description="see IkParams.pose")
-    half_width: float = Field(default=0.1, gt=0, le=1e4)
-
+class TrackParams(TrackOptions, Params):  # the library's options as params
     @classmethod
     def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
         return None if dof == 2 else {"near_pose": POSE_LENGTH[dof]}

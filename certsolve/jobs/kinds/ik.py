@@ -5,12 +5,10 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from pydantic import Field
-
+from ...robot.inputs import IkOptions
 from ...robot.schema import RobotSpec, robot_dof_schema
 from .base import (
     POSE_LENGTH,
-    Coord,
     Job,
     Kind,
     Params,
@@ -28,14 +26,7 @@ from .base import (
 __all__ = ["KIND", "QUICK", "IkCall", "IkJob", "IkParams", "call_ik", "ik_cost", "run_ik"]
 
 
-class IkParams(Params):
-    pose: list[Coord] = Field(
-        min_length=2,
-        max_length=6,
-        description="x,y,z,yaw,pitch,roll (dof 6), x,y,theta (dof 3) or x,y (dof 2); cm, deg",
-    )
-    method: Literal["tension", "alg1", "alg2"] = "tension"
-
+class IkParams(IkOptions, Params):  # the library's options as job params
     @classmethod
     def schema_variants(cls, dof: int) -> list[tuple[dict, dict[str, Any]]]:
         """The tension method takes any robot; Algorithms 1 and 2 need the elastic model."""

@@ -9,6 +9,7 @@ from typing import Any, Literal
 
 from pydantic import Field, model_validator
 
+from ...robot.inputs import IsotropicOptions
 from ...robot.schema import RobotSpec
 from .base import (
     POSE_LENGTH,
@@ -117,11 +118,7 @@ KIND = Kind(
 
 
 # -- the quick call: one pose ---------------------------------------------------------------------
-class PoseParams(Params):
-    pose: list[Coord] = Field(min_length=2, max_length=6, description="see IkParams.pose")
-    algorithm: Literal["shifting", "krut"] = "shifting"
-    external: Wrench | None = None
-
+class PoseParams(IsotropicOptions, Params):  # the library's options as params
     @classmethod
     def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
         return {"pose": POSE_LENGTH[dof], "external": dof}

@@ -6,6 +6,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field, field_validator
 
+from ...solver.options import SolveOptions
 from .base import Job, Kind, Params, RunContext, library_function
 
 __all__ = ["KIND", "MAX_SYSTEM_CHARS", "MAX_VARIABLES", "SolveJob", "SolveParams", "run_solve"]
@@ -14,14 +15,7 @@ MAX_SYSTEM_CHARS = 200_000  # Minibex text of a solve job
 MAX_VARIABLES = 100
 
 
-class SolveParams(Params):
-    eps: float = Field(default=1e-8, gt=0, le=1e9, description="boxes narrower stop")
-    timeout: float | None = Field(default=None, gt=0, description="time limit (s)")
-    max_boxes: int | None = Field(default=None, ge=1, description="limit on processed boxes")
-    max_solutions: int | None = Field(
-        default=None, ge=1, le=10**9, description="stop after this many certified solutions"
-    )
-    verify: bool = Field(default=False, description="re-prove solutions with mpmath")
+class SolveParams(SolveOptions, Params):  # the library's options, and the answer's sizes
     max_undecided: int = Field(
         default=1000, ge=0, le=100_000, description="undecided hulls listed in the answer"
     )

@@ -1,0 +1,155 @@
+"""What the robot functions take from a user, checked once: poses as plain numbers, and
+the options models of forward kinematics, tracking, inverse kinematics and the isotropic
+force.
+
+``certsolve.forward_kinematics``, ``track``, ``inverse_kinematics`` and
+``isotropic_force`` validate their options with these models (:func:`certsolve.inputs.
+checked`); the job kinds' params models derive from them (``FkParams(FkOptions,
+Params)``), and the command line builds those, so Python, HTTP and the command line refuse
+the same values with the same messages.  The checks against a robot that need no model
+are here too (:func:`check_controls`, :func:`as_pose`); they raise
+:class:`~certsolve.inputs.InputError` naming the field.
+
+A pose is a :class:`~.geometry.Pose`, or its parameters as a list, tuple or 1-D array
+(``x,y,z[,yaw,pitch,roll]`` for dof 6, ``x,y[,theta]`` for dof 3, ``x,y`` for dof 2; cm and
+degrees), or the same as comma-separated text.  Each coordinate is finite and within
+``±MAX_COORD``, as the robot file's.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import Field
+
+from ..inputs import (
+    MAX_FORCE,
+    Coord,
+    InputError,
+    StrictModel,
+    check_count,
+    checked_value,
+    value_type,
+)
+from .geometry import Pose, parse_pose
+from .schema import MAX_WIRES
+
+__all__ = [
+    "Formulation",
+    "FkOptions",
+    "IkOptions",
+    "IsotropicOptions",
+    "PoseValues",
+    "TrackOptions",
+    "Wrench",
+    "as_pose",
+    "check_controls",
+]
+
+#: = certsolve.kinematics.fk_systems.FORMULATIONS (tested)
+Formulation = Literal[
+    "auto", "frame", "pose", "planar-10", "general-19", "T-16", "almost-planar-13",
+    "points",
+]  # fmt: skip
+
+PoseValues = Annotated[
+    list[Coord],
+    Field(
+        min_length=2,
+        max_length=6,
+        description="x,y,z,yaw,pitch,roll (dof 6), x,y,theta (dof 3) or x,y (dof 2); cm, deg",
+    ),
+]
+_POSE_VALUES = value_type(PoseValues)
+Controls = Annotated[
+    list[Coord],
+    Field(min_length=1, max_length=MAX_WIRES, description="actuator values (cm), one per wire"),
+]
+Wrench = Annotated[
+    list[Annotated[float, Field(ge=-MAX_FORCE, le=MAX_FORCE)]],
+    Field(min_length=2, max_length=6, description="extra constant wrench (N, N*cm)"),
+]
+
+
+class FkOptions(StrictModel):
+    """Options of :func:`certsolve.forward_kinematics` (and of the ``fk`` job)."""
+
+    u: Controls
+    eps: float = Field(default=1e-8, gt=0, le=1e9)
+    timeout: float | None = Field(default=None, gt=0, description="time limit (s)")
+    max_boxes: int | None = Field(default=None, ge=1)
+    max_solutions: int | None = Field(
+        default=None, ge=1, le=10**9, description="stop after this many certified poses"
+    )
+    tau_max: float | None = Field(default=None, ge=0, le=MAX_FORCE, description="tension cap")
+    formulation: Formulation = Field(
+        default="auto", description="the FK equations (docs: README, forward kinematics)"
+    )
+    seed_planar: bool = False
+    seeded_only: bool = False
+
+
+class TrackOptions(StrictModel):
+    """Options of :func:`certsolve.track` (and of ``POST /v1/fk/track``)."""
+
+    u: list[Coord] = Field(min_length=1, max_length=MAX_WIRES)
+    near_pose: PoseValues = Field(description="see IkParams.pose")
+    half_width: float = Field(default=0.1, gt=0, le=1e4)
+
+
+class IkOptions(StrictModel):
+    """Options of :func:`certsolve.inverse_kinematics` (and of the ``ik`` job)."""
+
+    pose: PoseValues
+    method: Literal["tension", "alg1", "alg2"] = "tension"
+
+
+class IsotropicOptions(StrictModel):
+    """Options of :func:`certsolve.isotropic_force` (and of ``POST /v1/isotropic``)."""
+
+    pose: PoseValues = Field(description="see IkParams.pose")
+    algorithm: Literal["shifting", "krut"] = "shifting"
+    external: Wrench | None = None
+
+
+def check_controls(m: int, u: Sequence[float], field: str = "u") -> None:
+    """One control per wire."""
+    check_count(u, m, field, "values (one per wire)")
+
+
+def pose_values(pose: Any, field: str = "pose") -> list[float]:
+    """Pose parameters (a list, tuple or 1-D array), checked as the pose fields of the
+    options models check them."""
+    if isinstance(pose, np.ndarray):
+        if pose.ndim != 1:
+            raise InputError(field, f"expected a list of numbers, got shape {pose.shape}")
+        pose = pose.tolist()
+    return checked_value(_POSE_VALUES, pose, field)
+
+
+def as_pose(dof: int, pose: Any, field: str = "pose") -> Pose:
+    """A :class:`Pose` with float64 arrays for a robot of ``dof`` from what a user gives
+    (module docstring); :class:`~certsolve.inputs.InputError` at ``field`` otherwise."""
+    d = 3 if dof == 6 else 2
+    if isinstance(pose, Pose):
+        p = np.asarray(pose.position, dtype=float)
+        R = np.asarray(pose.rotation, dtype=float)
+        if p.shape != (d,) or R.shape != (d, d):
+            raise InputError(
+                field, f"a dof-{dof} robot needs a {d}-D position and a {d}x{d} rotation"
+            )
+        if not (np.all(np.isfinite(p)) and np.all(np.isfinite(R))):
+            raise InputError(field, "position and rotation must be finite")
+        if p is pose.position and R is pose.rotation:
+            return pose
+        return Pose(p, R)
+    try:
+        if isinstance(pose, str):
+            return parse_pose(dof, pose)
+        return Pose.from_params(dof, pose_values(pose, field))
+    except InputError:
+        raise
+    except ValueError as exc:
+        raise InputError(field, str(exc).removeprefix("pose ")) from None
