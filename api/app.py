@@ -6,7 +6,8 @@ run in the processes of :class:`certsolve.jobs.quick.QuickCalls`; the HTTP proce
 validates, stores and reads.  Routes live in one router per resource
 (:mod:`.routers.jobs`, :mod:`.routers.sync`, :mod:`.routers.meta`, :mod:`.routers.admin`, the
 pictures of finished jobs :mod:`.routers.pictures`, the bundled robots :mod:`.routers.examples`,
-and the web page at ``/`` :mod:`.routers.pages`)
+the web page at ``/`` :mod:`.routers.pages`, the API reference at ``/docs`` and ``/redoc``
+:mod:`.routers.docs`, offline)
 and get the settings, services and calling client through FastAPI dependencies
 (:mod:`.deps`).  With a token table (``settings.access``) every ``/v1/`` request needs a
 bearer token (:class:`.middleware.AccessMiddleware`), and the OpenAPI schema says so.
@@ -30,7 +31,7 @@ from certsolve.jobs.settings import ServiceSettings
 
 from .errors import install_error_handlers
 from .middleware import AccessMiddleware, BodyLimitMiddleware
-from .routers import admin, examples, jobs, meta, pages, pictures, sync
+from .routers import admin, docs, examples, jobs, meta, pages, pictures, sync
 
 __all__ = ["API_VERSION", "create_app"]
 
@@ -68,6 +69,8 @@ def create_app(
             '"msg", "type"}, ...]}`.'
         ),
         lifespan=lifespan,
+        docs_url=None,  # served offline by .routers.docs
+        redoc_url=None,
     )
     app.state.settings = settings
     app.state.service = service
@@ -87,6 +90,7 @@ def create_app(
     app.include_router(pictures.router)
     app.include_router(examples.router)
     app.include_router(pages.router)
+    app.include_router(docs.router)
     _finish_openapi(app, settings)
     return app
 
