@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Response
 
 from certsolve.jobs.kinds import KINDS, KindUnavailable, library_function, public_kinds
 
@@ -14,11 +14,15 @@ from ..schemas import errors
 router = APIRouter(tags=["service"])
 
 
-@router.get("/healthz")
-def healthz(service: Service, quick: Quick) -> dict[str, Any]:
-    """Liveness: workers alive, the queue depth and the quick-call processes (public: no
-    token needed)."""
-    return {**service.health(), "quick": quick.stats()}
+@router.get("/healthz", responses={503: {"description": "the job store fails its check"}})
+def healthz(service: Service, quick: Quick, response: Response) -> dict[str, Any]:
+    """Liveness: the job store's check, workers alive, the queue depth and the quick-call
+    processes (public: no token needed); 503 with ``status: failing`` when the store is
+    damaged or cannot be read."""
+    health = service.health()
+    if health["status"] != "ok":
+        response.status_code = 503
+    return {**health, "quick": quick.stats()}
 
 
 @router.get("/v1/kinds", responses=errors(401, 429))

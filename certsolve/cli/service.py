@@ -184,10 +184,14 @@ def run_serve(args: argparse.Namespace) -> int:
     _check_port(args.host, args.port)
     if settings.scheduler is not None:
         _check_scheduler(settings.scheduler)
+    service = None
     try:
         service = JobService(settings)
         service.acquire()
+        service.check_store()
     except ServiceError as exc:
+        if service is not None:
+            service.close()
         raise CliError(str(exc)) from None
     logging.basicConfig(
         level=getattr(logging, args.log_level.upper()),

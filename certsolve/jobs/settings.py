@@ -70,6 +70,7 @@ class ServiceSettings:
     # -- retention ------------------------------------------------------------------------------
     keep_days: float | None = None  # finished jobs older than this are purged (None: kept)
     housekeeping_interval: float = 600.0  # seconds between purges / WAL checkpoints
+    store_check_interval: float = 60.0  # /healthz re-runs the store's quick_check this often
 
     # -- timing ---------------------------------------------------------------------------------
     poll_interval: float = 0.25  # idle workers look for queued jobs this often (and on wake)

@@ -25,6 +25,12 @@ written by :mod:`certsolve.solver.checkpoint`): a job re-queued after its worker
 resumes from it (:meth:`JobStore.search_checkpoint`).  The blob is deleted when the job
 reaches a final status (and with the job by :meth:`JobStore.purge`).
 
+A file that is not this project's store is refused when opened (:class:`StoreError`): not
+SQLite at all, or a database with tables but no ``jobs`` table of this schema's columns, or
+a newer schema version; nothing is written to it.  :meth:`JobStore.check` runs SQLite's
+``PRAGMA quick_check`` (every page, every index entry; linear in the file's size), which
+finds bytes overwritten inside the tables that reads of a few rows can miss.
+
 Schema versions (``PRAGMA user_version``): 1 -- the jobs table; 2 -- ``jobs.owner`` and
 the ``owners`` table (a version-1 store is migrated when opened: existing jobs have no
 owner, so only admins see them once tokens are required); 3 -- the ``checkpoints`` table
@@ -57,6 +63,7 @@ __all__ = [
     "NewJob",
     "QueueFull",
     "STATUSES",
+    "StoreError",
     "new_job_id",
 ]
 
@@ -122,6 +129,11 @@ _NEXT_QUEUED = (
 # order of reaching a final status: write transactions are serialised, so a reader that has
 # seen fseq = n will see every later final job with fseq > n
 _NEXT_FSEQ = "(SELECT coalesce(max(fseq), 0) + 1 FROM jobs)"
+
+
+class StoreError(Exception):
+    """The file is not a job store of this project, or it is damaged; the message names
+    the file."""
 
 
 class QueueFull(Exception):
@@ -194,7 +206,22 @@ class JobStore:
         self._local = threading.local()
         self._all: list[sqlite3.Connection] = []
         self._lock = threading.Lock()
+        try:
+            self._open()
+        except sqlite3.DatabaseError as exc:
+            self.close()
+            raise StoreError(
+                f"{self.path}: damaged, or not a certsolve job store ({exc})"
+            ) from None
+        except StoreError:
+            self.close()
+            raise
+
+    def _open(self) -> None:
+        """Check that the file is empty or ours (:meth:`_refuse_foreign`), then create or
+        migrate the tables."""
         con = self._conn()
+        self._refuse_foreign(con)
         # a new file gives freed pages back to the file system (after a purge)
         con.execute("PRAGMA auto_vacuum = INCREMENTAL")
         mode = con.execute("PRAGMA journal_mode=WAL").fetchone()[0]
@@ -209,6 +236,37 @@ class JobStore:
                 if stmt.strip():
                     con.execute(stmt)
             con.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+
+    def _refuse_foreign(self, con: sqlite3.Connection) -> None:
+        """:class:`StoreError` unless the database is new (no table) or has this project's
+        ``jobs`` table at a schema version this code knows."""
+        tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+        tables.discard("sqlite_sequence")
+        if not tables:
+            return
+        cols = {r[1] for r in con.execute("PRAGMA table_info(jobs)")}
+        ours = {"id", "kind", "status", "request", "limits", "created_at", "lease", "result"}
+        if not ours <= cols:
+            found = ", ".join(sorted(tables)[:5])
+            raise StoreError(
+                f"{self.path}: not a certsolve job store (a SQLite database with tables {found})"
+            )
+        version = int(con.execute("PRAGMA user_version").fetchone()[0])
+        if version > SCHEMA_VERSION:
+            raise StoreError(
+                f"{self.path}: a job store of a newer certsolve (schema {version}; this one "
+                f"knows up to {SCHEMA_VERSION})"
+            )
+
+    def check(self) -> str | None:
+        """None when SQLite's ``PRAGMA quick_check`` finds the file sound, else its first
+        complaint (also when the check itself cannot read the file)."""
+        try:
+            rows = self._conn().execute("PRAGMA quick_check(5)").fetchall()
+        except sqlite3.DatabaseError as exc:
+            return str(exc)
+        problems = [str(r[0]) for r in rows if str(r[0]) != "ok"]
+        return "; ".join(problems[:3]) or None
 
     @staticmethod
     def _migrate(con: sqlite3.Connection) -> None:
