@@ -126,6 +126,7 @@ _WHY = {
     429: "the queue or the client's quota is full, too many requests, or no free "
     "quick-call process; retry after Retry-After seconds",
     501: "not available in this build",
+    503: "the job store fails its check or cannot be read",
 }
 _HEADERS = {
     401: {"WWW-Authenticate": {"schema": {"type": "string"}}},

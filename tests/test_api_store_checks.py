@@ -88,13 +88,14 @@ def test_healthz_reports_a_damaged_store(tmp_path):
     data = tmp_path / "data"
     data.mkdir()
     damaged(data)
-    settings = ServiceSettings(data_dir=data, workers=0)
-    with TestClient(create_app(settings), base_url="http://localhost") as client:
+    app = create_app(ServiceSettings(data_dir=data, workers=0))
+    with TestClient(app, base_url="http://localhost") as client:
         r = client.get("/healthz")
         assert r.status_code == 503, r.text
-        body = r.json()
-        assert body["status"] == "failing" and body["store"]["ok"] is False
-        assert "malformed" in body["store"]["error"]
+        assert r.json()["error"].startswith("the job store is failing: ")
+        assert "malformed" in r.json()["error"]
+        health = app.state.service.health()
+        assert health["status"] == "failing" and health["store"]["ok"] is False
 
 
 def test_healthz_is_ok_on_a_sound_store(tmp_path):

@@ -4,24 +4,26 @@ from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter, Response
+from fastapi import APIRouter
 
 from certsolve.jobs.kinds import KINDS, KindUnavailable, library_function, public_kinds
 
 from ..deps import Quick, Service, Settings
+from ..errors import APIError
 from ..schemas import errors
 
 router = APIRouter(tags=["service"])
 
 
-@router.get("/healthz", responses={503: {"description": "the job store fails its check"}})
-def healthz(service: Service, quick: Quick, response: Response) -> dict[str, Any]:
+@router.get("/healthz", responses=errors(503))
+def healthz(service: Service, quick: Quick) -> dict[str, Any]:
     """Liveness: the job store's check, workers alive, the queue depth and the quick-call
-    processes (public: no token needed); 503 with ``status: failing`` when the store is
-    damaged or cannot be read."""
+    processes (public: no token needed); 503 naming the problem when the store is damaged
+    or cannot be read."""
     health = service.health()
     if health["status"] != "ok":
-        response.status_code = 503
+        problem = health["store"]["error"]
+        raise APIError(503, f"the job store is failing: {problem}", loc=("store",))
     return {**health, "quick": quick.stats()}
 
 
