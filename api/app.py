@@ -30,8 +30,14 @@ from certsolve.jobs.service import JobService
 from certsolve.jobs.settings import ServiceSettings
 
 from .errors import install_error_handlers
-from .middleware import AccessMiddleware, BodyLimitMiddleware
+from .middleware import (
+    AccessMiddleware,
+    BodyLimitMiddleware,
+    HostMiddleware,
+    SecurityHeadersMiddleware,
+)
 from .routers import admin, docs, examples, jobs, meta, pages, pictures, sync
+from .server import ACCESS_LOGGER, QueryRedactor
 
 __all__ = ["API_VERSION", "create_app"]
 
@@ -49,14 +55,18 @@ def create_app(
     service = service or JobService(settings)
     quick = QuickCalls(settings)
 
+    redactor = QueryRedactor()
+
     @asynccontextmanager
     async def lifespan(app: FastAPI):
+        logging.getLogger(ACCESS_LOGGER).addFilter(redactor)
         service.start()
         try:
             yield
         finally:
             quick.close()
             service.close()
+            logging.getLogger(ACCESS_LOGGER).removeFilter(redactor)
 
     app = FastAPI(
         title="certsolve",
@@ -81,7 +91,12 @@ def create_app(
         AccessMiddleware,
         access=settings.access,
         default_rate=settings.quota_requests_per_minute,
+        failure_delay=settings.auth_failure_delay,
     )
+    app.add_middleware(
+        HostMiddleware, allowed=settings.allowed_hosts, active=settings.access is None
+    )
+    app.add_middleware(SecurityHeadersMiddleware)  # outermost: every answer has them
     install_error_handlers(app)
     app.include_router(meta.router)
     app.include_router(jobs.router(job_request_type(settings.enable_test_kinds)))
