@@ -396,6 +396,7 @@ def test_a_cancelled_job_counts_its_pending_boxes_not_their_groups(offline_brows
     assert "6131 pending box(es): the search stopped" in text, text
     assert "7 undecided box(es) in 1 group(s)" in text, text
     assert [b.text.lower() for b in css_all(d, "#job-head .badge")] == ["cancelled", "incomplete"]
+    assert console_errors(d) == []  # nothing refused by the Content-Security-Policy
 
 
 def test_a_complete_workspace_has_no_incomplete_badge(offline_browser, idle_server):
@@ -420,3 +421,36 @@ def test_a_complete_workspace_has_no_incomplete_badge(offline_browser, idle_serv
     row = f'#job-table tr[data-id="{job_id}"]'
     wait(d, lambda d: css_all(d, row), 30, "the job list")
     assert [b.text.lower() for b in css_all(d, f"{row} .badge")] == ["done"]
+
+
+def test_the_token_is_sent_but_not_stored(offline_browser, tmp_path_factory):
+    """A service with tokens: the typed token is sent with every call, kept in the page's
+    memory only (not in sessionStorage), and asked for again after a reload."""
+    d = offline_browser
+    data = tmp_path_factory.mktemp("tokens")
+    token = "page-token-0123456789abcdef"
+    (data / "tokens.json").write_text(json.dumps({"ada": {"token": token}}))
+    server = Server(data / "data", 0, "--tokens", str(data / "tokens.json"))
+    try:
+        d.get(server.base + "/#/")
+        d.refresh()
+        wait(d, lambda d: "access token" in css(d, "#banner").text, 30, "the token banner")
+        box = css(d, "#token")
+        box.send_keys(token)
+        css(d, "#jobs h2").click()  # leaves the field: its change event
+        wait(d, lambda d: css_all(d, "#form-fk select[name=robot] option[value=planar]"), 30,
+             "the robots, read with the token")  # fmt: skip
+        headers = {"Authorization": f"Bearer {token}"}
+        job = {"kind": "fk", "robot": PLANAR, "params": {"u": [0, 0, 0, 0]}}
+        job_id = server.http.post("/v1/jobs", json=job, headers=headers).json()["id"]
+        row = f'#job-table tr[data-id="{job_id}"]'
+        wait(d, lambda d: css_all(d, row), 30, "the job listed with the token")
+        stored = d.execute_script(
+            "return Object.keys(sessionStorage).map(k => sessionStorage.getItem(k))"
+        )
+        assert token not in stored, stored
+        d.refresh()
+        wait(d, lambda d: "access token" in css(d, "#banner").text, 30, "asked again")
+        assert css(d, "#token").get_attribute("value") == ""
+    finally:
+        server.close()

@@ -3,15 +3,17 @@
 // Plain JavaScript, no build step, no dependency. It uses the JSON API like any client:
 // GET /v1/robots (the bundled robots), POST /v1/jobs, GET /v1/jobs[/{id}],
 // DELETE /v1/jobs/{id}, and the PNG pictures under /v1/jobs/{id}/. An access token, when
-// typed, is kept in sessionStorage and sent as "Authorization: Bearer ..." with every call
-// (pictures are fetched, not linked, so they carry it too). Every text from the server is
+// typed, is kept in this page's memory only (not in sessionStorage, where any script of the
+// origin could read it later: a reload asks for it again) and sent as "Authorization:
+// Bearer ..." with every call (pictures are fetched, not linked, so they carry it too). Every text from the server is
 // inserted with textContent, never as HTML.
 "use strict";
 
 const POLL_RUNNING_MS = 1500; // the job list while something runs
 const POLL_IDLE_MS = 10000; // the job list otherwise (jobs submitted elsewhere)
 const POLL_JOB_MS = 1000; // one job's page while it runs
-const TOKEN_KEY = "certsolve.token";
+const OLD_TOKEN_KEY = "certsolve.token"; // where earlier versions kept it: removed at start
+let accessToken = "";
 
 // -- small helpers --------------------------------------------------------------------------
 function $(sel, root) {
@@ -70,8 +72,7 @@ const FINAL = new Set(["done", "failed", "cancelled"]);
 // -- the API ----------------------------------------------------------------------------------
 function authHeaders(extra) {
   const h = Object.assign({}, extra || {});
-  const t = sessionStorage.getItem(TOKEN_KEY);
-  if (t) h["Authorization"] = "Bearer " + t;
+  if (accessToken) h["Authorization"] = "Bearer " + accessToken;
   return h;
 }
 
@@ -204,6 +205,7 @@ const FORMS = [
 
 const page = {
   robots: null, // [{name, dof, wires, url}]
+  robotsLoaded: false,
   specs: new Map(), // name -> robot file (JSON)
   listTimer: null,
   jobTimer: null,
@@ -850,11 +852,12 @@ function route() {
 
 async function start() {
   const token = $("#token");
-  token.value = sessionStorage.getItem(TOKEN_KEY) || "";
+  sessionStorage.removeItem(OLD_TOKEN_KEY);
+  token.value = "";
   token.addEventListener("change", () => {
-    if (token.value) sessionStorage.setItem(TOKEN_KEY, token.value);
-    else sessionStorage.removeItem(TOKEN_KEY);
+    accessToken = token.value.trim();
     route();
+    if (!page.robotsLoaded) loadRobots();
   });
   buildForms();
   window.addEventListener("hashchange", route);
@@ -864,9 +867,15 @@ async function start() {
     else if (page.renderedFinal !== page.jobId) loadJob();
   });
   route();
+  await loadRobots();
+}
+
+// the bundled robots of the forms (again once a token is typed, if they were refused)
+async function loadRobots() {
   const r = await api("GET", "v1/robots");
+  page.robotsLoaded = r.ok;
   if (r.ok) fillRobots(r.data.robots || []);
-  else banner("cannot list the bundled robots: " + errorText(r));
+  else if (r.status !== 401) banner("cannot list the bundled robots: " + errorText(r));
 }
 
 document.addEventListener("DOMContentLoaded", start);
