@@ -88,6 +88,8 @@ class ServiceSettings:
     progress_interval: float = 0.2  # running jobs report progress / read the cancel flag
     cancel_grace: float = 5.0  # a cancelled job still running after this is killed
     kill_grace: float = 5.0  # a job running past its time limit by this much is killed
+    # ... unless its worker said it is storing its result: it has this long from then on
+    finish_grace: float = 120.0
     memory_stop: float = 0.85  # a job stops (keeping its result) at this share of memory_mb
     supervise_interval: float = 0.2
     checkpoint_interval: float = 30.0  # a running search saves itself this often (s)

@@ -34,7 +34,9 @@ finds bytes overwritten inside the tables that reads of a few rows can miss.
 Schema versions (``PRAGMA user_version``): 1 -- the jobs table; 2 -- ``jobs.owner`` and
 the ``owners`` table (a version-1 store is migrated when opened: existing jobs have no
 owner, so only admins see them once tokens are required); 3 -- the ``checkpoints`` table
-(created when an older store is opened).
+(created when an older store is opened); 4 -- ``jobs.stopping_at``, when the job's worker
+said its search has stopped and its result is being stored (:meth:`JobStore.heartbeat`
+with ``stopping``; the supervisor then waits ``finish_grace`` for it).
 
 Nothing here imports numpy or the solver.
 """
@@ -67,7 +69,7 @@ __all__ = [
     "new_job_id",
 ]
 
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 
 _TABLES = """
 CREATE TABLE IF NOT EXISTS jobs (
@@ -91,7 +93,8 @@ CREATE TABLE IF NOT EXISTS jobs (
     result              TEXT,
     error               TEXT,
     fseq                INTEGER,
-    owner               TEXT
+    owner               TEXT,
+    stopping_at         REAL
 );
 CREATE TABLE IF NOT EXISTS owners (
     name                TEXT PRIMARY KEY,
@@ -115,7 +118,7 @@ CREATE INDEX IF NOT EXISTS jobs_finished ON jobs(finished_at) WHERE finished_at 
 _SUMMARY_COLS = (
     "seq, id, kind, status, limits, batch, created_at, started_at, finished_at, attempts, "
     "max_attempts, worker_pid, lease, progress, heartbeat_at, cancel_requested_at, error, fseq, "
-    "owner"
+    "owner, stopping_at"
 )
 # owners whose running jobs reach their max_running: their queued jobs wait
 _BUSY_OWNERS = (
@@ -180,6 +183,7 @@ class JobRow:
     error: str | None
     fseq: int | None = None
     owner: str | None = None
+    stopping_at: float | None = None  # the search stopped, the result is being stored
     request: str | None = None  # JSON text (only when asked for)
     result: str | None = None  # JSON text (only when asked for)
 
@@ -275,6 +279,8 @@ class JobStore:
         cols = {r[1] for r in con.execute("PRAGMA table_info(jobs)")}
         if "owner" not in cols:  # version 1: jobs had no owner
             con.execute("ALTER TABLE jobs ADD COLUMN owner TEXT")
+        if "stopping_at" not in cols:  # versions 1-3
+            con.execute("ALTER TABLE jobs ADD COLUMN stopping_at REAL")
 
     def schema_version(self) -> int:
         return int(self._conn().execute("PRAGMA user_version").fetchone()[0])
@@ -485,24 +491,32 @@ class JobStore:
             con.execute(
                 "UPDATE jobs SET status = ?, attempts = attempts + 1, started_at = ?, "
                 "finished_at = NULL, worker_pid = ?, lease = ?, heartbeat_at = ?, "
-                "progress = NULL WHERE id = ?",
+                "progress = NULL, stopping_at = NULL WHERE id = ?",
                 (JobStatus.RUNNING, now, worker_pid, lease, now, row[0]),
             )
         job = self.get(row[0], result=False, request=True)
         assert job is not None
         return job, lease
 
-    def heartbeat(self, job_id: str, lease: str, progress: dict | None) -> tuple[bool, bool]:
-        """Record progress; return ``(still ours, cancel requested)``."""
+    def heartbeat(
+        self, job_id: str, lease: str, progress: dict | None, *, stopping: bool = False
+    ) -> tuple[bool, bool]:
+        """Record progress; return ``(still ours, cancel requested)``.  ``stopping``: the
+        job's search has stopped (or reached its time limit) and its result is being built
+        and stored; the first such heartbeat sets ``stopping_at``."""
+        now = time.time()
         row = (
             self._conn()
             .execute(
-                "UPDATE jobs SET progress = ?, heartbeat_at = ? "
+                "UPDATE jobs SET progress = ?, heartbeat_at = ?, "
+                "stopping_at = CASE WHEN ? THEN coalesce(stopping_at, ?) ELSE stopping_at END "
                 "WHERE id = ? AND lease = ? AND status = ? "
                 "RETURNING cancel_requested_at",
                 (
                     json.dumps(progress) if progress else None,
-                    time.time(),
+                    now,
+                    bool(stopping),
+                    now,
                     job_id,
                     lease,
                     JobStatus.RUNNING,
