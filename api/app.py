@@ -23,7 +23,7 @@ from typing import Any
 
 from fastapi import FastAPI
 
-from certsolve.jobs.kinds import job_request_type
+from certsolve.jobs.kinds import job_request_type, public_kinds
 from certsolve.jobs.pictures import Pictures
 from certsolve.jobs.quick import QuickCalls
 from certsolve.jobs.service import JobService
@@ -114,8 +114,8 @@ def _finish_openapi(app: FastAPI, settings: ServiceSettings) -> None:
     """What the OpenAPI schema says of this service: the ceilings of its job limits
     (``timeout`` at most ``max_timeout`` ...), that the ``jobs`` of a batch are job
     requests as ``POST /v1/jobs`` takes them (the service validates each item itself, to
-    name it by its index), and, with tokens, that every ``/v1/`` operation needs a bearer
-    token."""
+    name it by its index) and its ``kind`` one of the kinds this service runs, and, with
+    tokens, that every ``/v1/`` operation needs a bearer token."""
     build = app.openapi
     ceilings = {
         "timeout": {"maximum": settings.max_timeout},
@@ -147,6 +147,11 @@ def _finish_openapi(app: FastAPI, settings: ServiceSettings) -> None:
             for branch in jobs.get("anyOf", [jobs]):
                 if branch.get("type") == "array":
                     branch["items"] = job["application/json"]["schema"]
+            kind = components["BatchRequest"]["properties"]["kind"]
+            for branch in kind.get("anyOf", [kind]):
+                if branch.get("type") == "string":
+                    branch.pop("maxLength", None)
+                    branch["enum"] = public_kinds(settings.enable_test_kinds)
             if settings.access is not None:
                 schemes = schema.setdefault("components", {}).setdefault("securitySchemes", {})
                 schemes["bearer"] = {

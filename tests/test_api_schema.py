@@ -265,3 +265,39 @@ def test_job_submission(tmp_path, positive):
     mode = GenerationMode.POSITIVE if positive else GenerationMode.NEGATIVE
     for op in chosen:
         _run(op, mode, [])
+
+
+# -- what the schema publishes beyond the models ------------------------------------------------
+def test_a_batch_kind_is_one_of_the_services_kinds(tmp_path):
+    """The sweep form's ``kind`` is published as an enum of the kinds this service runs
+    (the hidden test kind only when enabled), and a wrong one is a 422 at ``kind``."""
+    from fastapi.testclient import TestClient
+
+    from certsolve.jobs.kinds import public_kinds
+
+    for hidden in (False, True):
+        settings = ServiceSettings(data_dir=tmp_path / str(hidden), workers=0,
+                                   enable_test_kinds=hidden)  # fmt: skip
+        with TestClient(create_app(settings), base_url="http://localhost") as c:
+            schema = c.get("/openapi.json").json()
+            kind = schema["components"]["schemas"]["BatchRequest"]["properties"]["kind"]
+            (branch,) = [b for b in kind["anyOf"] if b.get("type") == "string"]
+            assert branch["enum"] == public_kinds(hidden)
+            assert ("sleep" in branch["enum"]) is hidden
+            for bad in ("", "nope", *(() if hidden else ("sleep",))):
+                r = c.post("/v1/jobs/batch", json={"kind": bad, "params": [{}]})
+                assert r.status_code == 422, (bad, r.text)
+                (d,) = r.json()["detail"]
+                assert d["field"] == "kind" and d["msg"].startswith("must be one of 'solve'")
+
+
+def test_the_cross_field_rules_are_in_the_operations_descriptions(tmp_path):
+    from fastapi.testclient import TestClient
+
+    settings = ServiceSettings(data_dir=tmp_path, workers=0)
+    with TestClient(create_app(settings), base_url="http://localhost") as c:
+        paths = c.get("/openapi.json").json()["paths"]
+    for path in ("/v1/jobs", "/v1/jobs/batch"):
+        text = paths[path]["post"]["description"]
+        assert "`params.u` has one value per wire" in text, path
+        assert "`lo <= hi`" in text and "tau_max" in text, path

@@ -40,7 +40,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from ..robot.schema import RobotSpec
 from .access import Client
 from .errors import summary, validation_details
-from .kinds import KINDS, MAX_SYSTEM_CHARS, JobLimits, request_adapter
+from .kinds import KINDS, MAX_SYSTEM_CHARS, JobLimits, public_kinds, request_adapter
 from .pool import WorkerPool
 from .retention import Housekeeper
 from .settings import ServiceSettings
@@ -379,6 +379,11 @@ class JobService:
             raise BatchError("give jobs (a list), or kind + robot/system + params (a list)")
         items = batch.jobs if batch.jobs is not None else batch.params
         assert items is not None
+        kinds = public_kinds(self.settings.enable_test_kinds)
+        if batch.jobs is None and batch.kind not in kinds:
+            msg = f"must be one of {', '.join(repr(k) for k in kinds)}"
+            problem = {"loc": ("kind",), "msg": msg, "type": "enum"}
+            raise BatchError(f"kind: {msg}", validation_details([problem]))
         most = self.settings.max_batch
         if len(items) > most:
             raise BatchError(f"{len(items)} jobs in one batch; at most {most}", too_large=True)
