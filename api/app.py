@@ -23,7 +23,7 @@ from typing import Any
 
 from fastapi import FastAPI
 
-from certsolve.jobs.kinds import job_request_type, public_kinds
+from certsolve.jobs.kinds import KINDS, job_request_type, public_kinds
 from certsolve.jobs.pictures import Pictures
 from certsolve.jobs.quick import QuickCalls
 from certsolve.jobs.service import JobService
@@ -114,8 +114,10 @@ def _finish_openapi(app: FastAPI, settings: ServiceSettings) -> None:
     """What the OpenAPI schema says of this service: the ceilings of its job limits
     (``timeout`` at most ``max_timeout`` ...), that the ``jobs`` of a batch are job
     requests as ``POST /v1/jobs`` takes them (the service validates each item itself, to
-    name it by its index) and its ``kind`` one of the kinds this service runs, and, with
-    tokens, that every ``/v1/`` operation needs a bearer token."""
+    name it by its index), that the sweep form of a batch (``kind`` + robot or system +
+    a ``params`` list) is one variant per variant of each kind's job schema
+    (:func:`_sweep_variants`), and, with tokens, that every ``/v1/`` operation needs a
+    bearer token."""
     build = app.openapi
     ceilings = {
         "timeout": {"maximum": settings.max_timeout},
@@ -147,11 +149,17 @@ def _finish_openapi(app: FastAPI, settings: ServiceSettings) -> None:
             for branch in jobs.get("anyOf", [jobs]):
                 if branch.get("type") == "array":
                     branch["items"] = job["application/json"]["schema"]
-            kind = components["BatchRequest"]["properties"]["kind"]
+            kinds = public_kinds(settings.enable_test_kinds)
+            batch = components["BatchRequest"]
+            kind = batch["properties"]["kind"]
             for branch in kind.get("anyOf", [kind]):
                 if branch.get("type") == "string":
                     branch.pop("maxLength", None)
-                    branch["enum"] = public_kinds(settings.enable_test_kinds)
+                    branch["enum"] = kinds
+            for form in batch["oneOf"]:
+                if "kind" in form.get("required", ()):
+                    form.pop("properties", None)
+                    form["oneOf"] = _sweep_variants(components, kinds)
             if settings.access is not None:
                 schemes = schema.setdefault("components", {}).setdefault("securitySchemes", {})
                 schemes["bearer"] = {
@@ -167,3 +175,31 @@ def _finish_openapi(app: FastAPI, settings: ServiceSettings) -> None:
         return app.openapi_schema
 
     app.openapi = openapi  # type: ignore[method-assign]
+
+
+def _sweep_variants(components: dict[str, Any], kinds: list[str]) -> list[dict[str, Any]]:
+    """The sweep form of a batch as JSON Schema: for each variant of each kind's job schema
+    (one per robot dof), ``kind`` that kind, its robot (or system) as that variant takes
+    it, and ``params`` a list of that variant's params -- the shapes a job of the kind has,
+    one params object per job."""
+    variants = []
+    for name in kinds:
+        job = components[KINDS[name].model.__name__]
+        for v in job.get("oneOf", [job]):
+            props = v["properties"]
+            inputs = [i for i in ("robot", "system") if i in props]
+            variants.append(
+                {
+                    "title": f"sweep of {v.get('title', name)}",
+                    "properties": {
+                        "kind": {"const": name},
+                        **{i: props[i] for i in inputs},
+                        "params": {"type": "array", "minItems": 1, "items": props["params"]},
+                    },
+                    "required": ["kind", *inputs, "params"],
+                    "not": {
+                        "anyOf": [{"required": [i]} for i in ("robot", "system") if i not in inputs]
+                    },
+                }
+            )
+    return variants
