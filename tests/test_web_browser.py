@@ -51,8 +51,9 @@ def _browser_paths() -> tuple[str, str]:
     return chromium, driver
 
 
-@pytest.fixture(scope="module")
-def browser():
+def _chromium(*flags: str):
+    """Headless Chromium driven by selenium (a generator: the driver, then clean-up), with
+    ``flags`` beside :data:`FLAGS` and the console log kept."""
     chromium, driver_path = _browser_paths()
     try:
         from selenium import webdriver
@@ -62,14 +63,20 @@ def browser():
     os.environ["SE_OFFLINE"] = "true"  # selenium must not fetch a browser or a driver
     options = webdriver.ChromeOptions()
     options.binary_location = chromium
-    for flag in FLAGS:
+    for flag in (*FLAGS, *flags):
         options.add_argument(flag)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
     profile = tempfile.mkdtemp(prefix="certsolve-chromium-")
     options.add_argument(f"--user-data-dir={profile}")
     driver = webdriver.Chrome(service=Service(driver_path), options=options)
     yield driver
     driver.quit()
     shutil.rmtree(profile, ignore_errors=True)
+
+
+@pytest.fixture(scope="module")
+def browser():
+    yield from _chromium()
 
 
 @pytest.fixture(scope="module")
@@ -297,25 +304,7 @@ def test_bad_input_is_answered_beside_the_field(browser, server, tmp_path):
 @pytest.fixture(scope="module")
 def offline_browser():
     """Chromium that can resolve no name but 127.0.0.1: any CDN request fails."""
-    chromium, driver_path = _browser_paths()
-    try:
-        from selenium import webdriver
-        from selenium.webdriver.chrome.service import Service
-    except ImportError:
-        pytest.skip("selenium is not installed (pip install -e '.[dev]')")
-    os.environ["SE_OFFLINE"] = "true"
-    options = webdriver.ChromeOptions()
-    options.binary_location = chromium
-    for flag in FLAGS:
-        options.add_argument(flag)
-    options.add_argument("--host-resolver-rules=MAP * ~NOTFOUND , EXCLUDE 127.0.0.1")
-    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
-    profile = tempfile.mkdtemp(prefix="certsolve-chromium-")
-    options.add_argument(f"--user-data-dir={profile}")
-    driver = webdriver.Chrome(service=Service(driver_path), options=options)
-    yield driver
-    driver.quit()
-    shutil.rmtree(profile, ignore_errors=True)
+    yield from _chromium("--host-resolver-rules=MAP * ~NOTFOUND , EXCLUDE 127.0.0.1")
 
 
 @pytest.fixture(scope="module")
