@@ -96,7 +96,9 @@ def create_app(
     app.add_middleware(
         HostMiddleware, allowed=settings.allowed_hosts, active=settings.access is None
     )
-    app.add_middleware(SecurityHeadersMiddleware)  # outermost: every answer has them
+    # outside even Starlette's ServerErrorMiddleware, so that a 500 has them too
+    build_stack = app.build_middleware_stack
+    app.build_middleware_stack = lambda: SecurityHeadersMiddleware(build_stack())  # type: ignore[method-assign]
     install_error_handlers(app)
     app.include_router(meta.router)
     app.include_router(jobs.router(job_request_type(settings.enable_test_kinds)))

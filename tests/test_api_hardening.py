@@ -36,7 +36,14 @@ def client_for(tmp_path, base_url="http://localhost", **settings):
 # -- headers ---------------------------------------------------------------------------------
 def test_every_answer_has_the_security_headers(tmp_path):
     tokens = load_access(None, {"CERTSOLVE_TOKENS": json.dumps(TOKENS)})
-    with client_for(tmp_path, access=tokens, max_body_bytes=1000) as c:
+    settings = ServiceSettings(data_dir=tmp_path, workers=0, access=tokens, max_body_bytes=1000)
+    app = create_app(settings)
+
+    @app.get("/v1/boom")
+    def boom():
+        raise RuntimeError("a bug")
+
+    with TestClient(app, base_url="http://localhost", raise_server_exceptions=False) as c:
         auth = {"Authorization": f"Bearer {TOKEN}"}
         answers = {
             "page": c.get("/"),
@@ -48,6 +55,7 @@ def test_every_answer_has_the_security_headers(tmp_path):
             "413": c.post("/v1/jobs", content=b"x" * 2000, headers=auth),
             "docs": c.get("/docs"),
             "schema": c.get("/openapi.json"),
+            "500": c.get("/v1/boom", headers=auth),
         }
     for what, r in answers.items():
         assert r.headers["x-content-type-options"] == "nosniff", what
@@ -56,6 +64,7 @@ def test_every_answer_has_the_security_headers(tmp_path):
         assert "frame-ancestors 'none'" in csp, what
         assert csp == (DOCS_CSP if what == "docs" else PAGE_CSP), what
     assert answers["413"].status_code == 413 and answers["401"].status_code == 401
+    assert answers["500"].status_code == 500
 
 
 def test_the_page_needs_no_inline_script_or_style():
