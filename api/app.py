@@ -6,7 +6,8 @@ run in the processes of :class:`certsolve.jobs.quick.QuickCalls`; the HTTP proce
 validates, stores and reads.  Routes live in one router per resource
 (:mod:`.routers.jobs`, :mod:`.routers.sync`, :mod:`.routers.meta`, :mod:`.routers.admin`, the
 pictures of finished jobs :mod:`.routers.pictures`, the bundled robots :mod:`.routers.examples`,
-and the web page at ``/`` :mod:`.routers.pages`)
+the web page at ``/`` :mod:`.routers.pages`, the API reference at ``/docs`` and ``/redoc``
+:mod:`.routers.docs`, offline)
 and get the settings, services and calling client through FastAPI dependencies
 (:mod:`.deps`).  With a token table (``settings.access``) every ``/v1/`` request needs a
 bearer token (:class:`.middleware.AccessMiddleware`), and the OpenAPI schema says so.
@@ -22,15 +23,21 @@ from typing import Any
 
 from fastapi import FastAPI
 
-from certsolve.jobs.kinds import job_request_type
+from certsolve.jobs.kinds import KINDS, job_request_type, public_kinds
 from certsolve.jobs.pictures import Pictures
 from certsolve.jobs.quick import QuickCalls
 from certsolve.jobs.service import JobService
 from certsolve.jobs.settings import ServiceSettings
 
 from .errors import install_error_handlers
-from .middleware import AccessMiddleware, BodyLimitMiddleware
-from .routers import admin, examples, jobs, meta, pages, pictures, sync
+from .middleware import (
+    AccessMiddleware,
+    BodyLimitMiddleware,
+    HostMiddleware,
+    SecurityHeadersMiddleware,
+)
+from .routers import admin, docs, examples, jobs, meta, pages, pictures, sync
+from .server import ACCESS_LOGGER, QueryRedactor
 
 __all__ = ["API_VERSION", "create_app"]
 
@@ -48,14 +55,18 @@ def create_app(
     service = service or JobService(settings)
     quick = QuickCalls(settings)
 
+    redactor = QueryRedactor()
+
     @asynccontextmanager
     async def lifespan(app: FastAPI):
+        logging.getLogger(ACCESS_LOGGER).addFilter(redactor)
         service.start()
         try:
             yield
         finally:
             quick.close()
             service.close()
+            logging.getLogger(ACCESS_LOGGER).removeFilter(redactor)
 
     app = FastAPI(
         title="certsolve",
@@ -68,6 +79,8 @@ def create_app(
             '"msg", "type"}, ...]}`.'
         ),
         lifespan=lifespan,
+        docs_url=None,  # served offline by .routers.docs
+        redoc_url=None,
     )
     app.state.settings = settings
     app.state.service = service
@@ -78,7 +91,14 @@ def create_app(
         AccessMiddleware,
         access=settings.access,
         default_rate=settings.quota_requests_per_minute,
+        failure_delay=settings.auth_failure_delay,
     )
+    app.add_middleware(
+        HostMiddleware, allowed=settings.allowed_hosts, active=settings.access is None
+    )
+    # outside even Starlette's ServerErrorMiddleware, so that a 500 has them too
+    build_stack = app.build_middleware_stack
+    app.build_middleware_stack = lambda: SecurityHeadersMiddleware(build_stack())  # type: ignore[method-assign]
     install_error_handlers(app)
     app.include_router(meta.router)
     app.include_router(jobs.router(job_request_type(settings.enable_test_kinds)))
@@ -87,6 +107,7 @@ def create_app(
     app.include_router(pictures.router)
     app.include_router(examples.router)
     app.include_router(pages.router)
+    app.include_router(docs.router)
     _finish_openapi(app, settings)
     return app
 
@@ -95,8 +116,10 @@ def _finish_openapi(app: FastAPI, settings: ServiceSettings) -> None:
     """What the OpenAPI schema says of this service: the ceilings of its job limits
     (``timeout`` at most ``max_timeout`` ...), that the ``jobs`` of a batch are job
     requests as ``POST /v1/jobs`` takes them (the service validates each item itself, to
-    name it by its index), and, with tokens, that every ``/v1/`` operation needs a bearer
-    token."""
+    name it by its index), that the sweep form of a batch (``kind`` + robot or system +
+    a ``params`` list) is one variant per variant of each kind's job schema
+    (:func:`_sweep_variants`), and, with tokens, that every ``/v1/`` operation needs a
+    bearer token."""
     build = app.openapi
     ceilings = {
         "timeout": {"maximum": settings.max_timeout},
@@ -128,6 +151,17 @@ def _finish_openapi(app: FastAPI, settings: ServiceSettings) -> None:
             for branch in jobs.get("anyOf", [jobs]):
                 if branch.get("type") == "array":
                     branch["items"] = job["application/json"]["schema"]
+            kinds = public_kinds(settings.enable_test_kinds)
+            batch = components["BatchRequest"]
+            kind = batch["properties"]["kind"]
+            for branch in kind.get("anyOf", [kind]):
+                if branch.get("type") == "string":
+                    branch.pop("maxLength", None)
+                    branch["enum"] = kinds
+            for form in batch["oneOf"]:
+                if "kind" in form.get("required", ()):
+                    form.pop("properties", None)
+                    form["oneOf"] = _sweep_variants(components, kinds)
             if settings.access is not None:
                 schemes = schema.setdefault("components", {}).setdefault("securitySchemes", {})
                 schemes["bearer"] = {
@@ -143,3 +177,31 @@ def _finish_openapi(app: FastAPI, settings: ServiceSettings) -> None:
         return app.openapi_schema
 
     app.openapi = openapi  # type: ignore[method-assign]
+
+
+def _sweep_variants(components: dict[str, Any], kinds: list[str]) -> list[dict[str, Any]]:
+    """The sweep form of a batch as JSON Schema: for each variant of each kind's job schema
+    (one per robot dof), ``kind`` that kind, its robot (or system) as that variant takes
+    it, and ``params`` a list of that variant's params -- the shapes a job of the kind has,
+    one params object per job."""
+    variants = []
+    for name in kinds:
+        job = components[KINDS[name].model.__name__]
+        for v in job.get("oneOf", [job]):
+            props = v["properties"]
+            inputs = [i for i in ("robot", "system") if i in props]
+            variants.append(
+                {
+                    "title": f"sweep of {v.get('title', name)}",
+                    "properties": {
+                        "kind": {"const": name},
+                        **{i: props[i] for i in inputs},
+                        "params": {"type": "array", "minItems": 1, "items": props["params"]},
+                    },
+                    "required": ["kind", *inputs, "params"],
+                    "not": {
+                        "anyOf": [{"required": [i]} for i in ("robot", "system") if i not in inputs]
+                    },
+                }
+            )
+    return variants

@@ -12,6 +12,7 @@ from certsolve.jobs.service import BatchRequest
 from certsolve.jobs.status import JobStatus
 
 __all__ = [
+    "CROSS_FIELD_RULES",
     "BatchCreated",
     "BatchRequest",
     "BatchStatus",
@@ -25,6 +26,28 @@ __all__ = [
     "PurgeResult",
     "errors",
 ]
+
+
+# what the validation checks beyond the published JSON Schema (which states types, ranges,
+# lengths, enums and one variant per robot dof); in the descriptions of the operations that
+# take job requests, and in docs/reliability.md
+CROSS_FIELD_RULES = """
+Rules the JSON Schema cannot state (a request that breaks one is a 422 naming the field):
+
+- every range is `[lo, hi]` with `lo <= hi` (a wire's `tau` and `u`, the robot's domain,
+  a workspace `box`, a map's `grid` as `[xmin, xmax, ymin, ymax]`, design `range`s),
+  workspace angle ranges at most 360 degrees wide;
+- `params.u` has one value per wire of the robot (`fk`, `fk/track`);
+- a wire's `tau_max` is below its stiffness `k` (eq. 5 divides by `k - tau`);
+- `system` is Minibex text (its grammar, no undefined constant);
+- FK: the platform attachment points span the formulation's frame, and the formulation is
+  one the robot's geometry admits (`auto` always is);
+- no wire of zero length at an IK or force pose;
+- design parameter `path`s exist in the robot and share no number;
+- a map's `nx * ny` is at most 250 000 points;
+- a batch in the sweep form (`kind` + robot/system + `params` list): each item of `params`
+  is the params object of that kind.
+"""
 
 
 class JobCreated(BaseModel):
@@ -126,6 +149,7 @@ _WHY = {
     429: "the queue or the client's quota is full, too many requests, or no free "
     "quick-call process; retry after Retry-After seconds",
     501: "not available in this build",
+    503: "the job store fails its check or cannot be read",
 }
 _HEADERS = {
     401: {"WWW-Authenticate": {"schema": {"type": "string"}}},

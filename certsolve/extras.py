@@ -13,7 +13,7 @@ import importlib
 __all__ = ["EXTRAS", "MissingExtra", "require"]
 
 EXTRAS: dict[str, tuple[str, ...]] = {
-    "service": ("fastapi", "uvicorn"),  # certsolve serve, certsolve.api
+    "service": ("fastapi", "uvicorn", "fastapi_offline"),  # certsolve serve, certsolve.api
     "plot": ("matplotlib",),  # --plot
 }
 

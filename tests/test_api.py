@@ -34,7 +34,7 @@ def make_settings(tmp_path, **kw):
 @pytest.fixture
 def client(tmp_path):
     app = create_app(make_settings(tmp_path))
-    with TestClient(app) as c:
+    with TestClient(app, base_url="http://localhost") as c:
         yield c
 
 
@@ -236,7 +236,7 @@ def test_limits_and_sizes(client):
 
 def test_queue_limit_gives_429(tmp_path):
     app = create_app(make_settings(tmp_path, max_queued=3))
-    with TestClient(app) as c:
+    with TestClient(app, base_url="http://localhost") as c:
         job = {"kind": "solve", "system": CIRCLE}
         assert c.post("/v1/jobs/batch", json={"jobs": [job] * 3}).status_code == 202
         r = c.post("/v1/jobs", json=job)
@@ -327,7 +327,7 @@ _fields = st.fixed_dictionaries(
 @pytest.fixture(scope="module")
 def shared_client(tmp_path_factory):
     app = create_app(make_settings(tmp_path_factory.mktemp("garbage"), max_queued=10_000))
-    with TestClient(app, raise_server_exceptions=False) as c:
+    with TestClient(app, raise_server_exceptions=False, base_url="http://localhost") as c:
         yield c
 
 

@@ -31,7 +31,7 @@ def bearer(name: str) -> dict:
 def client(tmp_path):
     access = load_access(None, {"CERTSOLVE_TOKENS": json.dumps(TOKENS)})
     settings = ServiceSettings(data_dir=tmp_path / "data", workers=0, access=access)
-    with TestClient(create_app(settings)) as c:
+    with TestClient(create_app(settings), base_url="http://localhost") as c:
         yield c
 
 
@@ -137,7 +137,9 @@ def test_tokens_are_never_logged(tmp_path, caplog):
     settings = ServiceSettings(data_dir=tmp_path / "d", workers=0, access=access)
     assert TOKENS["alice"]["token"] not in repr(settings)
     caplog.set_level(logging.DEBUG)
-    with TestClient(create_app(settings), raise_server_exceptions=False) as c:
+    with TestClient(
+        create_app(settings), raise_server_exceptions=False, base_url="http://localhost"
+    ) as c:
         c.get("/v1/jobs", headers={"Authorization": "Bearer wrong-token-0123456789"})
         c.get("/v1/jobs", headers=bearer("alice"))
         c.post("/v1/jobs", json={"kind": "solve"}, headers=bearer("alice"))
@@ -172,7 +174,7 @@ def test_token_table_errors_name_the_entry(tmp_path):
 
 def test_without_tokens_everything_is_open(tmp_path):
     settings = ServiceSettings(data_dir=tmp_path / "d", workers=0)
-    with TestClient(create_app(settings)) as c:
+    with TestClient(create_app(settings), base_url="http://localhost") as c:
         job_id = c.post("/v1/jobs", json=JOB).json()["id"]
         assert c.get(f"/v1/jobs/{job_id}").json()["owner"] is None
         r = c.post("/v1/admin/purge", json={"older_than_days": 30})

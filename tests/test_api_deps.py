@@ -22,7 +22,7 @@ def test_quick_calls_are_injected(tmp_path):
     app = create_app(ServiceSettings(data_dir=tmp_path, workers=0))
     app.dependency_overrides[get_quick] = FullQuickCalls
     body = '{"robot": ' + PLANAR + ', "params": {"pose": [90, 60, 0]}}'
-    with TestClient(app) as client:
+    with TestClient(app, base_url="http://localhost") as client:
         r = client.post("/v1/ik", content=body, headers={"content-type": "application/json"})
         assert r.status_code == 429 and r.json()["error"] == "no slot"
         assert r.headers["retry-after"] == "3" and r.json()["detail"][0]["type"] == "busy"

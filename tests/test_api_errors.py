@@ -19,7 +19,9 @@ def client(tmp_path_factory):
     settings = ServiceSettings(
         data_dir=tmp_path_factory.mktemp("errors"), workers=0, max_body_bytes=100_000, max_queued=2
     )
-    with TestClient(create_app(settings), raise_server_exceptions=False) as c:
+    with TestClient(
+        create_app(settings), raise_server_exceptions=False, base_url="http://localhost"
+    ) as c:
         yield c
 
 
@@ -106,7 +108,9 @@ def test_openapi_lists_the_errors(client):
 
 def test_a_body_nested_100000_deep(tmp_path):
     """The issue's case, within the default 16 MiB body limit: a 400 naming the body."""
-    with TestClient(create_app(ServiceSettings(data_dir=tmp_path, workers=0))) as c:
+    with TestClient(
+        create_app(ServiceSettings(data_dir=tmp_path, workers=0)), base_url="http://localhost"
+    ) as c:
         raw = b"[" * 100_000 + b"]" * 100_000
         (d,) = error(c.post("/v1/jobs", content=raw, headers=JSON), 400)
         assert d["field"] == "body" and "nested too deeply" in d["msg"]

@@ -265,3 +265,71 @@ def test_job_submission(tmp_path, positive):
     mode = GenerationMode.POSITIVE if positive else GenerationMode.NEGATIVE
     for op in chosen:
         _run(op, mode, [])
+
+
+# -- what the schema publishes beyond the models ------------------------------------------------
+def test_a_batch_kind_is_one_of_the_services_kinds(tmp_path):
+    """The sweep form's ``kind`` is published as an enum of the kinds this service runs
+    (the hidden test kind only when enabled), and a wrong one is a 422 at ``kind``."""
+    from fastapi.testclient import TestClient
+
+    from certsolve.jobs.kinds import public_kinds
+
+    for hidden in (False, True):
+        settings = ServiceSettings(data_dir=tmp_path / str(hidden), workers=0,
+                                   enable_test_kinds=hidden)  # fmt: skip
+        with TestClient(create_app(settings), base_url="http://localhost") as c:
+            schema = c.get("/openapi.json").json()
+            kind = schema["components"]["schemas"]["BatchRequest"]["properties"]["kind"]
+            (branch,) = [b for b in kind["anyOf"] if b.get("type") == "string"]
+            assert branch["enum"] == public_kinds(hidden)
+            assert ("sleep" in branch["enum"]) is hidden
+            for bad in ("", "nope", *(() if hidden else ("sleep",))):
+                r = c.post("/v1/jobs/batch", json={"kind": bad, "params": [{}]})
+                assert r.status_code == 422, (bad, r.text)
+                (d,) = r.json()["detail"]
+                assert d["field"] == "kind" and d["msg"].startswith("must be one of 'solve'")
+
+
+def test_the_cross_field_rules_are_in_the_operations_descriptions(tmp_path):
+    from fastapi.testclient import TestClient
+
+    settings = ServiceSettings(data_dir=tmp_path, workers=0)
+    with TestClient(create_app(settings), base_url="http://localhost") as c:
+        paths = c.get("/openapi.json").json()["paths"]
+    for path in ("/v1/jobs", "/v1/jobs/batch"):
+        text = paths[path]["post"]["description"]
+        assert "`params.u` has one value per wire" in text, path
+        assert "`lo <= hi`" in text and "tau_max" in text, path
+
+
+def test_the_sweep_form_of_a_batch_is_published_per_kind(tmp_path):
+    """``{"kind", robot or system, "params": [...]}``: the schema states each kind's params
+    (one variant per kind and robot dof), so what it accepts the service accepts, and a
+    params object of the wrong kind is refused by both."""
+    from fastapi.testclient import TestClient
+
+    jsonschema_rs = pytest.importorskip("jsonschema_rs")
+    planar = json.loads((ROOT / "examples/robots/planar.json").read_text())
+    settings = ServiceSettings(data_dir=tmp_path, workers=0)
+    with TestClient(create_app(settings), base_url="http://localhost") as c:
+        components = c.get("/openapi.json").json()["components"]
+        root = {"components": components, "$ref": "#/components/schemas/BatchRequest"}
+        valid = jsonschema_rs.Draft202012Validator(root).is_valid
+        good = [
+            {"kind": "fk", "robot": planar, "params": [{"u": [0, 0, 0, 0]}, {"u": [1, 1, 1, 1]}]},
+            {"kind": "solve", "system": CIRCLE, "params": [{"eps": 1e-6}, {}]},
+        ]
+        bad = [
+            {"kind": "fk", "robot": planar, "params": [{"eps": 0.1}]},  # no u
+            {"kind": "fk", "robot": planar, "params": [{"u": [0, 0, 0, 0], "grid": [0, 1]}]},
+            {"kind": "solve", "system": CIRCLE, "robot": planar, "params": [{}]},
+            {"kind": "workspace", "robot": planar, "params": [{"u": [0, 0, 0, 0]}]},
+            {"kind": "fk", "system": CIRCLE, "params": [{"u": [0, 0, 0, 0]}]},
+        ]
+        for body in good:
+            assert valid(body), body
+            assert c.post("/v1/jobs/batch", json=body).status_code == 202, body
+        for body in bad:
+            assert not valid(body), body
+            assert c.post("/v1/jobs/batch", json=body).status_code == 422, body

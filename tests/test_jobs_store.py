@@ -270,7 +270,7 @@ def test_version_1_store_is_migrated(tmp_path):
     )
     con.close()
     store = JobStore(path)
-    assert store.schema_version() == 3
+    assert store.schema_version() == 4
     row = store.get("old1")
     assert row.status == "queued" and row.owner is None
     (job_id,) = store.add([owned("a")])

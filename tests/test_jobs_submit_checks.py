@@ -27,7 +27,7 @@ SWEEP = {"pose": [85, 65, 3], "joint": 1, "start": 0.1, "stop": 10, "count": 8}
 @pytest.fixture(scope="module")
 def client(tmp_path_factory):
     settings = ServiceSettings(data_dir=tmp_path_factory.mktemp("checks"), workers=0)
-    with TestClient(create_app(settings)) as c:
+    with TestClient(create_app(settings), base_url="http://localhost") as c:
         yield c
 
 

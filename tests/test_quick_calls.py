@@ -118,7 +118,7 @@ def test_the_32_wire_robot_is_refused_at_once(tmp_path):
 
     app = create_app(ServiceSettings(data_dir=tmp_path, workers=0))
     body = {"robot": spatial_robot(32), "params": {"pose": [0, 0, 100, 0, 0, 0]}}
-    with TestClient(app) as client:
+    with TestClient(app, base_url="http://localhost") as client:
         t0 = time.monotonic()
         r = client.post("/v1/isotropic", json=body)
         assert time.monotonic() - t0 < 10

@@ -55,7 +55,7 @@ def service(dask_client, tmp_path_factory):
     settings = settings_for(
         tmp_path_factory.mktemp("dask-svc"), scheduler=address, cancel_grace=3.0
     )
-    with TestClient(create_app(settings)) as http:
+    with TestClient(create_app(settings), base_url="http://localhost") as http:
         yield http
 
 
@@ -99,7 +99,9 @@ def test_a_job_on_the_cluster_equals_the_local_pool(service, dask_client, tmp_pa
     assert h["runner"] == "dask" and h["scheduler"] == dask_client.scheduler.address
     assert h["alive"] == 2
 
-    with TestClient(create_app(settings_for(tmp_path / "pool", workers=1))) as local:
+    with TestClient(
+        create_app(settings_for(tmp_path / "pool", workers=1)), base_url="http://localhost"
+    ) as local:
         on_pool = wait(local, submit(local, job))
         assert local.get("/healthz").json()["workers"]["runner"] == "processes"
     assert on_pool["status"] == "done", on_pool

@@ -39,7 +39,7 @@ def app(tmp_path):
 
 @pytest.fixture
 def client(app):
-    with TestClient(app) as c:
+    with TestClient(app, base_url="http://localhost") as c:
         yield c
 
 
@@ -104,6 +104,26 @@ def test_page_is_not_in_the_openapi_schema_but_pictures_are(client):
         assert "image/png" in op["responses"]["200"]["content"]
         assert {"404", "409", "501"} <= set(op["responses"])
     assert "/v1/robots" in paths and "/v1/robots/{name}" in paths
+
+
+def test_api_reference_pages_load_only_local_files(client):
+    """/docs and /redoc (Swagger UI, ReDoc) and every file they load come from the service,
+    by relative URLs: nothing from a CDN."""
+    for page, viewer in (("/docs", "swagger-ui-bundle.js"), ("/redoc", "redoc.standalone.js")):
+        r = client.get(page)
+        assert r.status_code == 200 and r.headers["content-type"].startswith("text/html")
+        assert not re.search(r"https?://|//cdn|@import|<script>", r.text), page
+        urls = re.findall(r'(?:src|href|spec-url)="([^"]+)"', r.text)
+        assert f"static/docs/{viewer}" in urls, urls
+        for url in urls:
+            assert not url.startswith(("/", "http")) and ":" not in url, url
+            a = client.get("/" + url)
+            assert a.status_code == 200 and len(a.content) > 100, url
+        assert "static/swagger-init.js" in urls or page == "/redoc"
+    schema = client.get("/openapi.json").json()
+    assert "/v1/jobs" in schema["paths"]
+    assert client.get("/static/docs/nothere.js").status_code == 404
+    assert client.get("/static/docs/..%2F..%2Fcore.py").status_code == 404
 
 
 # -- the bundled robots ----------------------------------------------------------------------------

@@ -51,8 +51,9 @@ def _browser_paths() -> tuple[str, str]:
     return chromium, driver
 
 
-@pytest.fixture(scope="module")
-def browser():
+def _chromium(*flags: str):
+    """Headless Chromium driven by selenium (a generator: the driver, then clean-up), with
+    ``flags`` beside :data:`FLAGS` and the console log kept."""
     chromium, driver_path = _browser_paths()
     try:
         from selenium import webdriver
@@ -62,14 +63,20 @@ def browser():
     os.environ["SE_OFFLINE"] = "true"  # selenium must not fetch a browser or a driver
     options = webdriver.ChromeOptions()
     options.binary_location = chromium
-    for flag in FLAGS:
+    for flag in (*FLAGS, *flags):
         options.add_argument(flag)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
     profile = tempfile.mkdtemp(prefix="certsolve-chromium-")
     options.add_argument(f"--user-data-dir={profile}")
     driver = webdriver.Chrome(service=Service(driver_path), options=options)
     yield driver
     driver.quit()
     shutil.rmtree(profile, ignore_errors=True)
+
+
+@pytest.fixture(scope="module")
+def browser():
+    yield from _chromium()
 
 
 @pytest.fixture(scope="module")
@@ -291,3 +298,148 @@ def test_bad_input_is_answered_beside_the_field(browser, server, tmp_path):
     form.find_element("css selector", "input[name=robot-file]").send_keys(str(path))
     form.find_element("css selector", "button[type=submit]").click()
     wait(browser, lambda d: "is not JSON" in field_error(form, "robot"), 30, "the JSON error")
+
+
+# -- the API reference offline, and results the page must count right -------------------------
+@pytest.fixture(scope="module")
+def offline_browser():
+    """Chromium that can resolve no name but 127.0.0.1: any CDN request fails."""
+    yield from _chromium("--host-resolver-rules=MAP * ~NOTFOUND , EXCLUDE 127.0.0.1")
+
+
+@pytest.fixture(scope="module")
+def idle_server(tmp_path_factory):
+    """A service without workers: its jobs are finished by the test, with chosen results."""
+    s = Server(tmp_path_factory.mktemp("idle") / "data", 0)
+    yield s
+    s.close()
+
+
+REDOC_LOGO = "https://cdn.redoc.ly"
+
+
+def loaded_from(driver) -> set[str]:
+    """The origins of every resource the page loaded."""
+    urls = driver.execute_script(
+        "return [location.href, ...performance.getEntriesByType('resource').map(e => e.name)]"
+    )
+    return {re.match(r"^[a-z]+://[^/]+", u).group(0) for u in urls}
+
+
+def console_errors(driver) -> list[str]:
+    return [e["message"] for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+
+
+def test_api_reference_renders_offline(offline_browser, idle_server):
+    """Swagger UI and ReDoc draw every operation with no network and no CSP complaint."""
+    d = offline_browser
+    paths = idle_server.http.get("/openapi.json").json()["paths"]
+    operations = sum(len(ops) for ops in paths.values())
+    d.get(idle_server.base + "/docs")
+    wait(d, lambda d: len(css_all(d, ".opblock")) == operations, 60, "Swagger UI's operations")
+    assert "/v1/jobs/{job_id}" in css(d, "#swagger-ui").text
+    d.get(idle_server.base + "/redoc")
+    wait(d, lambda d: len(css_all(d, '[data-section-id^="operation/"]')) == operations, 60,
+         "ReDoc's operations")  # fmt: skip
+    assert "Submit" in css(d, "redoc").text or "submit" in css(d, "redoc").text
+    # ReDoc's sidebar tries a decorative logo from its CDN (hidden when it fails to load);
+    # the CSP refuses it, and nothing else leaves the service
+    assert loaded_from(d) - {REDOC_LOGO} == {idle_server.base}
+    assert [e for e in console_errors(d) if REDOC_LOGO not in e] == []
+
+
+def finish_job(server, job: dict, status: str, result: dict, progress: dict) -> str:
+    """Submit ``job`` to the idle server, then end it here with ``result``."""
+    from certsolve.jobs.store import JobStore
+
+    job_id = server.submit(job)
+    store = JobStore(server.data_dir / "jobs.sqlite3")
+    try:
+        claimed, lease = store.claim(os.getpid())
+        assert claimed.id == job_id
+        assert store.finish(job_id, lease, status, result=json.dumps(result), progress=progress)
+    finally:
+        store.close()
+    return job_id
+
+
+def test_a_cancelled_job_counts_its_pending_boxes_not_their_groups(offline_browser, idle_server):
+    d = offline_browser
+    hulls = [[[0.0, 1.0]] * 3] * 1000  # the stored list: 1000 hulls of 6131 boxes
+    result = {
+        "robot": "planar", "formulation": "platform", "u": [0.8, 1.8, -2.5, -3.6],
+        "status": "cancelled", "solutions": [], "variables": ["x", "y", "t"],
+        "undecided": [{"box": [[0, 1]] * 3, "reason": "eps", "boxes": 7}],
+        "pending": hulls, "undecided_total": 7, "undecided_dropped": 0, "pending_total": 6131,
+        "pending_boxes": [6] * 1000, "stats": {"boxes": 9000, "stopped_by": "cancelled"},
+    }  # fmt: skip
+    job = {"kind": "fk", "robot": PLANAR, "params": {"u": [0.8, 1.8, -2.5, -3.6]}}
+    progress = {"boxes": 9000, "pending": 6131, "undecided": 7}
+    job_id = finish_job(idle_server, job, "cancelled", result, progress)
+    d.get(f"{idle_server.base}/#/jobs/{job_id}")
+    d.refresh()
+    wait(d, lambda d: css_all(d, "#verdict"), 30, "the verdict")
+    verdict = css(d, "#verdict").text
+    assert "7 undecided and 6131 pending box(es)" in verdict, verdict
+    text = css(d, "#job-result").text
+    assert "6131 pending box(es): the search stopped" in text, text
+    assert "7 undecided box(es) in 1 group(s)" in text, text
+    assert [b.text.lower() for b in css_all(d, "#job-head .badge")] == ["cancelled", "incomplete"]
+    assert console_errors(d) == []  # nothing refused by the Content-Security-Policy
+
+
+def test_a_complete_workspace_has_no_incomplete_badge(offline_browser, idle_server):
+    """Its boundary boxes are counted as undecided in its progress: not a worry."""
+    d = offline_browser
+    krut3 = json.loads((ROOT / "examples/robots/krut-3.json").read_text())
+    params = {"min_force": 100, "box": [[-90, 90], [-100, 50]], "eps": 10}
+    counts = {"inside": 40, "outside": 30, "boundary": 12, "pending": 0}
+    result = {
+        "robot": "krut-3", "min_force": 100, "status": "complete", "counts": counts,
+        "inside_measure": 1234.5, "unit": "cm²", "inside_share": 0.45, "boxes": 150,
+    }  # fmt: skip
+    progress = {"boxes": 150, "solutions": 40, "undecided": 12, "pending": 0}
+    job = {"kind": "workspace", "robot": krut3, "params": params}
+    job_id = finish_job(idle_server, job, "done", result, progress)
+    d.get(f"{idle_server.base}/#/jobs/{job_id}")
+    d.refresh()
+    wait(d, lambda d: css_all(d, "#verdict"), 30, "the verdict")
+    assert css(d, "#verdict").text.startswith("complete:")
+    assert [b.text.lower() for b in css_all(d, "#job-head .badge")] == ["done"]
+    d.get(f"{idle_server.base}/#/")
+    row = f'#job-table tr[data-id="{job_id}"]'
+    wait(d, lambda d: css_all(d, row), 30, "the job list")
+    assert [b.text.lower() for b in css_all(d, f"{row} .badge")] == ["done"]
+
+
+def test_the_token_is_sent_but_not_stored(offline_browser, tmp_path_factory):
+    """A service with tokens: the typed token is sent with every call, kept in the page's
+    memory only (not in sessionStorage), and asked for again after a reload."""
+    d = offline_browser
+    data = tmp_path_factory.mktemp("tokens")
+    token = "page-token-0123456789abcdef"
+    (data / "tokens.json").write_text(json.dumps({"ada": {"token": token}}))
+    server = Server(data / "data", 0, "--tokens", str(data / "tokens.json"))
+    try:
+        d.get(server.base + "/#/")
+        d.refresh()
+        wait(d, lambda d: "access token" in css(d, "#banner").text, 30, "the token banner")
+        box = css(d, "#token")
+        box.send_keys(token)
+        css(d, "#jobs h2").click()  # leaves the field: its change event
+        wait(d, lambda d: css_all(d, "#form-fk select[name=robot] option[value=planar]"), 30,
+             "the robots, read with the token")  # fmt: skip
+        headers = {"Authorization": f"Bearer {token}"}
+        job = {"kind": "fk", "robot": PLANAR, "params": {"u": [0, 0, 0, 0]}}
+        job_id = server.http.post("/v1/jobs", json=job, headers=headers).json()["id"]
+        row = f'#job-table tr[data-id="{job_id}"]'
+        wait(d, lambda d: css_all(d, row), 30, "the job listed with the token")
+        stored = d.execute_script(
+            "return Object.keys(sessionStorage).map(k => sessionStorage.getItem(k))"
+        )
+        assert token not in stored, stored
+        d.refresh()
+        wait(d, lambda d: "access token" in css(d, "#banner").text, 30, "asked again")
+        assert css(d, "#token").get_attribute("value") == ""
+    finally:
+        server.close()

@@ -28,6 +28,7 @@ from certsolve.jobs.store import JobRow, QueueFull
 from ..deps import Caller, Service, Settings
 from ..errors import APIError, validation_details
 from ..schemas import (
+    CROSS_FIELD_RULES,
     BatchCreated,
     BatchRequest,
     BatchStatus,
@@ -93,7 +94,14 @@ def router(job_request: Any) -> APIRouter:
     """The jobs router for the request type ``job_request`` (a union of kinds' models)."""
     r = APIRouter(tags=["jobs"])
 
-    @r.post("/v1/jobs", status_code=202, response_model=JobCreated, responses=_SUBMIT)
+    @r.post(
+        "/v1/jobs",
+        status_code=202,
+        response_model=JobCreated,
+        responses=_SUBMIT,
+        description="Queue one job; poll its URL for progress and the result.\n"
+        + CROSS_FIELD_RULES,
+    )
     def submit_job(
         job: Annotated[job_request, Body()],
         request: Request,
@@ -111,7 +119,15 @@ def router(job_request: Any) -> APIRouter:
         response.headers["Location"] = url
         return {"id": job_id, "url": url, "status": JobStatus.QUEUED}
 
-    @r.post("/v1/jobs/batch", status_code=202, response_model=BatchCreated, responses=_SUBMIT)
+    @r.post(
+        "/v1/jobs/batch",
+        status_code=202,
+        response_model=BatchCreated,
+        responses=_SUBMIT,
+        description='Queue many jobs at once (all or none): either `{"jobs": [job, ...]}` or '
+        '`{"kind": "fk", "robot": {...}, "params": [{"u": [...]}, ...]}` (one job per params '
+        "object).\n" + CROSS_FIELD_RULES,
+    )
     def submit_batch(
         batch: BatchRequest, request: Request, service: Service, settings: Settings, caller: Caller
     ):

@@ -9,16 +9,22 @@ from fastapi import APIRouter
 from certsolve.jobs.kinds import KINDS, KindUnavailable, library_function, public_kinds
 
 from ..deps import Quick, Service, Settings
+from ..errors import APIError
 from ..schemas import errors
 
 router = APIRouter(tags=["service"])
 
 
-@router.get("/healthz")
+@router.get("/healthz", responses=errors(503))
 def healthz(service: Service, quick: Quick) -> dict[str, Any]:
-    """Liveness: workers alive, the queue depth and the quick-call processes (public: no
-    token needed)."""
-    return {**service.health(), "quick": quick.stats()}
+    """Liveness: the job store's check, workers alive, the queue depth and the quick-call
+    processes (public: no token needed); 503 naming the problem when the store is damaged
+    or cannot be read."""
+    health = service.health()
+    if health["status"] != "ok":
+        problem = health["store"]["error"]
+        raise APIError(503, f"the job store is failing: {problem}", loc=("store",))
+    return {**health, "quick": quick.stats()}
 
 
 @router.get("/v1/kinds", responses=errors(401, 429))

@@ -3,15 +3,17 @@
 // Plain JavaScript, no build step, no dependency. It uses the JSON API like any client:
 // GET /v1/robots (the bundled robots), POST /v1/jobs, GET /v1/jobs[/{id}],
 // DELETE /v1/jobs/{id}, and the PNG pictures under /v1/jobs/{id}/. An access token, when
-// typed, is kept in sessionStorage and sent as "Authorization: Bearer ..." with every call
-// (pictures are fetched, not linked, so they carry it too). Every text from the server is
+// typed, is kept in this page's memory only (not in sessionStorage, where any script of the
+// origin could read it later: a reload asks for it again) and sent as "Authorization:
+// Bearer ..." with every call (pictures are fetched, not linked, so they carry it too). Every text from the server is
 // inserted with textContent, never as HTML.
 "use strict";
 
 const POLL_RUNNING_MS = 1500; // the job list while something runs
 const POLL_IDLE_MS = 10000; // the job list otherwise (jobs submitted elsewhere)
 const POLL_JOB_MS = 1000; // one job's page while it runs
-const TOKEN_KEY = "certsolve.token";
+const OLD_TOKEN_KEY = "certsolve.token"; // where earlier versions kept it: removed at start
+let accessToken = "";
 
 // -- small helpers --------------------------------------------------------------------------
 function $(sel, root) {
@@ -70,8 +72,7 @@ const FINAL = new Set(["done", "failed", "cancelled"]);
 // -- the API ----------------------------------------------------------------------------------
 function authHeaders(extra) {
   const h = Object.assign({}, extra || {});
-  const t = sessionStorage.getItem(TOKEN_KEY);
-  if (t) h["Authorization"] = "Bearer " + t;
+  if (accessToken) h["Authorization"] = "Bearer " + accessToken;
   return h;
 }
 
@@ -204,6 +205,7 @@ const FORMS = [
 
 const page = {
   robots: null, // [{name, dof, wires, url}]
+  robotsLoaded: false,
   specs: new Map(), // name -> robot file (JSON)
   listTimer: null,
   jobTimer: null,
@@ -476,19 +478,31 @@ function progressText(job) {
   return parts.join(" · ");
 }
 
-// the job's status, and beside a finished one "incomplete" when its search left boxes
-// pending or undecided, or was stopped (from its last progress: the list has no results)
-function statusBadge(job) {
+// the job's status, and beside a finished one "incomplete" when its verdict is not a
+// proof (on the job's page, `v` from verdict()), or, in the list (which has no results),
+// when its last progress left boxes pending or undecided or was stopped; a workspace's
+// undecided boxes are its boundary boxes, part of a complete paving
+function statusBadge(job, v) {
   let word = job.status;
   if (job.cancel_requested && !FINAL.has(job.status)) word = "cancelling";
   const p = job.progress || {};
-  const worry = FINAL.has(job.status) && (p.pending > 0 || p.undecided > 0 || p.stopped_by);
+  const undecided = job.kind === "workspace" ? 0 : p.undecided;
+  let worry = FINAL.has(job.status) && (p.pending > 0 || undecided > 0 || !!p.stopped_by);
+  if (v) worry = job.status !== "failed" && v.cls === "warn";
   return el(
     "span",
     {},
     el("span", { class: "badge status-" + job.status, text: word }),
     worry ? el("span", { class: "badge warn", text: "incomplete" }) : ""
   );
+}
+
+// the number of `name` ("pending" or "undecided") boxes of a search result: the lists
+// hold hulls of groups of boxes, `name`_total counts the boxes themselves
+function boxCount(result, name) {
+  const total = result[name + "_total"];
+  if (typeof total === "number") return total;
+  return (result.truncated && result.truncated[name]) || (result[name] || []).length;
 }
 
 async function cancelJob(id, button) {
@@ -592,11 +606,11 @@ function headSkeleton(id) {
   return parts;
 }
 
-function renderHead(job) {
+function renderHead(job, v) {
   const h = page.head && page.head.id === job.id ? page.head : headSkeleton(job.id);
   const lim = job.limits || {};
   $("#job-head h2 span").textContent = job.kind + " job ";
-  h.badge.replaceWith((h.badge = statusBadge(job)));
+  h.badge.replaceWith((h.badge = statusBadge(job, v)));
   h.running.hidden = FINAL.has(job.status);
   if (!FINAL.has(job.status)) {
     const used = job.elapsed || 0;
@@ -630,8 +644,8 @@ function verdict(job, result) {
   if (job.kind === "fk" || job.kind === "solve") {
     const what = job.kind === "fk" ? "certified pose(s)" : "certified solution(s)";
     const n = (result.solutions || []).length;
-    const und = (result.truncated && result.truncated.undecided) || (result.undecided || []).length;
-    const pen = (result.truncated && result.truncated.pending) || (result.pending || []).length;
+    const und = boxCount(result, "undecided");
+    const pen = boxCount(result, "pending");
     const stop = result.stats && result.stats.stopped_by ? ` (stopped by ${result.stats.stopped_by})` : "";
     if (result.status === "complete" && !und && !cancelled)
       return { cls: "ok", text: `complete: ${n} ${what}; there is no other in the search domain.${cut}` };
@@ -701,11 +715,12 @@ function renderFk(job, r, out) {
 function boxesNote(r, out) {
   const und = r.undecided || [];
   if (und.length) {
-    out.append(el("h3", { text: `${und.length} undecided box(es)` }));
+    const groups = und.length < boxCount(r, "undecided") ? ` in ${und.length} group(s)` : "";
+    out.append(el("h3", { text: `${num(boxCount(r, "undecided"))} undecided box(es)${groups}` }));
     out.append(el("ul", {}, und.slice(0, 20).map((u) => el("li", { text: (u.reason || "undecided") + (u.box ? " " + JSON.stringify(u.box.map((b) => b.map((x) => Number(num(x, 6))))) : "") }))));
   }
-  const pen = (r.truncated && r.truncated.pending) || (r.pending || []).length;
-  if (pen) out.append(el("p", { class: "warn-text", text: `${pen} pending box(es): the search stopped before looking into them.` }));
+  const pen = boxCount(r, "pending");
+  if (pen) out.append(el("p", { class: "warn-text", text: `${num(pen)} pending box(es): the search stopped before looking into them.` }));
 }
 
 function renderSolve(job, r, out) {
@@ -766,10 +781,9 @@ function renderWorkspace(job, r, out) {
 
 const RENDER = { fk: renderFk, solve: renderSolve, "isotropic-map": renderMap, workspace: renderWorkspace };
 
-function renderResult(job) {
+function renderResult(job, v) {
   const out = $("#job-result");
   const r = job.result;
-  const v = verdict(job, r);
   out.replaceChildren(el("p", { class: "verdict " + v.cls, id: "verdict", text: v.text }));
   if (r && RENDER[job.kind]) RENDER[job.kind](job, r, out);
   else if (r) out.append(el("pre", { text: JSON.stringify(r, null, 1).slice(0, 5000) }));
@@ -798,11 +812,12 @@ async function loadJob() {
     return;
   }
   const job = r.data;
-  renderHead(job);
+  const v = FINAL.has(job.status) ? verdict(job, job.result) : null;
+  renderHead(job, v);
   if (FINAL.has(job.status)) {
     if (page.renderedFinal !== id) {
       page.renderedFinal = id;
-      renderResult(job);
+      renderResult(job, v);
     }
     return;
   }
@@ -837,11 +852,12 @@ function route() {
 
 async function start() {
   const token = $("#token");
-  token.value = sessionStorage.getItem(TOKEN_KEY) || "";
+  sessionStorage.removeItem(OLD_TOKEN_KEY);
+  token.value = "";
   token.addEventListener("change", () => {
-    if (token.value) sessionStorage.setItem(TOKEN_KEY, token.value);
-    else sessionStorage.removeItem(TOKEN_KEY);
+    accessToken = token.value.trim();
     route();
+    if (!page.robotsLoaded) loadRobots();
   });
   buildForms();
   window.addEventListener("hashchange", route);
@@ -851,9 +867,15 @@ async function start() {
     else if (page.renderedFinal !== page.jobId) loadJob();
   });
   route();
+  await loadRobots();
+}
+
+// the bundled robots of the forms (again once a token is typed, if they were refused)
+async function loadRobots() {
   const r = await api("GET", "v1/robots");
+  page.robotsLoaded = r.ok;
   if (r.ok) fillRobots(r.data.robots || []);
-  else banner("cannot list the bundled robots: " + errorText(r));
+  else if (r.status !== 401) banner("cannot list the bundled robots: " + errorText(r));
 }
 
 document.addEventListener("DOMContentLoaded", start);

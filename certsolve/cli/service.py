@@ -56,6 +56,21 @@ def _register_serve(sub) -> None:
         "'Authorization: Bearer <token>' (default: no tokens, loopback only)",
     )
     p.add_argument(
+        "--allow-host",
+        action="append",
+        metavar="NAME",
+        default=None,
+        help="without tokens, answer requests for this Host name too (repeatable; '*' for "
+        "any; default: localhost, 127.0.0.1, ::1 and a specific --host; against DNS "
+        "rebinding; $CERTSOLVE_ALLOWED_HOSTS, comma-separated)",
+    )
+    p.add_argument(
+        "--request-timeout",
+        type=float,
+        default=None,
+        help="seconds a client may take to send a whole request before it is closed (10)",
+    )
+    p.add_argument(
         "--insecure",
         action="store_true",
         help="allow a non-loopback --host without tokens (anyone who reaches the port can "
@@ -96,6 +111,10 @@ def _settings(args, **extra):
     try:
         if getattr(args, "tokens", None):
             extra["access"] = load_access(args.tokens)
+        if hasattr(args, "allow_host"):
+            extra["allowed_hosts"] = _allowed_hosts(args, environ)
+        if getattr(args, "request_timeout", None) is not None:
+            extra["request_timeout"] = args.request_timeout
         if getattr(args, "keep_days", None) is not None:
             extra["keep_days"] = args.keep_days
             extra["housekeeping_interval"] = min(3600.0, args.keep_days * 86400.0 / 4)
@@ -114,6 +133,19 @@ def _settings(args, **extra):
         raise CliError(f"--tokens {exc}" if getattr(args, "tokens", None) else str(exc)) from None
     except (TypeError, ValueError) as exc:
         raise CliError(str(exc)) from None
+
+
+def _allowed_hosts(args, environ) -> tuple[str, ...]:
+    """The Host names a service without tokens answers: the loopback names, those of
+    ``$CERTSOLVE_ALLOWED_HOSTS`` and ``--allow-host``, and the ``--host`` it listens on
+    (unless that is every interface)."""
+    from ..jobs.settings import LOOPBACK_HOSTS
+
+    env = environ.get("CERTSOLVE_ALLOWED_HOSTS", "").split(",")
+    names = [*LOOPBACK_HOSTS, *env, *(args.allow_host or [])]
+    if args.host not in ("0.0.0.0", "::", ""):
+        names.append(args.host)
+    return tuple(dict.fromkeys(n.strip().lower() for n in names if n.strip()))
 
 
 def _is_loopback(host: str) -> bool:
@@ -166,6 +198,7 @@ def run_serve(args: argparse.Namespace) -> int:
     import uvicorn
 
     from ..api.app import create_app
+    from ..api.server import uvicorn_options
     from ..jobs import JobService, ServiceError
 
     if args.workers is not None and args.workers < 0:
@@ -174,6 +207,8 @@ def run_serve(args: argparse.Namespace) -> int:
         raise CliError("--port must be in 0..65535")
     if args.keep_days is not None and not args.keep_days > 0:
         raise CliError("--keep-days must be > 0")
+    if args.request_timeout is not None and not args.request_timeout > 0:
+        raise CliError("--request-timeout must be > 0 (seconds)")
     settings = _settings(args)
     if settings.access is None and not args.insecure and not _is_loopback(args.host):
         raise CliError(
@@ -184,10 +219,14 @@ def run_serve(args: argparse.Namespace) -> int:
     _check_port(args.host, args.port)
     if settings.scheduler is not None:
         _check_scheduler(settings.scheduler)
+    service = None
     try:
         service = JobService(settings)
         service.acquire()
+        service.check_store()
     except ServiceError as exc:
+        if service is not None:
+            service.close()
         raise CliError(str(exc)) from None
     logging.basicConfig(
         level=getattr(logging, args.log_level.upper()),
@@ -210,6 +249,7 @@ def run_serve(args: argparse.Namespace) -> int:
         port=args.port,
         log_level=args.log_level,
         timeout_graceful_shutdown=5,
+        **uvicorn_options(settings),
     )
     return 0
 

@@ -15,8 +15,9 @@ service's disk:
 * **cancel**: the job's progress callback reads a Dask ``Event`` named after the job and
   its lease, which the dispatcher sets when the store holds a cancel request (or the job
   was taken away); the search stops between two rounds and its partial result is kept.
-  A job still running ``cancel_grace`` seconds after the request (``kill_grace`` past its
-  time limit) is ended in the store, its task cancelled and the worker running it
+  A job still running ``cancel_grace`` seconds after the request (past its time limit by
+  ``kill_grace``, or ``finish_grace`` after it said it is storing its result:
+  :func:`.worker.overdue`) is ended in the store, its task cancelled and the worker running it
   restarted (by its nanny), as the pool kills its process;
 * the **outcome** is the task's return value, which the dispatcher records with
   ``JobStore.finish`` under the job's lease (a job ended meanwhile is left as it is);
@@ -44,7 +45,7 @@ from typing import Any
 from .settings import ServiceSettings
 from .status import JobStatus
 from .store import JobRow, JobStore
-from .worker import run_job
+from .worker import overdue, run_job
 
 __all__ = [
     "TOPIC",
@@ -78,9 +79,12 @@ class DaskChannel:
         self.flag = Event(stop_flag_name(job_id, lease))
         self.outcome: dict[str, Any] | None = None
 
-    def heartbeat(self, job_id: str, lease: str, progress: dict | None) -> tuple[bool, bool]:
+    def heartbeat(
+        self, job_id: str, lease: str, progress: dict | None, *, stopping: bool = False
+    ) -> tuple[bool, bool]:
         try:
-            self.worker.log_event(TOPIC, {"id": job_id, "lease": lease, "progress": progress})
+            event = {"id": job_id, "lease": lease, "progress": progress, "stopping": stopping}
+            self.worker.log_event(TOPIC, event)
             return True, bool(self.flag.is_set())
         except Exception as exc:  # noqa: BLE001 - the scheduler is away: carry on
             log.warning("progress of job %s not sent: %s", job_id, exc)
@@ -218,7 +222,9 @@ class DaskJobRunner:
                 self._finished(flight)
         elif what == "progress":
             job_id, lease = str(data.get("id")), str(data.get("lease"))
-            owned, cancel = self.store.heartbeat(job_id, lease, data.get("progress"))
+            owned, cancel = self.store.heartbeat(
+                job_id, lease, data.get("progress"), stopping=bool(data.get("stopping"))
+            )
             if not owned or cancel:
                 flight = self._flights.get(lease)
                 if flight is not None:
@@ -297,19 +303,14 @@ class DaskJobRunner:
             flight = self._flights.get(job.lease or "")
             if flight is None:
                 continue
-            limit = float(job.limits.get("timeout", s.default_timeout))
             if job.cancel_requested_at is not None:
                 self._halt(flight)
                 if now - job.cancel_requested_at > s.cancel_grace:
                     self._abandon(
                         flight, JobStatus.CANCELLED, "cancelled (its Dask task was dropped)"
                     )
-            elif job.started_at is not None and now - job.started_at > limit + s.kill_grace:
-                self._abandon(
-                    flight,
-                    JobStatus.FAILED,
-                    f"time limit exceeded ({limit:g} s); its Dask task was dropped",
-                )
+            elif (why := overdue(job, now, s)) is not None:
+                self._abandon(flight, JobStatus.FAILED, f"{why}; its Dask task was dropped")
 
     def _halt(self, flight: _Flight) -> None:
         if not flight.stopping:

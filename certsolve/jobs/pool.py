@@ -8,7 +8,8 @@ processes and then, every ``supervise_interval`` seconds:
   when a slot keeps dying;
 * kills the worker of a job cancelled more than ``cancel_grace`` seconds ago that has not
   stopped (the job ends ``cancelled``), or of a job past its time limit by ``kill_grace``
-  (the job ends ``failed``);
+  -- by ``finish_grace`` from the moment its worker said it was storing its result
+  (:func:`.worker.overdue`) -- (the job ends ``failed``);
 * releases running jobs held by no live worker (orphans).
 
 The supervisor thread also starts every worker, so ``PR_SET_PDEATHSIG`` (tied to the
@@ -28,7 +29,7 @@ from collections import deque
 from .settings import ServiceSettings
 from .status import JobStatus
 from .store import JobStore
-from .worker import EXIT_FRESH, worker_main
+from .worker import EXIT_FRESH, overdue, worker_main
 
 __all__ = ["WorkerPool", "describe_exit"]
 
@@ -169,15 +170,9 @@ class WorkerPool:
                     job.id, job.lease, JobStatus.CANCELLED, "cancelled (the worker was stopped)"
                 ):
                     self._kill(proc)
-            elif job.started_at is not None and now - job.started_at > (
-                float(job.limits.get("timeout", s.default_timeout)) + s.kill_grace
-            ):
-                limit = float(job.limits.get("timeout", s.default_timeout))
+            elif (why := overdue(job, now, s)) is not None:
                 if self.store.force_finish(
-                    job.id,
-                    job.lease,
-                    JobStatus.FAILED,
-                    f"time limit exceeded ({limit:g} s); the worker was stopped",
+                    job.id, job.lease, JobStatus.FAILED, f"{why}; the worker was stopped"
                 ):
                     self._kill(proc)
             elif proc is None and (job.heartbeat_at or 0) < now - 5:

@@ -3,6 +3,12 @@ of its jobs -- local worker processes (:class:`~.pool.WorkerPool`), or the Dask 
 ``settings.scheduler`` (:class:`~.dask_runner.DaskJobRunner`); both run the same
 :func:`~.worker.run_job` and record everything in the store.
 
+The store is checked before use: :meth:`JobService.check_store` (``certsolve serve`` calls
+it at start) refuses a damaged file, and :meth:`JobService.health` reports a store that
+fails its check (``PRAGMA quick_check``, re-run at most every ``store_check_interval``
+seconds: it reads the whole file) or cannot be read, so ``/healthz`` is not ``ok`` while
+job requests fail.
+
 Used by the HTTP API (:mod:`certsolve.api`) and the offline batch runner.  One service owns
 a data directory at a time (an exclusive ``flock`` on ``service.lock``); on start it
 re-queues the jobs a previous run left ``running`` (or fails those out of attempts).
@@ -22,6 +28,7 @@ from __future__ import annotations
 
 import logging
 import os
+import sqlite3
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -33,12 +40,12 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from ..robot.schema import RobotSpec
 from .access import Client
 from .errors import summary, validation_details
-from .kinds import KINDS, MAX_SYSTEM_CHARS, JobLimits, request_adapter
+from .kinds import KINDS, MAX_SYSTEM_CHARS, JobLimits, public_kinds, request_adapter
 from .pool import WorkerPool
 from .retention import Housekeeper
 from .settings import ServiceSettings
 from .status import JobStatus
-from .store import JobRow, JobStore, NewJob, new_job_id
+from .store import JobRow, JobStore, NewJob, StoreError, new_job_id
 
 __all__ = [
     "BatchError",
@@ -204,6 +211,9 @@ class JobService:
             raise ServiceError(
                 f"{settings.data_dir}: cannot use as data directory ({exc})"
             ) from None
+        except StoreError as exc:
+            raise ServiceError(str(exc)) from None
+        self._store_checked: tuple[float, str | None] | None = None  # (when, problem)
         self.adapter = request_adapter(settings.enable_test_kinds)
         self.pool: JobRunner | None = None
         self.housekeeper: Housekeeper | None = None
@@ -228,6 +238,25 @@ class JobService:
         os.ftruncate(fd, 0)
         os.write(fd, f"{os.getpid()}\n".encode())
         self._lock_fd = fd
+
+    def check_store(self) -> None:
+        """:class:`ServiceError` naming the store file if ``PRAGMA quick_check`` finds it
+        damaged."""
+        problem = self._store_problem(force=True)
+        if problem is not None:
+            raise ServiceError(
+                f"{self.settings.db_path}: the job store is damaged ({problem}); restore it "
+                "from a backup or move it away to start with an empty store"
+            )
+
+    def _store_problem(self, force: bool = False) -> str | None:
+        """The store's quick check (the last answer if younger than
+        ``store_check_interval``): None when sound."""
+        now = time.monotonic()
+        last = self._store_checked
+        if force or last is None or now - last[0] >= self.settings.store_check_interval:
+            last = self._store_checked = (now, self.store.check())
+        return last[1]
 
     def start(self) -> None:
         """Take the data directory, recover interrupted jobs, start the runner (on a
@@ -350,6 +379,11 @@ class JobService:
             raise BatchError("give jobs (a list), or kind + robot/system + params (a list)")
         items = batch.jobs if batch.jobs is not None else batch.params
         assert items is not None
+        kinds = public_kinds(self.settings.enable_test_kinds)
+        if batch.jobs is None and batch.kind not in kinds:
+            msg = f"must be one of {', '.join(repr(k) for k in kinds)}"
+            problem = {"loc": ("kind",), "msg": msg, "type": "enum"}
+            raise BatchError(f"kind: {msg}", validation_details([problem]))
         most = self.settings.max_batch
         if len(items) > most:
             raise BatchError(f"{len(items)} jobs in one batch; at most {most}", too_large=True)
@@ -452,10 +486,17 @@ class JobService:
         return {"batch": batch_id, "total": total, "counts": counts, "finished": finished}
 
     def health(self) -> dict[str, Any]:
-        counts = self.store.counts()
+        """What ``/healthz`` shows: ``status`` is ``ok``, or ``failing`` when the store
+        fails its check or cannot be read (``store.error`` says why)."""
+        try:
+            problem = self._store_problem()
+            counts = self.store.counts()
+        except sqlite3.Error as exc:
+            problem, counts = str(exc), None
         scheduler = self.settings.scheduler
         return {
-            "status": "ok",
+            "status": "ok" if problem is None else "failing",
+            "store": {"ok": problem is None, "error": problem},
             "workers": {
                 "runner": "processes" if scheduler is None else "dask",
                 "scheduler": scheduler,
@@ -464,8 +505,8 @@ class JobService:
                 "restarts": self.pool.restarts if self.pool else 0,
             },
             "jobs": {
-                "queued": counts[JobStatus.QUEUED],
-                "running": counts[JobStatus.RUNNING],
+                "queued": None if counts is None else counts[JobStatus.QUEUED],
+                "running": None if counts is None else counts[JobStatus.RUNNING],
             },
             "kinds": [k for k in KINDS if self.settings.enable_test_kinds or not KINDS[k].hidden],
         }

@@ -10,7 +10,10 @@ from pathlib import Path
 
 from .access import AccessTable, load_access
 
-__all__ = ["ServiceSettings", "default_workers"]
+__all__ = ["LOOPBACK_HOSTS", "ServiceSettings", "default_workers"]
+
+# the Host names a service without tokens answers by default (against DNS rebinding)
+LOOPBACK_HOSTS = ("localhost", "127.0.0.1", "::1")
 
 
 def default_workers() -> int:
@@ -57,6 +60,14 @@ class ServiceSettings:
     quota_queued: int = 10_000  # queued jobs per client (its own max_queued overrides)
     quota_running: int | None = None  # running jobs per client (None: as many as workers)
     quota_requests_per_minute: int = 1200  # requests per client and minute
+    auth_failure_delay: float = 0.5  # seconds a refused token waits for its 401
+    # Host headers served when there are no tokens ("*": any); with tokens, any
+    allowed_hosts: tuple[str, ...] = LOOPBACK_HOSTS
+
+    # -- connections (certsolve serve: api.server) ----------------------------------------
+    request_timeout: float = 10.0  # seconds to receive a whole request, else closed
+    keep_alive_timeout: float = 5.0  # an idle kept-alive connection is closed after this
+    max_connections: int = 256  # open connections; past this, 503
 
     # -- quick synchronous calls (/v1/ik, /v1/isotropic, /v1/fk/track; see .quick) ---------
     quick_workers: int = 2  # processes answering light calls
@@ -70,12 +81,15 @@ class ServiceSettings:
     # -- retention ------------------------------------------------------------------------------
     keep_days: float | None = None  # finished jobs older than this are purged (None: kept)
     housekeeping_interval: float = 600.0  # seconds between purges / WAL checkpoints
+    store_check_interval: float = 60.0  # /healthz re-runs the store's quick_check this often
 
     # -- timing ---------------------------------------------------------------------------------
     poll_interval: float = 0.25  # idle workers look for queued jobs this often (and on wake)
     progress_interval: float = 0.2  # running jobs report progress / read the cancel flag
     cancel_grace: float = 5.0  # a cancelled job still running after this is killed
     kill_grace: float = 5.0  # a job running past its time limit by this much is killed
+    # ... unless its worker said it is storing its result: it has this long from then on
+    finish_grace: float = 120.0
     memory_stop: float = 0.85  # a job stops (keeping its result) at this share of memory_mb
     supervise_interval: float = 0.2
     checkpoint_interval: float = 30.0  # a running search saves itself this often (s)
@@ -105,6 +119,15 @@ class ServiceSettings:
             not self.scheduler.strip() or any(c.isspace() for c in self.scheduler.strip())
         ):
             raise ValueError("scheduler: expected a scheduler address tcp://HOST:PORT")
+        object.__setattr__(self, "allowed_hosts", tuple(h.lower() for h in self.allowed_hosts))
+        if not self.allowed_hosts:
+            raise ValueError("allowed_hosts: give at least one host name (or '*')")
+        if not (self.request_timeout > 0 and self.keep_alive_timeout > 0):
+            raise ValueError("request_timeout and keep_alive_timeout must be > 0 (seconds)")
+        if self.max_connections < 1:
+            raise ValueError("max_connections must be >= 1")
+        if not self.auth_failure_delay >= 0:
+            raise ValueError("auth_failure_delay must be >= 0 (seconds)")
         if not self.checkpoint_interval >= 0:
             raise ValueError("checkpoint_interval must be >= 0 (seconds)")
 
@@ -129,8 +152,9 @@ class ServiceSettings:
     def from_env(cls, environ=None, **overrides) -> ServiceSettings:
         """Settings from ``CERTSOLVE_DATA_DIR``, ``CERTSOLVE_WORKERS``,
         ``CERTSOLVE_SCHEDULER`` (jobs on that Dask cluster), ``CERTSOLVE_TOKENS`` (the token
-        table as JSON), ``CERTSOLVE_KEEP_DAYS``, ``CERTSOLVE_TEST_KINDS`` (for ``uvicorn
-        certsolve.api.app:create_app --factory``), then ``overrides``."""
+        table as JSON), ``CERTSOLVE_KEEP_DAYS``, ``CERTSOLVE_ALLOWED_HOSTS`` (Host names
+        answered besides the loopback names, comma-separated), ``CERTSOLVE_TEST_KINDS`` (for
+        ``uvicorn certsolve.api.app:create_app --factory``), then ``overrides``."""
         env = os.environ if environ is None else environ
         values: dict = {}
         if env.get("CERTSOLVE_DATA_DIR"):
@@ -143,6 +167,9 @@ class ServiceSettings:
             values["keep_days"] = float(env["CERTSOLVE_KEEP_DAYS"])
         if "access" not in overrides or overrides["access"] is None:
             values["access"] = load_access(None, env)
+        if env.get("CERTSOLVE_ALLOWED_HOSTS", "").strip():
+            hosts = env["CERTSOLVE_ALLOWED_HOSTS"].split(",")
+            values["allowed_hosts"] = (*LOOPBACK_HOSTS, *(h.strip() for h in hosts if h.strip()))
         if env.get("CERTSOLVE_TEST_KINDS", "").lower() in ("1", "true", "yes"):
             values["enable_test_kinds"] = True
         values.update({k: v for k, v in overrides.items() if v is not None})

@@ -25,10 +25,18 @@ written by :mod:`certsolve.solver.checkpoint`): a job re-queued after its worker
 resumes from it (:meth:`JobStore.search_checkpoint`).  The blob is deleted when the job
 reaches a final status (and with the job by :meth:`JobStore.purge`).
 
+A file that is not this project's store is refused when opened (:class:`StoreError`): not
+SQLite at all, or a database with tables but no ``jobs`` table of this schema's columns, or
+a newer schema version; nothing is written to it.  :meth:`JobStore.check` runs SQLite's
+``PRAGMA quick_check`` (every page, every index entry; linear in the file's size), which
+finds bytes overwritten inside the tables that reads of a few rows can miss.
+
 Schema versions (``PRAGMA user_version``): 1 -- the jobs table; 2 -- ``jobs.owner`` and
 the ``owners`` table (a version-1 store is migrated when opened: existing jobs have no
 owner, so only admins see them once tokens are required); 3 -- the ``checkpoints`` table
-(created when an older store is opened).
+(created when an older store is opened); 4 -- ``jobs.stopping_at``, when the job's worker
+said its search has stopped and its result is being stored (:meth:`JobStore.heartbeat`
+with ``stopping``; the supervisor then waits ``finish_grace`` for it).
 
 Nothing here imports numpy or the solver.
 """
@@ -57,10 +65,11 @@ __all__ = [
     "NewJob",
     "QueueFull",
     "STATUSES",
+    "StoreError",
     "new_job_id",
 ]
 
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 
 _TABLES = """
 CREATE TABLE IF NOT EXISTS jobs (
@@ -84,7 +93,8 @@ CREATE TABLE IF NOT EXISTS jobs (
     result              TEXT,
     error               TEXT,
     fseq                INTEGER,
-    owner               TEXT
+    owner               TEXT,
+    stopping_at         REAL
 );
 CREATE TABLE IF NOT EXISTS owners (
     name                TEXT PRIMARY KEY,
@@ -108,7 +118,7 @@ CREATE INDEX IF NOT EXISTS jobs_finished ON jobs(finished_at) WHERE finished_at 
 _SUMMARY_COLS = (
     "seq, id, kind, status, limits, batch, created_at, started_at, finished_at, attempts, "
     "max_attempts, worker_pid, lease, progress, heartbeat_at, cancel_requested_at, error, fseq, "
-    "owner"
+    "owner, stopping_at"
 )
 # owners whose running jobs reach their max_running: their queued jobs wait
 _BUSY_OWNERS = (
@@ -122,6 +132,11 @@ _NEXT_QUEUED = (
 # order of reaching a final status: write transactions are serialised, so a reader that has
 # seen fseq = n will see every later final job with fseq > n
 _NEXT_FSEQ = "(SELECT coalesce(max(fseq), 0) + 1 FROM jobs)"
+
+
+class StoreError(Exception):
+    """The file is not a job store of this project, or it is damaged; the message names
+    the file."""
 
 
 class QueueFull(Exception):
@@ -168,6 +183,7 @@ class JobRow:
     error: str | None
     fseq: int | None = None
     owner: str | None = None
+    stopping_at: float | None = None  # the search stopped, the result is being stored
     request: str | None = None  # JSON text (only when asked for)
     result: str | None = None  # JSON text (only when asked for)
 
@@ -194,7 +210,22 @@ class JobStore:
         self._local = threading.local()
         self._all: list[sqlite3.Connection] = []
         self._lock = threading.Lock()
+        try:
+            self._open()
+        except sqlite3.DatabaseError as exc:
+            self.close()
+            raise StoreError(
+                f"{self.path}: damaged, or not a certsolve job store ({exc})"
+            ) from None
+        except StoreError:
+            self.close()
+            raise
+
+    def _open(self) -> None:
+        """Check that the file is empty or ours (:meth:`_refuse_foreign`), then create or
+        migrate the tables."""
         con = self._conn()
+        self._refuse_foreign(con)
         # a new file gives freed pages back to the file system (after a purge)
         con.execute("PRAGMA auto_vacuum = INCREMENTAL")
         mode = con.execute("PRAGMA journal_mode=WAL").fetchone()[0]
@@ -210,6 +241,37 @@ class JobStore:
                     con.execute(stmt)
             con.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
 
+    def _refuse_foreign(self, con: sqlite3.Connection) -> None:
+        """:class:`StoreError` unless the database is new (no table) or has this project's
+        ``jobs`` table at a schema version this code knows."""
+        tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+        tables.discard("sqlite_sequence")
+        if not tables:
+            return
+        cols = {r[1] for r in con.execute("PRAGMA table_info(jobs)")}
+        ours = {"id", "kind", "status", "request", "limits", "created_at", "lease", "result"}
+        if not ours <= cols:
+            found = ", ".join(sorted(tables)[:5])
+            raise StoreError(
+                f"{self.path}: not a certsolve job store (a SQLite database with tables {found})"
+            )
+        version = int(con.execute("PRAGMA user_version").fetchone()[0])
+        if version > SCHEMA_VERSION:
+            raise StoreError(
+                f"{self.path}: a job store of a newer certsolve (schema {version}; this one "
+                f"knows up to {SCHEMA_VERSION})"
+            )
+
+    def check(self) -> str | None:
+        """None when SQLite's ``PRAGMA quick_check`` finds the file sound, else its first
+        complaint (also when the check itself cannot read the file)."""
+        try:
+            rows = self._conn().execute("PRAGMA quick_check(5)").fetchall()
+        except sqlite3.DatabaseError as exc:
+            return str(exc)
+        problems = [str(r[0]) for r in rows if str(r[0]) != "ok"]
+        return "; ".join(problems[:3]) or None
+
     @staticmethod
     def _migrate(con: sqlite3.Connection) -> None:
         """Bring an older store up to :data:`SCHEMA_VERSION` (inside the opening
@@ -217,6 +279,8 @@ class JobStore:
         cols = {r[1] for r in con.execute("PRAGMA table_info(jobs)")}
         if "owner" not in cols:  # version 1: jobs had no owner
             con.execute("ALTER TABLE jobs ADD COLUMN owner TEXT")
+        if "stopping_at" not in cols:  # versions 1-3
+            con.execute("ALTER TABLE jobs ADD COLUMN stopping_at REAL")
 
     def schema_version(self) -> int:
         return int(self._conn().execute("PRAGMA user_version").fetchone()[0])
@@ -427,24 +491,32 @@ class JobStore:
             con.execute(
                 "UPDATE jobs SET status = ?, attempts = attempts + 1, started_at = ?, "
                 "finished_at = NULL, worker_pid = ?, lease = ?, heartbeat_at = ?, "
-                "progress = NULL WHERE id = ?",
+                "progress = NULL, stopping_at = NULL WHERE id = ?",
                 (JobStatus.RUNNING, now, worker_pid, lease, now, row[0]),
             )
         job = self.get(row[0], result=False, request=True)
         assert job is not None
         return job, lease
 
-    def heartbeat(self, job_id: str, lease: str, progress: dict | None) -> tuple[bool, bool]:
-        """Record progress; return ``(still ours, cancel requested)``."""
+    def heartbeat(
+        self, job_id: str, lease: str, progress: dict | None, *, stopping: bool = False
+    ) -> tuple[bool, bool]:
+        """Record progress; return ``(still ours, cancel requested)``.  ``stopping``: the
+        job's search has stopped (or reached its time limit) and its result is being built
+        and stored; the first such heartbeat sets ``stopping_at``."""
+        now = time.time()
         row = (
             self._conn()
             .execute(
-                "UPDATE jobs SET progress = ?, heartbeat_at = ? "
+                "UPDATE jobs SET progress = ?, heartbeat_at = ?, "
+                "stopping_at = CASE WHEN ? THEN coalesce(stopping_at, ?) ELSE stopping_at END "
                 "WHERE id = ? AND lease = ? AND status = ? "
                 "RETURNING cancel_requested_at",
                 (
                     json.dumps(progress) if progress else None,
-                    time.time(),
+                    now,
+                    bool(stopping),
+                    now,
                     job_id,
                     lease,
                     JobStatus.RUNNING,

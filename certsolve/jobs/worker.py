@@ -16,8 +16,14 @@ the last save with a fresh time limit and box budget.
 
 Whatever stopped the search (its time or box limit, memory, a cancel), the result is
 bounded before it is stored (:func:`.partial.stored_result`), with the memory limit lifted
-again: building it takes a fraction of the grace the supervisor gives a job (``kill_grace``
-past its time limit, ``cancel_grace`` after a cancel).
+again.  Stopping a large search -- its last checkpoint, the result built and written --
+can take longer than ``kill_grace`` on a loaded machine (a search of 1.8M pending boxes
+once did), so the worker says when it is at that stage: a heartbeat with ``stopping``
+(:meth:`.JobStore.heartbeat`) when its time limit has passed, and again when the library
+call has returned.  :func:`overdue` then gives the job ``finish_grace`` from that moment
+instead of ``kill_grace`` past its limit: a limit ends in a stored partial result, not a
+killed worker.  A job that never reports progress (a call that ignores its limits) is
+still killed ``kill_grace`` past its limit.
 
 A worker dies with its parent (``PR_SET_PDEATHSIG``, and a ``getppid`` check in case that
 is unavailable), so a killed service never leaves workers writing to the store.
@@ -49,6 +55,7 @@ __all__ = [
     "JobChannel",
     "JobMonitor",
     "die_with_parent",
+    "overdue",
     "restore_memory_limit",
     "run_job",
     "set_memory_limit",
@@ -65,8 +72,11 @@ _PROGRESS_FIELDS = ("boxes", "pending", "solutions", "undecided", "elapsed")
 class JobChannel(Protocol):
     """What a running job writes to: the store (:class:`.JobStore`), or a relay to it."""
 
-    def heartbeat(self, job_id: str, lease: str, progress: dict | None) -> tuple[bool, bool]:
-        """Record progress; ``(still ours, cancel requested)``."""
+    def heartbeat(
+        self, job_id: str, lease: str, progress: dict | None, *, stopping: bool = False
+    ) -> tuple[bool, bool]:
+        """Record progress (``stopping``: the search has stopped or reached its time limit,
+        the result is being stored); ``(still ours, cancel requested)``."""
         ...
 
     def finish(
@@ -81,6 +91,26 @@ class JobChannel(Protocol):
     ) -> bool:
         """Record the outcome; False if the job is no longer ours."""
         ...
+
+
+def overdue(job: JobRow, now: float, settings: ServiceSettings) -> str | None:
+    """Why the supervisor must stop this running job now, past its time limit, or None.
+
+    Killed ``kill_grace`` seconds past the limit, unless the worker said it is storing its
+    result (``stopping_at``): then ``finish_grace`` seconds from that moment."""
+    if job.started_at is None:
+        return None
+    limit = float(job.limits.get("timeout", settings.default_timeout))
+    if now - job.started_at <= limit + settings.kill_grace:
+        return None
+    if job.stopping_at is None:
+        return f"time limit exceeded ({limit:g} s)"
+    if now - job.stopping_at <= settings.finish_grace:
+        return None
+    return (
+        f"time limit exceeded ({limit:g} s): its result was not stored "
+        f"{settings.finish_grace:g} s after its search stopped"
+    )
 
 
 def die_with_parent(parent_pid: int) -> None:
@@ -195,6 +225,7 @@ class JobMonitor:
         parent_pid: int | None,
         max_boxes: int | None = None,
         memory_stop_bytes: int | None = None,
+        time_limit: float | None = None,
     ):
         self.store = store
         self.job = job
@@ -203,6 +234,8 @@ class JobMonitor:
         self.parent_pid = parent_pid
         self.max_boxes = max_boxes  # enforced here for kinds whose call has no such limit
         self.memory_stop_bytes = memory_stop_bytes
+        self.time_limit = time_limit
+        self.stopping = False  # said to the store: the search stops, the result follows
         self.address_space = AddressSpace()
         self.t0 = time.monotonic()
         self.next_tick = self.t0
@@ -224,20 +257,29 @@ class JobMonitor:
             if used is not None and used >= self.memory_stop_bytes:
                 self.stopped_by = "memory"
                 return False
-        if now < self.next_tick:
+        if now < self.next_tick and (
+            self.stopping or self.time_limit is None or now - self.t0 < self.time_limit
+        ):
             return True
         self.next_tick = now + self.interval
         return self.check()
 
     def check(self) -> bool:
-        """Write the progress, read the cancel flag; False if the job must stop."""
+        """Write the progress, read the cancel flag; False if the job must stop.  Past the
+        time limit, the heartbeat says the job is stopping (the search stops at its limit,
+        on its own clock: this one started earlier, with the job)."""
         if self.parent_pid is not None and os.getppid() != self.parent_pid:
             os._exit(0)
+        past = self.time_limit is not None and time.monotonic() - self.t0 >= self.time_limit
+        stopping = self.stopping or past
         try:
-            owned, cancel = self.store.heartbeat(self.job.id, self.lease, self.last)
+            owned, cancel = self.store.heartbeat(
+                self.job.id, self.lease, self.last, stopping=stopping
+            )
         except sqlite3.Error as exc:  # a busy store must not kill the job
             log.warning("progress of job %s not recorded: %s", self.job.id, exc)
             return True
+        self.stopping = stopping
         if not owned:
             self.lost = True
             return False
@@ -245,6 +287,17 @@ class JobMonitor:
             self.cancelled = True
             return False
         return True
+
+    def stop(self) -> None:
+        """The library call has returned: say that the result is being stored (once; a
+        cancel requested from now on no longer changes the outcome)."""
+        if self.stopping or self.cancelled or self.lost:
+            return
+        try:
+            self.store.heartbeat(self.job.id, self.lease, self.last, stopping=True)
+            self.stopping = True
+        except sqlite3.Error as exc:
+            log.warning("job %s: its stop not recorded: %s", self.job.id, exc)
 
 
 def job_checkpoint(store: JobStore, job: JobRow, lease: str, interval: float):
@@ -293,6 +346,7 @@ def run_job(
         interval=settings.progress_interval,
         parent_pid=parent_pid,
         memory_stop_bytes=stop_at,
+        time_limit=float(limits["timeout"]),
     )
     status, text, error = JobStatus.FAILED, None, None
     old_limit = None
@@ -316,6 +370,7 @@ def run_job(
         finally:
             restore_memory_limit(old_limit)
             old_limit = None
+        monitor.stop()
         result = stored_result(raw, settings.max_result_items)
         if monitor.stopped_by and isinstance(result, dict):
             result["stopped_by"] = monitor.stopped_by  # the library only saw a callback's no
