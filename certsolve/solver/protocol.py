@@ -42,7 +42,10 @@ class Step(Protocol):
     the step and its state must pickle.
     """
 
-    batch_size: int
+    @property
+    def batch_size(self) -> int:
+        """Boxes per batch."""
+        ...
 
     def start(self, known: Any = None) -> Any:
         """A new state with an empty stack, seeded with ``known`` (see :meth:`known`)."""
