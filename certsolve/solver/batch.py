@@ -5,8 +5,9 @@ through its contractor, a composition of parts (:mod:`.pipeline`).  The record h
 
 * the bounds ``lo, hi`` ``(k, n)`` of the boxes still in the round and the ``empty`` mask
   (``empty[r]``: box ``r`` is proven to hold no solution);
-* the shared linearisation, when a part computed one: the interval Jacobian ``jac``
-  ``(jlo, jhi)`` ``(k, n, n)`` and the rows where Newton is informative (``regular``);
+* the shared linearisation, when a part computed one: the interval Jacobian
+  (:meth:`share_jacobian`, :meth:`jacobian`: ``(jlo, jhi)`` ``(k, n, n)``) and the rows
+  where Newton is informative (``regular``);
   Newton computes it once per round and the later parts (inflation, CID's smear order,
   the bisector) reuse it.  A Jacobian over a box encloses the Jacobian over every box
   inside it, so it stays valid for a row however much later parts contract it;
@@ -40,6 +41,7 @@ if TYPE_CHECKING:
     from ..expr.compiled import CompiledSystem
     from .buffer import BoxStack
     from .certify import Certifier
+    from .newton import Linearization
 
 __all__ = ["Batch", "Contractor", "log_volume_ratio", "progress_gain"]
 
@@ -87,8 +89,11 @@ class Contractor(Protocol):
 class Batch:
     """The boxes of one round and what the parts share about them (module docstring).
 
-    Per-row arrays (``lo``, ``hi``, ``empty``, ``ids``, ``jac``, ``regular`` and the
+    Per-row arrays (``lo``, ``hi``, ``empty``, ``ids``, ``regular``, the Jacobian and the
     bisector's choice) always have the same rows; :meth:`keep` selects rows in all of them.
+    The Jacobian ``(k, n, n)`` is selected lazily: :meth:`keep` narrows an index into the
+    arrays Newton computed, and :meth:`jacobian` gathers the rows asked for when a part
+    asks (one copy a round, where every selection copied it).
     """
 
     lo: np.ndarray  # (k, n)
@@ -104,13 +109,25 @@ class Batch:
     acid: Any = None  # the search's learnt state (:class:`.shaving.AdaptiveCount`), if any
     empty: np.ndarray = field(init=False)
     ids: np.ndarray = field(init=False)  # each row's position in the round's first batch
-    jac: tuple[np.ndarray, np.ndarray] | None = None  # interval Jacobian (k, n, n)
+    #: the boxes as the round received them (row ``ids[r]`` is row ``r``'s), and the
+    #: linearisation a part shared (Newton's :class:`~.newton.Linearization`, whose
+    #: Jacobian :meth:`jacobian` reads), kept for the round: the large arrays of a round
+    #: then live until its end, as they did when the round was one function -- freed as
+    #: soon as replaced, glibc returned the top of the heap to the system between the
+    #: kernels and the FK rounds of 2048 boxes took 2-3x the page faults (marionet-t at
+    #: 60 N, 60k boxes: +0.3-0.9 s of system time on 4.4 s)
+    start_lo: np.ndarray = field(init=False, repr=False)
+    start_hi: np.ndarray = field(init=False, repr=False)
+    linearization: Linearization | None = None
     regular: np.ndarray | None = None  # Newton informative (preconditioned pivots free of 0)
+    _jac: tuple[np.ndarray, np.ndarray] | None = field(default=None, init=False, repr=False)
+    _jac_at: np.ndarray | None = field(default=None, init=False, repr=False)  # rows of _jac
     _var: np.ndarray | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         self.empty = np.zeros(self.lo.shape[0], dtype=bool)
         self.ids = np.arange(self.lo.shape[0])
+        self.start_lo, self.start_hi = self.lo, self.hi
 
     @property
     def size(self) -> int:
@@ -121,8 +138,9 @@ class Batch:
         """Keep only ``rows`` (a boolean mask) in every per-row array."""
         self.lo, self.hi = self.lo[rows], self.hi[rows]
         self.empty, self.ids = self.empty[rows], self.ids[rows]
-        if self.jac is not None:
-            self.jac = (self.jac[0][rows], self.jac[1][rows])
+        if self._jac is not None:
+            at = np.arange(self._jac[0].shape[0]) if self._jac_at is None else self._jac_at
+            self._jac_at = at[rows]
         if self.regular is not None:
             self.regular = self.regular[rows]
         if self._var is not None:
@@ -147,12 +165,28 @@ class Batch:
         """:func:`progress_gain` of every row from ``lo0, hi0`` (same rows) to its box now."""
         return progress_gain(lo0, hi0, self.lo, self.hi, self.eps, self.mask)
 
-    def jacobian(self) -> tuple[np.ndarray, np.ndarray]:
-        """The shared Jacobian enclosure: Newton's, or evaluated here on the boxes now."""
-        if self.jac is None:
+    def share_jacobian(self, jlo: np.ndarray, jhi: np.ndarray) -> None:
+        """Make ``jlo, jhi`` ``(k, n, n)``, enclosures of the Jacobian over each row's box
+        (or a box containing it), the round's shared Jacobian."""
+        self._jac, self._jac_at = (jlo, jhi), None
+
+    def jacobian(self, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The shared Jacobian enclosure of every row (or of ``rows``, a mask or indices):
+        Newton's, or evaluated here on the boxes now."""
+        if self._jac is None:
             _, _, jlo, jhi = self.csys.eval_fj(self.lo, self.hi)
-            self.jac = (jlo, jhi)
-        return self.jac
+            self.share_jacobian(jlo, jhi)
+        assert self._jac is not None
+        jlo, jhi = self._jac
+        at = self._jac_at
+        if rows is not None:
+            at = np.arange(self.size)[rows] if at is None else at[rows]
+        if at is None:
+            return jlo, jhi
+        if rows is None:  # every row: gathered once, then kept as the shared one
+            self.share_jacobian(jlo[at], jhi[at])
+            return self._jac
+        return jlo[at], jhi[at]
 
     def splittable(self) -> np.ndarray:
         """Rows wider than ``eps`` in some variable the bisector may split."""
@@ -170,8 +204,12 @@ class Batch:
             if np.any(big):
                 if self.choose is None:
                     raise RuntimeError("this batch has no bisector to choose variables")
-                jlo, jhi = self.jacobian()
-                var[big] = self.choose(self.lo[big], self.hi[big], jlo[big], jhi[big])
+                if big.all():
+                    jlo, jhi = self.jacobian()
+                    var[:] = self.choose(self.lo, self.hi, jlo, jhi)
+                else:
+                    jlo, jhi = self.jacobian(big)
+                    var[big] = self.choose(self.lo[big], self.hi[big], jlo, jhi)
             self._var = var
         return self._var
 

@@ -158,7 +158,7 @@ class IntervalNewton:
     def apply(self, batch: Batch) -> None:
         """Contract; a box proven to hold exactly one solution is recorded
         (``batch.prove``: existence box ``K(X) ∩ X``, unicity box ``X``) and leaves the
-        round; the others keep the linearisation (``batch.jac``, ``batch.regular``)."""
+        round; the others keep the linearisation (``batch.jacobian()``, ``batch.regular``)."""
         lo, hi = batch.lo, batch.hi
         step = self.contract(lo, hi)
         p = step.proven
@@ -170,7 +170,8 @@ class IntervalNewton:
             batch.prove(elo, ehi, lo[p], hi[p])
         batch.lo, batch.hi = step.lo, step.hi
         batch.empty = batch.empty | step.empty
-        batch.jac = (step.lin.jlo, step.lin.jhi)
+        batch.linearization = step.lin
+        batch.share_jacobian(step.lin.jlo, step.lin.jhi)
         batch.regular = step.regular
         if np.any(p):
             batch.keep(~p)

@@ -199,11 +199,12 @@ class Shave:
         rows = var >= 0
         if not np.any(rows):
             return
-        jlo, jhi = batch.jacobian()
         if rows.all():
             lo, hi, v = batch.lo, batch.hi, var
+            jlo, jhi = batch.jacobian()
         else:
-            lo, hi, v, jlo, jhi = batch.lo[rows], batch.hi[rows], var[rows], jlo[rows], jhi[rows]
+            lo, hi, v = batch.lo[rows], batch.hi[rows], var[rows]
+            jlo, jhi = batch.jacobian(rows)
         clo, chi, cemp = self.contract(
             lo, hi, jlo, jhi, v, batch.acid, eps=batch.eps, mask=batch.mask
         )
