@@ -48,7 +48,7 @@ from .batch import Batch, Contractor
 from .certify import box_difference
 from .contractors import HC4, IntervalNewton, PartialNewton
 from .relaxation import PolytopeHull
-from .shaving import Shave
+from .shaving import Shave, check_count
 
 __all__ = ["FixPoint", "Inflate", "Sequence", "core", "default_pipeline", "find", "parts_of"]
 
@@ -209,6 +209,6 @@ def default_pipeline(
     pipeline: list[Contractor] = [FixPoint(Sequence(*parts)), Inflate()]
     if cid_slices:
         pipeline.append(FixPoint(Shave(hc4, cid_slices, count=cid_vars, n=csys.n)))
-    elif cid_vars not in (None, "auto") and not int(cid_vars) >= 1:
-        raise ValueError("cid_vars must be >= 1, None (all variables) or 'auto'")
+    else:
+        check_count(cid_vars)  # refused even when CID is off, as before
     return Sequence(*pipeline)

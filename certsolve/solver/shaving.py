@@ -27,7 +27,7 @@ from ..interval.reductions import any_last
 from .batch import Batch, log_volume_ratio
 from .bisectors import smear_scores
 
-__all__ = ["CID", "AdaptiveCount", "Shave"]
+__all__ = ["CID", "AdaptiveCount", "Shave", "check_count"]
 
 
 class CID:
@@ -141,6 +141,12 @@ class AdaptiveCount:
             self.needed_sum = self.needed_boxes = 0
 
 
+def check_count(count: int | str | None) -> None:
+    """``count`` is a number >= 1, ``None`` (all the variables) or ``"auto"``."""
+    if count not in (None, "auto") and not int(count) >= 1:
+        raise ValueError("cid_vars must be >= 1, None (all variables) or 'auto'")
+
+
 class Shave:
     """CID before bisection (IBEX ``CtcCID`` / ACID), a part of the pipeline.
 
@@ -166,8 +172,7 @@ class Shave:
     """
 
     def __init__(self, inner, slices: int = 4, count: int | str | None = "auto", *, n: int):
-        if count not in (None, "auto") and not int(count) >= 1:
-            raise ValueError("cid_vars must be >= 1, None (all variables) or 'auto'")
+        check_count(count)
         #: the contractor of each slice (``contract(lo, hi) -> (lo, hi, empty)``)
         self.inner = inner
         self.cid = CID(inner.contract, slices)
