@@ -77,7 +77,7 @@ def overhead(runs: int) -> None:
             for label, interval in (("none", None), ("every 30 s", 30.0), ("every batch", 0.0)):
                 path = Path(tmp) / f"k6-{interval}-{len(rows[label])}.ck"
                 cp = None if interval is None else Checkpoint.file(path, interval=interval)
-                t, _, res = cpu(lambda cp=cp: Solver(system).solve(checkpoint=cp))
+                t, _, res = cpu(lambda cp=cp: Solver.default(system).solve(checkpoint=cp))
                 rows[label].append(t)
                 writes[label] = (0 if cp is None else cp.writes, res.stats.boxes)
     print("katsura-6 solved serially (CPU s, median):")
@@ -91,7 +91,7 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--boxes", type=int, default=100_000)
     args = ap.parse_args()
-    k6 = Solver(load_minibex(str(ROOT / "examples/systems/katsura-6.mbx")))
+    k6 = Solver.default(load_minibex(str(ROOT / "examples/systems/katsura-6.mbx")))
     snapshot_costs("katsura-6", k6, args.boxes, args.runs)
     robot = with_tau_max(Robot.load(ROOT / "examples/robots/marionet-t.json"), 10.0)
     fk = FKSolver(robot)

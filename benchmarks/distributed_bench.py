@@ -44,7 +44,7 @@ def t16_60():
 
 def katsura7():
     # katsura-6 (2.4 s since the affine relaxation) ends inside the 2 s serial warm-up
-    return Solver(load_minibex("benchmarks/systems/katsura-7.mbx"))
+    return Solver.default(load_minibex("benchmarks/systems/katsura-7.mbx"))
 
 
 CASES = {"t16-60": t16_60, "katsura-7": katsura7}

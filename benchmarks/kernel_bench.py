@@ -44,12 +44,14 @@ def _minibex(name: str):
 def _t16():
     from certsolve.kinematics import FKSolver, with_tau_max
     from certsolve.robot import Robot
+    from certsolve.solver.contractors import IntervalNewton
+    from certsolve.solver.pipeline import find
 
     robot = with_tau_max(Robot.load(str(ROOT / "examples" / "robots" / "marionet-t.json")), 60.0)
     fk = FKSolver(robot)
     fk._prepare(np.full(robot.m, 2.0))
     dom = np.asarray(fk.csys.system.domain, dtype=float)
-    return fk.csys, dom, fk.solver.newton.groups
+    return fk.csys, dom, find(fk.solver.contractor, IntervalNewton).groups
 
 
 SYSTEMS = {"katsura-6": lambda: _minibex("katsura-6"), "eco-7": lambda: _minibex("eco-7")}

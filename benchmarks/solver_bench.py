@@ -30,6 +30,8 @@ from pathlib import Path
 from certsolve.expr.minibex import load_minibex
 from certsolve.solver import Solver
 from certsolve.solver.bisectors import SmearCurvatureMix, SmearSumRelative
+from certsolve.solver.pipeline import find
+from certsolve.solver.relaxation import PolytopeHull
 
 BISECTORS = {"mix": SmearCurvatureMix, "smear": SmearSumRelative}
 
@@ -81,15 +83,16 @@ def main() -> None:
         for (cid_name, cid), affine, reduce, bis, w in settings_:
             walls, cpus, res = [], [], None
             for _ in range(args.runs):
-                solver = Solver(
+                solver = Solver.default(
                     system,
                     eps=args.eps,
                     cid_vars=cid,
                     reduce_degree=reduce,
                     bisector=BISECTORS[bis](),
                 )
-                if solver.relax is not None:
-                    solver.relax.affine = affine
+                relax = find(solver.contractor, PolytopeHull)
+                if relax is not None:
+                    relax.affine = affine
                 t, c = time.perf_counter(), time.process_time()
                 res = solver.solve(workers=w, timeout=args.timeout)
                 walls.append(time.perf_counter() - t)

@@ -68,7 +68,7 @@ def same_solutions(a, b) -> bool:
 
 @pytest.fixture(scope="module")
 def k5():
-    solver = Solver(load_minibex(K5))
+    solver = Solver.default(load_minibex(K5))
     return solver, solver.solve()
 
 
@@ -118,7 +118,7 @@ def test_learnt_cid_count_is_saved_with_the_search():
     resumed after each box limit replays the uninterrupted run exactly, and a worker task
     starts from the count its search has learnt."""
     # katsura-6: katsura-5's search (3,900 boxes) ends before ACID's first learning phase
-    solver = Solver(load_minibex(K6), cid_vars="auto")
+    solver = Solver.default(load_minibex(K6), cid_vars="auto")
     ref = solver.solve()
     mem = Memory()
     for _ in range(50):
@@ -162,7 +162,8 @@ def test_snapshots_with_tasks_in_flight_keep_the_handed_out_boxes(k5):
     """A snapshot taken while workers hold slices of the buffer lists those slices as
     pending: resuming serially from it still finds every solution."""
     _, ref = k5
-    solver = Solver(load_minibex(K5), batch_size=256)  # the warm-up grows to a batch per slot
+    # the warm-up grows to a batch per slot
+    solver = Solver.default(load_minibex(K5), batch_size=256)
     mem = Memory()
     tasks_here = FlakyExecutor(slice_size=64, task_max_boxes=256, grow=0.25)  # none lost
     run = solver.solve(executor=tasks_here, checkpoint=mem.checkpoint(interval=0.0))
@@ -182,10 +183,10 @@ def test_a_checkpoint_of_another_search_is_refused(k5, tmp_path):
     path = tmp_path / "k5.ck"
     solver.solve(max_boxes=100, checkpoint=Checkpoint.file(path))
     assert path.exists()
-    other = Solver(load_minibex(str(ROOT / "examples/systems/eco-7.mbx")))
+    other = Solver.default(load_minibex(str(ROOT / "examples/systems/eco-7.mbx")))
     with pytest.raises(CheckpointError, match="another search"):
         other.solve(checkpoint=Checkpoint.file(path))
-    coarser = Solver(load_minibex(K5), eps=1e-6)
+    coarser = Solver.default(load_minibex(K5), eps=1e-6)
     with pytest.raises(CheckpointError, match="another search"):
         coarser.solve(checkpoint=Checkpoint.file(path))
     path.write_bytes(b"not a checkpoint")

@@ -45,7 +45,8 @@ from certsolve.expr.affine import affine_forms
 from certsolve.expr.compiled import CompiledSystem
 from certsolve.expr.minibex import load_minibex
 from certsolve.solver import Solver
-from certsolve.solver.relaxation import affine_rows
+from certsolve.solver.pipeline import find
+from certsolve.solver.relaxation import PolytopeHull, affine_rows
 from certsolve.solver.verify import iv_eval
 
 SYSTEMS = Path(__file__).resolve().parent.parent / "examples" / "systems"
@@ -166,8 +167,8 @@ def test_affine_rows_prune_quadratic_systems(name):
     system = load_minibex(SYSTEMS / f"{name}.mbx")
     runs = {}
     for affine in (False, True):
-        solver = Solver(system)
-        solver.relax.affine = affine
+        solver = Solver.default(system)
+        find(solver.contractor, PolytopeHull).affine = affine
         runs[affine] = solver.solve(workers=1)
     assert runs[True].status == runs[False].status == "complete"
     expected = len(REFERENCE[name]["solutions"])

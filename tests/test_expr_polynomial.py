@@ -197,7 +197,7 @@ def test_coefficients_beyond_the_float_range_leave_the_system_as_given():
     for first in (tiny * (sqr(_X) + sqr(_Y)) - 1, huge * _X + sqr(_X) + sqr(_Y)):
         system = System.build(dom, [first, circle])
         assert reduce_degree(system) is system
-        assert Solver(system).csys.system is system
+        assert Solver.default(system).csys.system is system
 
 
 @pytest.mark.parametrize("build, count", [(_spheres, 2), (_cubics, None)])
@@ -205,7 +205,7 @@ def test_solver_finds_the_same_solutions_on_the_lowered_system(build, count):
     system = build()
     results = {}
     for reduce in (True, False):
-        solver = Solver(system, reduce_degree=reduce)
+        solver = Solver.default(system, reduce_degree=reduce)
         assert (solver.csys.system is not system) == reduce
         res = solver.solve(verify=True)
         assert res.status == "complete" and not res.undecided

@@ -89,15 +89,18 @@ def test_mixed_jacobian_group_order_keeps_the_poses(order):
 
     from certsolve.robot import Pose
     from certsolve.solver.contractors import IntervalNewton
+    from certsolve.solver.pipeline import find
 
     r = robot("marionet")
     pose = Pose.from_params(6, (108, 60, 104, 5, 3, -4))
     u = ik_u(r, pose)
     fk = FKSolver(r)
     names = fk.form.system.variables
-    assert [names[j][0] for j in np.flatnonzero(fk.solver.newton.groups[0])] == ["e"] * 9
+    newton = find(fk.solver.contractor, IntervalNewton)
+    assert [names[j][0] for j in np.flatnonzero(newton.groups[0])] == ["e"] * 9
     if order == "lengths first":
-        fk.solver.newton = IntervalNewton(fk.solver.csys, fk.solver.newton.groups[::-1])
+        reversed_groups = IntervalNewton(fk.solver.csys, newton.groups[::-1])
+        fk.solver.contractor = fk.solver.contractor.replace(newton, reversed_groups)
     res = fk.solve(u, boxes=local_boxes(fk, r, pose, 2.0, u), timeout=120)
     assert res.status == "complete" and not res.undecided
     (s,) = matching(res, r, pose)

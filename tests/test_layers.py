@@ -4,8 +4,10 @@ Layers, lowest first: interval -> expr -> solver -> robot -> kinematics / force 
 client -> api -> cli (``certsolve serve`` starts the api).  Small utilities -- ``lazy``,
 ``extras``, ``plotting``, ``inputs`` -- sit below everything and import nothing of the package.
 Imports are read with :mod:`ast`, including those inside functions (a lazy import is still
-a dependency); imports under ``if TYPE_CHECKING:`` are ignored.  ``from pkg import name``
-depends on the module ``pkg.name`` when there is one, else on ``pkg``.
+a dependency) and those under ``if TYPE_CHECKING:`` (an annotation is a dependency too:
+two modules that name each other's types belong together or share a lower module).
+``from pkg import name`` depends on the module ``pkg.name`` when there is one, else on
+``pkg``.
 """
 
 from __future__ import annotations
@@ -54,27 +56,20 @@ def _modules() -> dict[str, Path]:
 MODULES = _modules()
 
 
-def _type_checking_nodes(tree: ast.AST) -> set[int]:
-    skip: set[int] = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
-            for child in node.body:
-                skip.update(id(n) for n in ast.walk(child))
-    return skip
-
-
 def imports_of(name: str) -> set[str]:
     """The package modules that module ``name`` imports."""
     path = MODULES[name]
     tree = ast.parse(path.read_text(encoding="utf-8"))
-    skip = _type_checking_nodes(tree)
-    is_pkg = path.name == "__init__.py"
+    return _edges(name, tree, MODULES, is_pkg=path.name == "__init__.py")
+
+
+def _edges(name: str, tree: ast.AST, modules, *, is_pkg: bool = False) -> set[str]:
+    """The modules of ``modules`` that the parsed module ``name`` imports, anywhere in it
+    (inside functions and under ``if TYPE_CHECKING:`` included)."""
     out: set[str] = set()
     for node in ast.walk(tree):
-        if id(node) in skip:
-            continue
         if isinstance(node, ast.Import):
-            out.update(a.name for a in node.names if a.name in MODULES)
+            out.update(a.name for a in node.names if a.name in modules)
         elif isinstance(node, ast.ImportFrom):
             if node.level:
                 base = name.split(".") if is_pkg else name.split(".")[:-1]
@@ -84,9 +79,9 @@ def imports_of(name: str) -> set[str]:
                 target = node.module or ""
             for a in node.names:
                 sub = f"{target}.{a.name}"
-                if sub in MODULES:
+                if sub in modules:
                     out.add(sub)
-                elif target in MODULES:
+                elif target in modules:
                     out.add(target)
     out.discard(name)
     return out
@@ -123,8 +118,8 @@ def test_no_upward_import():
     assert not bad, "imports against the layer order:\n" + "\n".join(sorted(bad))
 
 
-def test_no_import_cycle():
-    """Tarjan's strongly connected components of the module graph: all of size one."""
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Tarjan's strongly connected components of ``graph`` with more than one module."""
     index: dict[str, int] = {}
     low: dict[str, int] = {}
     stack: list[str] = []
@@ -135,7 +130,7 @@ def test_no_import_cycle():
         index[v] = low[v] = len(index)
         stack.append(v)
         on_stack.add(v)
-        for w in GRAPH[v]:
+        for w in sorted(graph[v]):
             if w not in index:
                 visit(w)
                 low[v] = min(low[v], low[w])
@@ -152,9 +147,15 @@ def test_no_import_cycle():
             if len(comp) > 1:
                 cycles.append(sorted(comp))
 
-    for v in sorted(GRAPH):
+    for v in sorted(graph):
         if v not in index:
             visit(v)
+    return cycles
+
+
+def test_no_import_cycle():
+    """The module graph's strongly connected components are all of size one."""
+    cycles = _cycles(GRAPH)
     assert not cycles, f"import cycles: {cycles}"
 
 
@@ -165,3 +166,14 @@ def test_the_checker_sees_real_edges():
     assert "certsolve.solver.dask_executor" in GRAPH["certsolve.solver.executors"]
     assert "certsolve.solver.search" in GRAPH["certsolve.solver.workers"]
     assert layer("certsolve.jobs.store")[1] > layer("certsolve.solver.search")[1]
+
+
+def test_the_cycle_check_sees_type_checking_imports():
+    """An import under ``if TYPE_CHECKING:`` is an edge: a cycle through it is caught."""
+    source = "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from .b import B\n"
+    graph = {"p.a": _edges("p.a", ast.parse(source), {"p.a", "p.b"}), "p.b": {"p.a"}}
+    assert graph["p.a"] == {"p.b"}
+    assert _cycles(graph) == [["p.a", "p.b"]]
+    # the search driver and its checkpoints share a lower module instead of each other
+    assert "certsolve.solver.search" not in GRAPH["certsolve.solver.checkpoint"]
+    assert "certsolve.solver.checkpoint" not in GRAPH["certsolve.solver.search"]

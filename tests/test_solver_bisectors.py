@@ -118,7 +118,7 @@ def test_no_information_splits_the_widest_relative_to_the_domain(bisector):
 
 def test_the_solver_scale_is_its_domain():
     s = parse_minibex("Variables x in [0, 2]; y; z in [1, 1]; Constraints x = 1; y = 1; z = 1; end")
-    solver = Solver(s)
+    solver = Solver.default(s)
     assert solver.scale.tolist() == [2.0, 1.0, 1.0]  # unbounded, degenerate: 1
     assert solver.on_domain(np.array([[0, 4], [0, 1], [1, 1]])).scale.tolist() == [4, 1, 1]
 
@@ -136,7 +136,7 @@ def test_a_pole_inside_the_domain_and_a_wide_multiplier():
     ``z`` only multiplies: the smear scores say nothing, and the fallback splits the variable
     widest relative to its domain (6 boxes; the widest in absolute terms, ``z``, took 67).
     Both solutions, (π/4, 2/3, 1) and (atan(8/3), 1/4, -1/4), and nothing undecided."""
-    r = Solver(parse_minibex(POLE)).solve(timeout=60)
+    r = Solver.default(parse_minibex(POLE)).solve(timeout=60)
     assert r.status == "complete" and not r.undecided
     got = sorted(((s.lo + s.hi) / 2).tolist() for s in r.solutions)
     want = sorted([[math.pi / 4, 2 / 3, 1.0], [math.atan(8 / 3), 0.25, -0.25]])

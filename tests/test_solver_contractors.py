@@ -23,8 +23,9 @@ from certsolve.expr.minibex import load_minibex
 from certsolve.solver import Solver, solve
 from certsolve.solver.bisectors import smear_scores
 from certsolve.solver.contractors import HC4, IntervalNewton, PartialNewton, log_volume_ratio
+from certsolve.solver.pipeline import find
 from certsolve.solver.search import run_search
-from certsolve.solver.shaving import CID, AdaptiveCount
+from certsolve.solver.shaving import CID, AdaptiveCount, Shave
 
 ROOT = Path(__file__).resolve().parent.parent
 SYSTEMS = ROOT / "examples" / "systems"
@@ -189,17 +190,17 @@ def test_cid_on_several_variables_keeps_solutions(name, stacked):
     least as much as CID on one variable."""
     csys, _ = compiled(name)
     rng = np.random.default_rng(5)
-    every = Solver(csys, cid_vars=None)  # CID on all the variables
-    every.stacked_cid_pairs = stacked
-    one = Solver(csys, cid_vars=1)  # the chosen variable only
-    assert every.cid_vars == csys.n and one.cid_vars == 1
+    every = find(Solver.default(csys, cid_vars=None).contractor, Shave)  # all the variables
+    every.stacked_pairs = stacked
+    one = find(Solver.default(csys, cid_vars=1).contractor, Shave)  # the chosen variable only
+    assert every.count == csys.n and one.count == 1
     gains = []
 
     def contract(csys, lo, hi):
         _, _, jlo, jhi = csys.eval_fj(lo, hi)
         var = rng.integers(csys.n, size=lo.shape[0])
-        a = every._cid(lo, hi, jlo, jhi, var)
-        b = one._cid(lo, hi, jlo, jhi, var)
+        a = every.contract(lo, hi, jlo, jhi, var, eps=1e-8)
+        b = one.contract(lo, hi, jlo, jhi, var, eps=1e-8)
         # the extra rounds only contract what CID on ``var`` alone left
         live = ~b[2] & ~a[2]
         assert np.all(a[0][live] >= b[0][live]) and np.all(a[1][live] <= b[1][live])
@@ -220,7 +221,7 @@ def test_cid_vars_needs_fewer_boxes_and_keeps_the_solutions():
     assert len(one.solutions) == len(every.solutions) == len(REFERENCE["eco-6"]["solutions"])
     assert every.stats.boxes < one.stats.boxes
     with pytest.raises(ValueError):
-        Solver(system, cid_vars=0)
+        Solver.default(system, cid_vars=0)
 
 
 @pytest.mark.parametrize("side_by_side", [False, True], ids=["sequence", "side-by-side"])
@@ -231,24 +232,24 @@ def test_cid_on_several_variables_box_by_box(name, side_by_side):
     positive smear score -- one after the other, best first (a large batch), or each on the
     box the chosen one left, the results intersected (a small batch)."""
     csys, pts = compiled(name)
-    solver = Solver(csys, cid_vars=None)
+    shave = find(Solver.default(csys, cid_vars=None).contractor, Shave)
     rng = np.random.default_rng(6)
     lo, hi = random_boxes(pts, csys.system.domain, rng, count=60)
     if not side_by_side:
-        solver.stacked_cid_pairs = 0
-    assert (lo.shape[0] * (csys.n - 1) <= solver.stacked_cid_pairs) == side_by_side
+        shave.stacked_pairs = 0
+    assert (lo.shape[0] * (csys.n - 1) <= shave.stacked_pairs) == side_by_side
     _, _, jlo, jhi = csys.eval_fj(lo, hi)
     var = rng.integers(csys.n, size=lo.shape[0])
-    blo, bhi, bemp = solver._cid(lo, hi, jlo, jhi, var)
+    blo, bhi, bemp = shave.contract(lo, hi, jlo, jhi, var, eps=1e-8)
     for k in range(lo.shape[0]):
-        a, b, e = solver.cid.contract(lo[k : k + 1], hi[k : k + 1], var[k : k + 1])
+        a, b, e = shave.cid.contract(lo[k : k + 1], hi[k : k + 1], var[k : k + 1])
         score = smear_scores(lo[k : k + 1], hi[k : k + 1], jlo[k : k + 1], jhi[k : k + 1])[0]
         score[var[k]] = -1.0
         ilo, ihi, empty = a[0].copy(), b[0].copy(), bool(e[0])
         for v in np.argsort(-score, kind="stable"):
             if e[0] or empty or score[v] <= 0.0:
                 break
-            c, d, f = solver.cid.contract(a, b, np.array([v]))
+            c, d, f = shave.cid.contract(a, b, np.array([v]))
             if side_by_side:  # each from the box CID on the chosen variable left
                 empty |= bool(f[0])
                 ilo, ihi = np.maximum(ilo, c[0]), np.minimum(ihi, d[0])
@@ -294,7 +295,7 @@ def test_auto_cid_count_keeps_every_solution(name):
     """cid_vars="auto" changes how much is shaved, never what is found."""
     system = load_minibex(SYSTEMS / f"{name}.mbx")
     one = solve(system, cid_vars=1, timeout=300)
-    auto = Solver(system, cid_vars="auto")
+    auto = Solver.default(system, cid_vars="auto")
     res = auto.solve(timeout=300)
     assert res.status == one.status == "complete"
     assert len(res.solutions) == len(one.solutions) == len(REFERENCE[name]["solutions"])

@@ -31,7 +31,7 @@ def _cubic():
 
 @pytest.mark.parametrize(("mask", "bisected"), [([True, False], 1), (None, 0)])
 def test_auxiliary_shrinking_alone_does_not_send_a_box_round_again(mask, bisected):
-    solver = Solver(_cubic(), bisect_mask=mask, cid_slices=0, relax=False)
+    solver = Solver.default(_cubic(), bisect_mask=mask, cid_slices=0, relax=False)
     state = solver.start()
     dom = solver.domain
     solver.process(dom[:, 0][None].copy(), dom[:, 1][None].copy(), state)
@@ -43,7 +43,7 @@ def test_auxiliary_shrinking_alone_does_not_send_a_box_round_again(mask, bisecte
 
 @pytest.mark.parametrize("mask", [[True, False], None])
 def test_same_roots_with_and_without_the_mask(mask):
-    res = Solver(_cubic(), bisect_mask=mask).solve()
+    res = Solver.default(_cubic(), bisect_mask=mask).solve()
     assert res.status == "complete" and not res.undecided
     mids = sorted(float(s.midpoint[0]) for s in res.solutions)
     assert np.allclose(mids, [-1.0, 0.0, 1.0], atol=1e-9)
@@ -69,7 +69,7 @@ def test_frame_bisector_splits_the_position_only_when_much_wider(name, tau, alph
 def test_variables_narrower_than_eps_do_not_count_as_progress():
     """A component converging to an exact zero (``[-1e-200, 1e-200]`` -> ``[-1e-250,
     1e-250]``) is no progress towards a bisection: the box must not go round again for it."""
-    solver = Solver(_cubic(), eps=1e-8)
+    solver = Solver.default(_cubic(), eps=1e-8)
     lo0, hi0 = np.array([[0.5, -1e-200]]), np.array([[0.6, 1e-200]])
     lo1, hi1 = np.array([[0.5, -1e-250]]), np.array([[0.6, 1e-250]])
     assert solver._gain(lo0, hi0, lo1, hi1)[0] == 0.0
@@ -81,6 +81,7 @@ def test_no_long_tail_of_single_box_rounds_at_a_solution_with_zeros():
     """katsura-5 has the solution (1, 0, 0, 0, 0, 0): near it, HC4 shrinks the zero components
     by orders of magnitude at every round.  Counted as progress, one box went round again
     ~180 times (210 batches in all with batches of 1024; 28 without the tail)."""
-    res = Solver(load_minibex(SYSTEMS / "katsura-5.mbx"), batch_size=1024).solve(timeout=300)
+    system = load_minibex(SYSTEMS / "katsura-5.mbx")
+    res = Solver.default(system, batch_size=1024).solve(timeout=300)
     assert res.status == "complete" and len(res.solutions) == 16 and not res.undecided
     assert res.stats.rounds < 60

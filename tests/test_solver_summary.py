@@ -109,7 +109,7 @@ def test_pending_hulls_cover_the_stack():
     system = parse_minibex(
         "Variables x in [-1e6, 1e6]; y in [-1e6, 1e6]; Constraints x - y = 0; 2*x - 2*y = 0; end"
     )
-    solver = Solver(system, eps=1e-12, max_pending=7, max_undecided=5)
+    solver = Solver.default(system, eps=1e-12, max_pending=7, max_undecided=5)
     dom = system.domain
     run = run_search(solver, dom[:, 0][None], dom[:, 1][None], limits=Limits(max_boxes=20000))
     raw_lo, raw_hi = run.state.stack.snapshot()
@@ -132,7 +132,7 @@ def test_complete_results_list_everything():
     assert r.status == "complete" and r.undecided_dropped == 0 and r.pending_total == 0
     assert r.undecided_total == sum(u.boxes for u in r.undecided) >= 1
     with pytest.raises(ValueError, match="max_pending"):
-        Solver(parse_minibex("Variables x; Constraints x = 1; end"), max_pending=0)
+        Solver.default(parse_minibex("Variables x; Constraints x = 1; end"), max_pending=0)
 
 
 def test_a_complete_search_with_unlisted_undecided_boxes_is_truncated():

@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
     executor = executor_from_args(args)
     deadline = Deadline(params.timeout, args.started)
     system = load_minibex(args.file)
-    solver = Solver(
+    solver = Solver.default(
         system,
         eps=params.eps,
         max_undecided=params.max_undecided,

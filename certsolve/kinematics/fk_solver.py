@@ -14,11 +14,15 @@ from typing import Any
 
 import numpy as np
 
+from ..expr.compiled import CompiledSystem
 from ..robot.elastic import tension
 from ..robot.geometry import euler_zyx
 from ..robot.model import Robot
-from ..solver import SearchStatus, Solver
+from ..solver import SearchStatus, Solver, SolverLimits
 from ..solver.bisectors import Prioritized, SmearSumRelative
+from ..solver.certify import Certifier
+from ..solver.contractors import HC4
+from ..solver.pipeline import FixPoint, Inflate, Sequence, core
 from ..solver.result import SolveResult
 from .fk_systems import (
     FKFormulation,
@@ -182,17 +186,22 @@ class FKSolver:
                 [not v.startswith(("e", "rho")) for v in names],
                 alpha=0.25,
             )
-        self.solver = Solver(
-            self.form.system,
-            eps=eps,
-            batch_size=batch_size,
-            bisect_mask=mask,
+        # the solver's pipeline without its relaxation (fewer boxes, more CPU: see
+        # Solver.default's ``relax``) and without CID: HC4, partial Newton on the
+        # translation, Newton with the mixed Jacobian, in a fixpoint; inflated proofs
+        csys = CompiledSystem(self.form.system)
+        newton = core(
+            csys,
+            hc4=HC4(csys),
             subsystems=subsystems,
-            bisector=bisector,
             newton_groups=_newton_groups(self.form.system.variables),
-            cid_slices=0,
-            cid_vars=1,  # CID is off: nothing to learn (and the checkpoint fingerprint stays)
-            relax=False,  # fewer boxes, more CPU (see Solver's ``relax``)
+        )
+        self.solver = Solver(
+            csys,
+            Sequence(FixPoint(Sequence(*newton)), Inflate()),
+            Certifier(csys),
+            bisector,
+            limits=SolverLimits(eps=eps, batch_size=batch_size, bisect_mask=mask),
         )
         self.csys = self.solver.csys
 

@@ -174,6 +174,13 @@ class Certifier:
         self._clo = np.array([cons[i].lo for i in checked], dtype=np.float64)
         self._chi = np.array([cons[i].hi for i in checked], dtype=np.float64)
 
+    def describe(self) -> str:
+        """The settings that shape the answer, as text (for the checkpoint fingerprint)."""
+        return (
+            f"{type(self).__name__}(newton_iterations={self.newton_iterations}, "
+            f"scales={self.scales!r}, tighten_steps={self.tighten_steps})"
+        )
+
     # -- float Newton -----------------------------------------------------------------------
     def newton_point(self, x0: np.ndarray, lo=None, hi=None) -> tuple[np.ndarray, np.ndarray]:
         """Float Newton iterations from ``x0`` (B, n); returns points and a converged mask.

@@ -59,14 +59,11 @@ import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from .search import SearchStats
-
-if TYPE_CHECKING:
-    from .search import Search, Step
+from .protocol import RunningSearch, SearchStats, Step
 
 __all__ = [
     "Checkpoint",
@@ -293,12 +290,12 @@ class Checkpoint:
             self.ignored = str(exc)
             return None
 
-    def tick(self, search: Search) -> None:
+    def tick(self, search: RunningSearch) -> None:
         """Write if ``interval`` seconds passed since the last write."""
         if time.monotonic() - self._last >= self.interval:
             self.write(search)
 
-    def write(self, search: Search) -> None:
+    def write(self, search: RunningSearch) -> None:
         """Save a snapshot now.  A snapshot that cannot be built or stored (out of memory,
         disk full) is skipped -- the search goes on, the previous one stays -- and
         :attr:`error` says why."""
@@ -319,7 +316,7 @@ class Checkpoint:
         self.write_time += time.perf_counter() - t0
 
     # -- snapshot and restore ------------------------------------------------------------------
-    def snapshot(self, search: Search) -> bytes:
+    def snapshot(self, search: RunningSearch) -> bytes:
         """The search as bytes (module docstring)."""
         lo, hi = search.pending_boxes()
         records = {

@@ -1,7 +1,13 @@
 """Contractors: narrow a batch of boxes without losing any solution (IBEX ``Ctc``).
 
-Each contractor is a small class with ``contract(lo, hi) -> (lo, hi, empty)`` acting on a
-batch ``(B, n)`` of boxes; ``empty[k]`` proves box ``k`` holds no solution.
+Each contractor is a small class with two faces:
+
+* the pipeline's protocol (:mod:`.batch`): ``apply(batch)`` on the round's
+  :class:`~.batch.Batch` and ``describe()`` for the checkpoint fingerprint;
+* its kernel on arrays, ``contract(lo, hi)`` on a batch ``(B, n)`` of boxes, returning
+  ``(lo, hi, empty)`` (``empty[k]`` proves box ``k`` holds no solution) -- or, for
+  :class:`IntervalNewton`, the whole :class:`NewtonStep` (the proof and the linearisation
+  come with the contraction).
 
 * :class:`HC4` -- forward-backward propagation on every equation and constraint at once
   (:meth:`certsolve.expr.compiled.CompiledSystem.hc4_revise`), repeated while it narrows.
@@ -19,6 +25,7 @@ import numpy as np
 from ..expr.compiled import CompiledSystem
 from ..interval.core import midpoint
 from ..interval.reductions import all_last
+from .batch import Batch, log_volume_ratio
 from .newton import (
     Linearization,
     hansen_sengupta,
@@ -28,15 +35,6 @@ from .newton import (
 )
 
 __all__ = ["HC4", "IntervalNewton", "NewtonStep", "PartialNewton", "log_volume_ratio"]
-
-
-def log_volume_ratio(lo0, hi0, lo1, hi1) -> np.ndarray:
-    """``Σ_i log(w1_i / w0_i)`` per box (0 for degenerate components): < 0 means it shrank."""
-    with np.errstate(all="ignore"):  # unbounded boxes: infinite widths are fine here
-        w0 = hi0 - lo0
-        w1 = np.maximum(hi1 - lo1, 0.0)
-        r = np.where(w0 > 0.0, w1 / w0, 1.0)
-        return np.sum(np.log(np.maximum(r, 1e-300)), axis=1)
 
 
 class HC4:
@@ -61,6 +59,13 @@ class HC4:
             if active.size == 0:
                 break
         return lo, hi, empty
+
+    def apply(self, batch: Batch) -> None:
+        batch.lo, batch.hi, empty = self.contract(batch.lo, batch.hi)
+        batch.empty |= empty
+
+    def describe(self) -> str:
+        return f"HC4(passes={self.max_passes}, threshold={self.threshold!r})"
 
 
 @dataclass
@@ -150,6 +155,31 @@ class IntervalNewton:
         empty &= ~proven
         return NewtonStep(lin, klo, khi, proven, nlo, nhi, empty)
 
+    def apply(self, batch: Batch) -> None:
+        """Contract; a box proven to hold exactly one solution is recorded
+        (``batch.prove``: existence box ``K(X) ∩ X``, unicity box ``X``) and leaves the
+        round; the others keep the linearisation (``batch.jacobian()``, ``batch.regular``)."""
+        lo, hi = batch.lo, batch.hi
+        step = self.contract(lo, hi)
+        p = step.proven
+        if np.any(p):
+            if batch.prove is None:
+                raise RuntimeError("IntervalNewton proves solutions: the batch needs prove")
+            elo = np.fmax(step.klo[p], step.lo[p])
+            ehi = np.fmin(step.khi[p], step.hi[p])
+            batch.prove(elo, ehi, lo[p], hi[p])
+        batch.lo, batch.hi = step.lo, step.hi
+        batch.empty = batch.empty | step.empty
+        batch.linearization = step.lin
+        batch.share_jacobian(step.lin.jlo, step.lin.jhi)
+        batch.regular = step.regular
+        if np.any(p):
+            batch.keep(~p)
+
+    def describe(self) -> str:
+        groups = None if self.groups is None else [g.tolist() for g in self.groups]
+        return f"IntervalNewton(groups={groups})"
+
 
 class PartialNewton:
     """Hansen–Sengupta on a square sub-system, the other variables as interval parameters.
@@ -199,3 +229,10 @@ class PartialNewton:
         nlo[:, V] = vlo
         nhi[:, V] = vhi
         return nlo, nhi, empty
+
+    def apply(self, batch: Batch) -> None:
+        batch.lo, batch.hi, empty = self.contract(batch.lo, batch.hi)
+        batch.empty |= empty
+
+    def describe(self) -> str:
+        return f"PartialNewton(equations={self.S.tolist()}, variables={self.V.tolist()})"

@@ -54,6 +54,7 @@ from ..expr.compiled import CompiledSystem
 from ..interval.linalg import gamma
 from ..interval.reductions import all_last, any_last, to_front
 from ..interval.rounding import down, up
+from .batch import Batch
 from .bisectors import smear_scores
 from .lp import StallRule, dual_active_set
 
@@ -287,3 +288,13 @@ class PolytopeHull:
         hi[idx] = np.where(emp[:, None], hi[idx], nhi)
         empty[idx] = emp
         return lo, hi, empty
+
+    def apply(self, batch: Batch) -> None:
+        batch.lo, batch.hi, empty = self.contract(batch.lo, batch.hi)
+        batch.empty |= empty
+
+    def describe(self) -> str:
+        return (
+            f"PolytopeHull(directions={self.directions}, max_iter={self.max_iter}, "
+            f"affine={self.affine}, stall={self.stall!r})"
+        )

@@ -33,14 +33,13 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from .checkpoint import Checkpoint
+from .protocol import Saver, SearchStats, Step, Tally
 
 __all__ = [
     "Executor",
@@ -113,64 +112,6 @@ class Progress:
 
 
 @dataclass(kw_only=True)
-class Tally:
-    """A step's counts of what its state holds (for limits and progress)."""
-
-    solutions: int  # what max_solutions counts
-    undecided: int = 0
-    extra: dict[str, float] = field(default_factory=dict)
-
-
-class Step(Protocol):
-    """What the driver needs from a search.  The step's *state* must have a ``stack``
-    (:class:`~.buffer.BoxStack`); the rest of it is the step's business.
-
-    Executors with workers also use :meth:`known`, :meth:`found` and :meth:`merge`, and
-    the step and its state must pickle.
-    """
-
-    batch_size: int
-
-    def start(self, known: Any = None) -> Any:
-        """A new state with an empty stack, seeded with ``known`` (see :meth:`known`)."""
-
-    def process(self, lo: np.ndarray, hi: np.ndarray, state: Any) -> None:
-        """Process a batch ``(B, n)``: record results in ``state``, push what remains of the
-        boxes on ``state.stack``.  Whatever is neither pushed nor recorded is proven empty."""
-
-    def tally(self, state: Any) -> Tally: ...
-
-    def known(self, state: Any) -> Any:
-        """What a task must know from ``state`` (small, picklable; ``None`` if nothing)."""
-
-    def found(self, state: Any) -> Any:
-        """What ``state`` recorded since :meth:`start` (picklable), for :meth:`merge`."""
-
-    def merge(self, state: Any, found: Any) -> None:
-        """Add a task's :meth:`found` to ``state``."""
-
-
-@dataclass(kw_only=True)
-class SearchStats:
-    """Counters of one search (steps add their own in their state)."""
-
-    executor: str = "serial"  # "serial" | "processes" | "dask"
-    workers: int = 1
-    boxes: int = 0  # boxes processed by the step
-    batches: int = 0
-    tasks: int = 0  # worker tasks finished
-    resubmitted: int = 0  # task slices handed out again after a worker was lost
-    max_pending: int = 0
-    time: float = 0.0  # wall seconds
-    cpu: float = 0.0  # CPU seconds: this process plus every task
-    resumed: int = 0  # times the search was restored from a checkpoint (.checkpoint)
-    resumed_boxes: int = 0  # boxes already processed at the last restore
-
-    def to_dict(self) -> dict:
-        return asdict(self)
-
-
-@dataclass(kw_only=True)
 class SearchRun:
     """The end of a search: its status, the step's state (records, and the pending boxes
     in ``state.stack``) and the counters."""
@@ -207,7 +148,7 @@ class Search:
         cancel: Any = None,
         stats: SearchStats | None = None,
         count_new: bool = False,
-        checkpoint: Checkpoint | None = None,
+        checkpoint: Saver | None = None,
     ):
         self.step = step
         self.state = state
@@ -409,7 +350,7 @@ def run_search(
     progress: ProgressCallback | None = None,
     cancel: Any = None,
     previous: SearchRun | None = None,
-    checkpoint: Checkpoint | None = None,
+    checkpoint: Saver | None = None,
 ) -> SearchRun:
     """Search the boxes ``lo, hi`` (``(B, n)``) with ``step`` (see the module docstring).
 

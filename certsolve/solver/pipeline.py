@@ -1,0 +1,214 @@
+"""Compositions of contractors (IBEX ``CtcCompo``, ``CtcFixPoint``), batched, and the
+default pipelines.
+
+Every part follows the protocol of :mod:`.batch` (``apply(batch)``, ``describe()``), and so
+does every composition, so compositions nest:
+
+* :class:`Sequence` -- the parts one after the other, each on what the previous one left
+  (IBEX ``CtcCompo``).  Rows proven empty are dropped after each part; the composition of
+  sound contractors is sound.
+* :class:`FixPoint` -- the inner contractor, then every box that shrank at least as much
+  as a bisection would (log-volume ``<= log 1/2`` over the variables a bisection may still
+  split, :func:`.batch.progress_gain`) goes back to the buffer for another round instead
+  of being split.  The iteration of IBEX's ``CtcFixPoint`` runs through the buffer: the box
+  comes back in a later batch, so its next round is batched with the others.  It stops:
+  a box goes round again only after halving its volume over variables wider than ``eps``,
+  which can happen only finitely often.
+* :class:`Inflate` -- where the linearisation is informative (``batch.regular``) but the
+  box stalled, the certifier's inflated Krawczyk test (:meth:`.Certifier.inflate`); a proven
+  solution is recorded and the part of the box outside its unicity box goes back to the
+  buffer.
+* :class:`~.shaving.Shave` -- CID on the variable the bisector chose and on more variables
+  by smear order (ACID).
+
+The solver's default pipeline (:func:`default_pipeline`) is::
+
+    Sequence(
+        FixPoint(Sequence(HC4, PartialNewton..., IntervalNewton, PolytopeHull)),
+        Inflate(),
+        FixPoint(Shave(HC4, slices=4, count="auto")),
+    )
+
+then the solver bisects what is left (:meth:`.Solver.process`).  Forward kinematics
+composes its own (:class:`certsolve.kinematics.fk_solver.FKSolver`: no relaxation, no CID).
+Adding a technique: a class with ``apply`` and ``describe``, and one line where the
+pipeline is assembled (``docs/architecture.md``, *Adding a contractor*).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from collections.abc import Sequence as Seq
+from typing import Any
+
+import numpy as np
+
+from ..expr.compiled import CompiledSystem
+from .batch import Batch, Contractor
+from .certify import box_difference
+from .contractors import HC4, IntervalNewton, PartialNewton
+from .relaxation import PolytopeHull
+from .shaving import Shave, check_count
+
+__all__ = ["FixPoint", "Inflate", "Sequence", "core", "default_pipeline", "find", "parts_of"]
+
+_LOG_HALF = float(np.log(0.5))
+
+
+class Sequence:
+    """The parts one after the other (IBEX ``CtcCompo``); empty rows dropped after each."""
+
+    def __init__(self, *parts: Contractor):
+        self.parts: tuple[Contractor, ...] = tuple(parts)
+
+    def apply(self, batch: Batch) -> None:
+        for part in self.parts:
+            if batch.size == 0:
+                return
+            part.apply(batch)
+            batch.drop_empty()
+
+    def describe(self) -> str:
+        return f"Sequence({', '.join(p.describe() for p in self.parts)})"
+
+    def children(self) -> tuple[Contractor, ...]:
+        return self.parts
+
+    def replace(self, old: Contractor, new: Contractor) -> Sequence:
+        """This composition with the part ``old`` (anywhere inside) replaced by ``new``."""
+        return Sequence(*(_replaced(p, old, new) for p in self.parts))
+
+
+class FixPoint:
+    """The inner contractor; boxes that shrank at least as much as a bisection go back to
+    the buffer for another round (module docstring).  ``gain``: the log-volume change at
+    or below which a box goes round again (default ``log 1/2``)."""
+
+    def __init__(self, inner: Contractor, gain: float = _LOG_HALF):
+        if not gain < 0.0:
+            raise ValueError("FixPoint gain must be negative (a log-volume ratio)")
+        self.inner = inner
+        self.gain = float(gain)
+
+    def apply(self, batch: Batch) -> None:
+        lo0, hi0, ids0 = batch.lo, batch.hi, batch.ids
+        self.inner.apply(batch)
+        batch.drop_empty()
+        if batch.size == 0:
+            return
+        at = np.searchsorted(ids0, batch.ids)  # rows keep their order: where each one was
+        if at.size != ids0.size:
+            lo0, hi0 = lo0[at], hi0[at]
+        batch.send_back(batch.gain(lo0, hi0) <= self.gain)
+
+    def describe(self) -> str:
+        return f"FixPoint({self.inner.describe()}, gain={self.gain!r})"
+
+    def children(self) -> tuple[Contractor, ...]:
+        return (self.inner,)
+
+    def replace(self, old: Contractor, new: Contractor) -> FixPoint:
+        return FixPoint(_replaced(self.inner, old, new), self.gain)
+
+
+class Inflate:
+    """Inflated Krawczyk proofs where Newton is informative but the box stalled.
+
+    For each row with ``batch.regular`` (every row when no part linearised), the
+    certifier looks for a float Newton point near the box and proves a unicity box ``U``
+    around it (:meth:`.Certifier.inflate`).  The solution is recorded; when ``U`` overlaps
+    the box with positive volume, the box minus ``U`` (:func:`.certify.box_difference`: at
+    most ``2n`` boxes covering it) goes back to the buffer and the row leaves the round --
+    ``U`` holds exactly one solution, recorded.  Otherwise the row stays (to be split).
+    """
+
+    def apply(self, batch: Batch) -> None:
+        if batch.certifier is None:
+            raise RuntimeError("Inflate needs the solver's certifier on the batch")
+        lo, hi = batch.lo, batch.hi
+        rows = batch.regular if batch.regular is not None else np.ones(batch.size, dtype=bool)
+        try_inflate = np.flatnonzero(rows)
+        if try_inflate.size == 0:
+            return
+        idx, Elo, Ehi, Ulo, Uhi = batch.certifier.inflate(lo[try_inflate], hi[try_inflate])
+        if idx.size == 0:
+            return
+        assert batch.prove is not None and batch.stack is not None
+        batch.prove(Elo, Ehi, Ulo, Uhi)
+        done = np.zeros(batch.size, dtype=bool)
+        for k, r in enumerate(try_inflate[idx]):
+            # progress only if U overlaps X with positive volume: otherwise the remainder
+            # would be X itself; leave X to bisection instead
+            ilo = np.maximum(lo[r], Ulo[k])
+            ihi = np.minimum(hi[r], Uhi[k])
+            if not np.all(ilo < ihi):
+                continue
+            for plo, phi in box_difference(lo[r], hi[r], Ulo[k], Uhi[k]):
+                batch.stack.push(plo[None], phi[None])
+            done[r] = True
+        if np.any(done):
+            batch.keep(~done)
+
+    def describe(self) -> str:
+        return "Inflate()"
+
+
+def _replaced(part: Contractor, old: Contractor, new: Contractor) -> Contractor:
+    if part is old:
+        return new
+    replace = getattr(part, "replace", None)
+    return replace(old, new) if callable(replace) else part
+
+
+def parts_of(contractor: Contractor) -> Iterator[Contractor]:
+    """Every part of a composition, depth first, the compositions included."""
+    yield contractor
+    children = getattr(contractor, "children", None)
+    for child in children() if callable(children) else ():
+        yield from parts_of(child)
+
+
+def find(contractor: Contractor, kind: type) -> Any:
+    """The first part of ``contractor`` of type ``kind`` (depth first), or ``None``."""
+    return next((p for p in parts_of(contractor) if isinstance(p, kind)), None)
+
+
+def core(
+    csys: CompiledSystem,
+    *,
+    hc4: HC4,
+    subsystems: Seq[tuple[Any, Any]] = (),
+    newton_groups: Any = "variables",
+) -> list[Contractor]:
+    """The contractors of a round before any LP: HC4, partial Newton on each sub-system,
+    interval Newton (Hansen's mixed Jacobian over ``newton_groups``: ``"variables"``, one
+    variable per group; ``None``: the plain Jacobian; or a list of boolean masks)."""
+    if isinstance(newton_groups, str):
+        if newton_groups != "variables":
+            raise ValueError("newton_groups: 'variables', None or a list of masks")
+        newton_groups = list(np.eye(csys.n, dtype=bool))
+    partial = [PartialNewton(csys, e, v) for e, v in subsystems]
+    return [hc4, *partial, IntervalNewton(csys, newton_groups)]
+
+
+def default_pipeline(
+    csys: CompiledSystem,
+    *,
+    hc4_passes: int = 4,
+    subsystems: Seq[tuple[Any, Any]] = (),
+    newton_groups: Any = "variables",
+    relax: bool = True,
+    cid_slices: int = 4,
+    cid_vars: int | str | None = "auto",
+) -> Sequence:
+    """The solver's pipeline from its options (see :meth:`.Solver.default`)."""
+    hc4 = HC4(csys, max_passes=hc4_passes)
+    parts = core(csys, hc4=hc4, subsystems=subsystems, newton_groups=newton_groups)
+    if relax:
+        parts.append(PolytopeHull(csys))
+    pipeline: list[Contractor] = [FixPoint(Sequence(*parts)), Inflate()]
+    if cid_slices:
+        pipeline.append(FixPoint(Shave(hc4, cid_slices, count=cid_vars, n=csys.n)))
+    else:
+        check_count(cid_vars)  # refused even when CID is off, as before
+    return Sequence(*pipeline)
