@@ -114,8 +114,9 @@ def bench_workspace(repeat: int, quick: bool):
 def bench_design(repeat: int, quick: bool):
     """Certified design of Krut's 3-motor robot (examples/design/krut3-spec.json)."""
     from certsolve.force.design import design
+    from certsolve.force.design_spec import load_design_spec
 
-    spec = ROBOTS.parent / "design" / "krut3-spec.json"
+    spec = load_design_spec(ROBOTS.parent / "design" / "krut3-spec.json")
     print("\ncertified design, krut-3: base half-width x tau_max, F = 150 N on [-20, 20]^2")
     print(
         f"{'eps':>6} {'ws eps':>7} {'time s, median (min-max)':>27} {'pairs':>8} "
@@ -124,7 +125,8 @@ def bench_design(repeat: int, quick: bool):
     settings = [(1 / 16, 2.5), (1 / 32, 1.25)] + ([] if quick else [(1 / 64, 0.625)])
     for eps, weps in settings:
         res, ts = timed(
-            lambda e=eps, w=weps: design(spec=spec, eps=e, workspace_eps=w), 1 if quick else 3
+            lambda e=eps, w=weps: design(spec.model_copy(update={"eps": e, "workspace_eps": w})),
+            1 if quick else 3,
         )
         print(
             f"{eps:6.4f} {weps:7g} {fmt_times(ts):>27} {res.pairs:8d} {res.parameter_boxes:6d} "

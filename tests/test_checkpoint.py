@@ -363,11 +363,13 @@ def test_job_resumes_from_its_checkpoint_after_its_worker_is_killed(k5, tmp_path
 
 
 def test_design_resumes_to_the_same_classification():
-    """The certified design has a loop of its own; it saves and resumes the same way."""
+    """The certified design is a step of the driver; it saves and resumes the same way."""
     from certsolve.force.design import design
+    from certsolve.force.design_spec import load_design_spec
 
-    spec = str(ROOT / "examples/design/krut3-spec.json")
-    kw = {"eps": 1 / 8, "workspace_eps": 2.5, "batch": 256}
+    krut3 = load_design_spec(ROOT / "examples/design/krut3-spec.json")
+    spec = krut3.model_copy(update={"eps": 1 / 8, "workspace_eps": 2.5})
+    kw = {"batch": 256}
     ref = design(spec=spec, **kw)
     mem = Memory()
     runs = 0
@@ -382,4 +384,4 @@ def test_design_resumes_to_the_same_classification():
         assert np.array_equal(getattr(res, key), getattr(ref, key)), key
     assert len(ref.good) and len(ref.bad) and res.best_robot == ref.best_robot
     with pytest.raises(CheckpointError):
-        design(spec=spec, **{**kw, "eps": 1 / 4}, checkpoint=mem.checkpoint())
+        design(spec.model_copy(update={"eps": 1 / 4}), **kw, checkpoint=mem.checkpoint())

@@ -224,7 +224,7 @@ def _workspace():
 def _design():
     from certsolve import design
 
-    return design(spec=DESIGN_SPEC)
+    return design(DESIGN_SPEC)
 
 
 def _map():

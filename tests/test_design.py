@@ -13,7 +13,7 @@ import pytest
 
 from certsolve.cli import main
 from certsolve.force import isotropic_values
-from certsolve.force.design import BoxClass, design
+from certsolve.force.design import PARTS, design
 from certsolve.force.design_spec import DesignSpecError
 from certsolve.robot import Robot
 from certsolve.robot.params import AffineRobot, ParameterDef
@@ -31,6 +31,12 @@ PLANAR_PARAMS = [
      "range": [4, 20]},
     {"name": "tau_max", "path": "wires[*].tau[1]", "range": [5, 40]},
 ]  # fmt: skip
+
+
+def spec(robot, parameters, workspace, min_force, **options) -> dict:
+    """A design spec (``design``'s one argument)."""
+    return {"robot": robot, "parameters": parameters, "workspace": workspace,
+            "min_force": min_force, **options}  # fmt: skip
 
 
 def samples(box: np.ndarray, n: int, rng) -> np.ndarray:
@@ -52,16 +58,16 @@ def affine_of(res, robot, params) -> AffineRobot:
 
 @pytest.fixture(scope="module")
 def krut_result():
-    return design(KRUT3, KRUT_PARAMS, [-20, 20, -20, 20], 150.0, eps=1 / 8, workspace_eps=2.5)
+    return design(spec(KRUT3, KRUT_PARAMS, [-20, 20, -20, 20], 150.0, eps=1 / 8, workspace_eps=2.5))
 
 
 def test_krut_classes_cover_the_parameter_box(krut_result):
     res = krut_result
     assert res.complete and res.pairs > 0
     assert len(res.good) and len(res.bad) and len(res.margin) == len(res.good)
-    total = sum(res.share(c) for c in BoxClass)
+    total = sum(res.share(c) for c in PARTS)
     assert total == pytest.approx(1.0, abs=1e-12)
-    allb = np.concatenate([getattr(res, str(c)) for c in BoxClass])
+    allb = np.concatenate([getattr(res, c) for c in PARTS])
     assert np.all(allb[..., 0] >= res.ranges[:, 0]) and np.all(allb[..., 1] <= res.ranges[:, 1])
     # boxes do not overlap: their volumes add up to the whole box and no two share an interior
     lo, hi = allb[..., 0], allb[..., 1]
@@ -112,7 +118,7 @@ def test_best_robot_is_the_centre_of_the_best_box(krut_result, tmp_path):
 
 def test_planar_platform_size_and_tension(tmp_path):
     """A rigid platform (dof 3): platform size and tension limit as design parameters."""
-    res = design(PLANAR, PLANAR_PARAMS, [85, 95, 55, 65], 5.0, eps=1 / 8, workspace_eps=2.0)
+    res = design(spec(PLANAR, PLANAR_PARAMS, [85, 95, 55, 65], 5.0, eps=1 / 8, workspace_eps=2.0))
     assert res.complete and len(res.good)
     aff = affine_of(res, PLANAR, PLANAR_PARAMS)
     rng = np.random.default_rng(2)
@@ -166,21 +172,21 @@ def test_affine_robot_paths_and_bounds():
 def test_parameter_errors_name_the_field(params, message):
     ok = {"name": "z", "path": "wires[1].base[1]", "range": [40, 60]}
     with pytest.raises(DesignSpecError, match=message.replace("[", r"\[").replace("]", r"\]")):
-        design(KRUT3, params + [ok], [-1, 1, -1, 1], 10.0)
+        design(spec(KRUT3, params + [ok], [-1, 1, -1, 1], 10.0))
 
 
 def test_stopping_leaves_pending_boxes():
-    res = design(KRUT3, KRUT_PARAMS, [-20, 20, -20, 20], 150.0, eps=1 / 16, max_boxes=3000)
+    res = design(spec(KRUT3, KRUT_PARAMS, [-20, 20, -20, 20], 150.0, eps=1 / 16), max_boxes=3000)
     assert res.status == "max_boxes" and len(res.pending)
-    assert sum(res.share(c) for c in BoxClass) == pytest.approx(1.0, abs=1e-12)
+    assert sum(res.share(c) for c in PARTS) == pytest.approx(1.0, abs=1e-12)
     calls = []
 
     def progress(info):
-        calls.append(info.pairs)
+        calls.append(info.extra["pairs"])
         return False
 
-    res = design(KRUT3, KRUT_PARAMS, [-20, 20, -20, 20], 150.0, progress=progress)
-    assert res.status == "stopped" and len(calls) == 1
+    res = design(spec(KRUT3, KRUT_PARAMS, [-20, 20, -20, 20], 150.0), progress=progress)
+    assert res.status == "cancelled" and len(calls) == 1
 
 
 def run(capsys, *argv):
@@ -303,3 +309,57 @@ def test_cli_help_default_matches_the_library():
     from certsolve.force.design_spec import DEFAULT_EPS
 
     assert cli_design.DEFAULT_EPS == DEFAULT_EPS
+
+
+def test_resumed_design_gives_the_serial_answer(krut_result, tmp_path):
+    """The design on the driver: stopped by ``cancel`` (Ctrl-C's way) and by ``max_boxes``,
+    saved to a file and resumed, it ends with the boxes, verdicts, margins, witnesses and
+    counters of the uninterrupted serial run."""
+    import threading
+
+    from certsolve.solver.checkpoint import Checkpoint
+
+    ref = krut_result
+    assert ref.stats.executor == "serial" and ref.stats.resumed == 0
+    path = tmp_path / "design.ckpt"
+    problem = spec(KRUT3, KRUT_PARAMS, [-20, 20, -20, 20], 150.0, eps=1 / 8, workspace_eps=2.5)
+    cancel = threading.Event()
+
+    def stop_after_two(p) -> bool:
+        if p.boxes >= 2 * 1024:
+            cancel.set()
+        return True
+
+    res = design(problem, progress=stop_after_two, cancel=cancel, checkpoint=Checkpoint.file(path))
+    assert res.status == "cancelled" and len(res.pending) and path.exists()
+    runs = 1
+    while res.status != "complete":
+        res = design(problem, max_boxes=5000, checkpoint=Checkpoint.file(path))
+        runs += 1
+        assert res.status in ("complete", "max_boxes") and runs < 40
+    assert runs >= 3 and res.resumed_from > 0 and res.stats.resumed == runs - 1
+    assert res.pairs == ref.pairs and res.parameter_boxes == ref.parameter_boxes
+    assert res.stats.boxes == ref.stats.boxes
+    for key in ("good", "bad", "undecided", "pending", "margin", "witness"):
+        assert np.array_equal(getattr(res, key), getattr(ref, key)), key
+    assert res.best == ref.best and res.best_robot == ref.best_robot
+
+
+def test_pair_queue_is_first_in_first_out():
+    """The design's buffer: rows come out in the order they went in, across growth and
+    partial pops, and a snapshot pushed into a new queue rebuilds it."""
+    from certsolve.force.design_step import PairQueue
+
+    q = PairQueue(2, capacity=4)
+    rows = np.arange(40.0).reshape(20, 2)
+    q.push(rows[:3], rows[:3] + 0.5)
+    lo, hi = q.pop(2)
+    assert np.array_equal(lo, rows[:2]) and np.array_equal(hi, rows[:2] + 0.5)
+    q.push(rows[3:20], rows[3:20] + 0.5)  # grows, keeping the unpopped row first
+    assert len(q) == 18
+    again = PairQueue(2)
+    again.push(*q.snapshot())
+    for queue in (q, again):
+        lo, hi = queue.pop(100)
+        assert np.array_equal(lo, rows[2:]) and np.array_equal(hi, rows[2:] + 0.5)
+        assert len(queue) == 0 and queue.pop(3)[0].shape == (0, 2)

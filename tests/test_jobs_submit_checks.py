@@ -199,8 +199,8 @@ def test_design_job_gives_the_library_answer(tmp_path):
         row = run_one(svc, {"kind": "design", "robot": KRUT3, "params": DESIGN})
     assert row.status == "done", row.error
     got = json.loads(row.result)
-    want = design(robot=KRUT3, **{k: DESIGN[k] for k in ("parameters", "workspace", "min_force")},
-                  eps=0.25, workspace_eps=5).to_dict()  # fmt: skip
+    fields = {k: DESIGN[k] for k in ("parameters", "workspace", "min_force")}
+    want = design({"robot": KRUT3, **fields, "eps": 0.25, "workspace_eps": 5}).to_dict()
     assert got["status"] == "complete" and got["counts"] == want["counts"]
     assert got["good_boxes"] == want["good_boxes"] and got["best"] == want["best"]
     assert got["counts"]["good"] >= 1

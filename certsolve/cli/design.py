@@ -126,23 +126,16 @@ def run(args: argparse.Namespace) -> int:
     progress, stop = progress_reporter(not args.json, line=_design_line)
     saving = checkpointing(args, "design")
     try:
-        with saving as (checkpoint, cancel):
-
-            def watch(info) -> bool:  # the line on stderr; Ctrl-C stops (and saves)
-                if progress is not None:
-                    progress(info)
-                return cancel is None or not cancel.is_set()
-
+        with saving as (checkpoint, cancel):  # Ctrl-C sets cancel: the search stops and saves
             res = design(
-                spec=spec,
-                eps=params.eps,
-                workspace_eps=params.workspace_eps,
-                progress=watch,
+                params.spec(spec.robot),
+                progress=progress,
+                cancel=cancel,
                 timeout=params.timeout,
                 max_boxes=params.max_boxes,
                 checkpoint=checkpoint,
             )
-            saving.status = res.status
+            saving.status = str(res.status)
     finally:
         stop()
     if args.plot:
@@ -215,7 +208,10 @@ def format_design(
 
 
 def _design_line(p) -> str:
+    """The progress line from the driver's :class:`~certsolve.solver.search.Progress`."""
+    x = p.extra
     return (
-        f"design: {p.pairs} pairs, {p.queued} queued, {p.good} good, {p.bad} bad, "
-        f"{p.undecided} undecided, {100 * p.good_share:.1f} % proven good, {p.elapsed:.1f} s"
+        f"design: {x['pairs']:.0f} pairs, {p.pending} queued, {x['good']:.0f} good, "
+        f"{x['bad']:.0f} bad, {x['undecided']:.0f} undecided, "
+        f"{100 * x['good_share']:.1f} % proven good, {p.elapsed:.1f} s"
     )

@@ -16,17 +16,19 @@ positions (fixed orientation) and a required force ``F > 0``, the search classif
   witness region;
 * **undecided**: ``P`` is narrower than ``eps`` (a fraction of each parameter range) and some
   pose box narrower than ``workspace_eps`` is neither proven inside nor outside for it;
-* **pending**: not decided because the search stopped (timeout, ``max_boxes``, the
-  progress callback returned ``False``).
-
-The union of the four classes is ``Θ``: nothing is dropped.
+The three are a box's verdict (:class:`~.design_step.DesignVerdict`).  A box without one is
+**pending**: the search stopped first, and its status
+(:class:`~certsolve.solver.search.SearchStatus`: ``timeout``, ``max_boxes``, ``cancelled``)
+says why.  The good, bad, undecided and pending boxes tile ``Θ``: nothing is dropped.
 
 **The search** works on pairs ``(P, Q)``, a batch of pairs per numpy call.  A pair proven
 inside is done (``Q`` stays proven for every sub-box of ``P``); a pair proven outside makes
 ``P`` bad; an undecided pair is split along its widest axis relative to the stopping
 widths: a pose axis splits ``Q`` (two new pairs with the same ``P``), a parameter axis
 defers ``Q`` until every pair of ``P`` is processed, and then ``P`` is bisected and both
-halves inherit only the deferred pose boxes.
+halves inherit only the deferred pose boxes.  The search is a step of the one search driver
+(:class:`~.design_step.DesignStep` on :func:`~certsolve.solver.search.run_search`): limits,
+cancellation, progress and checkpoints are the driver's.
 
 **Margin.**  Every inside pair also gives a lower bound of the force:
 ``f_min ≥ F + min_k glo_k / ||c_k,f||_hi`` (the slacks are ``g = (d_k + c_k·w) -
@@ -41,10 +43,11 @@ proof covers it).
 
 from __future__ import annotations
 
+import os
 import time
-from collections.abc import Callable
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from enum import StrEnum
+from typing import Any
 
 import numpy as np
 
@@ -52,45 +55,17 @@ from ..robot.geometry import rotation_2d, rotation_zyx
 from ..robot.model import Robot
 from ..robot.params import AffineRobot
 from ..robot.schema import RobotFileError
-from ..solver.bisectors import split as bisect
-from ..solver.checkpoint import Checkpoint
+from ..solver.protocol import Saver, SearchStats
+from ..solver.search import Limits, ProgressCallback, SearchStatus, run_search
 from .certified import parse_box
 from .design_spec import DesignSpec, DesignSpecError, load_design_spec
+from .design_step import DesignProblem, DesignState, DesignStep, DesignVerdict
 from .enclosure import slack_enclosures
 
-__all__ = ["BoxClass", "DesignProgress", "DesignResult", "design"]
+__all__ = ["PARTS", "DesignResult", "DesignVerdict", "design"]
 
-
-class BoxClass(StrEnum):
-    """The class of a parameter box (module docstring)."""
-
-    GOOD = "good"
-    BAD = "bad"
-    UNDECIDED = "undecided"
-    PENDING = "pending"
-
-
-class DesignStatus(StrEnum):
-    """How a design search ended: ``complete`` (every parameter box classified), or what
-    stopped it (``timeout``, ``max_boxes``; ``stopped``: the progress callback)."""
-
-    COMPLETE = "complete"
-    TIMEOUT = "timeout"
-    MAX_BOXES = "max_boxes"
-    STOPPED = "stopped"
-
-
-@dataclass(kw_only=True)
-class DesignProgress:
-    """Passed to the ``progress`` callback after every batch."""
-
-    pairs: int  # (parameter box, pose box) pairs evaluated so far
-    queued: int  # pairs waiting
-    good: int
-    bad: int
-    undecided: int
-    elapsed: float  # seconds
-    good_share: float  # share of the parameter box already proven good
+#: the parts a design splits the parameter box into: the verdicts, and the boxes left pending
+PARTS: tuple[str, ...] = (*map(str, DesignVerdict), "pending")
 
 
 @dataclass(kw_only=True)
@@ -101,7 +76,11 @@ class DesignResult:
     proven lower bound of ``f_min - min_force`` over ``good[i]`` × the workspace;
     ``witness[i]`` ``(d, 2)`` a pose box where every robot of ``bad[i]`` has ``f_min <
     min_force``.  ``best`` is the index in ``good`` of the largest margin (None if no box is
-    good) and ``best_robot`` the robot file at its centre.
+    good) and ``best_robot`` the robot file at its centre.  ``status`` is the search's:
+    ``complete`` means nothing is pending.  ``pairs``: (parameter box, pose box) pairs
+    evaluated, every run of a resumed search included; ``stats``: the driver's counters
+    (its ``boxes`` are the pairs taken from the queue, those dropped because their
+    parameter box was already bad included).
     """
 
     robot: str
@@ -123,16 +102,17 @@ class DesignResult:
     pending: np.ndarray
     best: int | None
     best_robot: dict | None
-    status: DesignStatus
-    pairs: int  # (parameter box, pose box) pairs evaluated (every run of a resumed search)
+    status: SearchStatus
+    pairs: int
     parameter_boxes: int  # parameter boxes examined
     time: float  # seconds of this run
     notes: list[str] = field(default_factory=list)
     resumed_from: int | None = None  # pairs evaluated before this run (from a checkpoint)
+    stats: SearchStats = field(default_factory=SearchStats)
 
-    def share(self, cls: BoxClass | str) -> float:
-        """Share of the parameter box's volume in the class ``cls``."""
-        boxes = getattr(self, str(cls))
+    def share(self, part: str) -> float:
+        """Share of the parameter box's volume in ``part`` (one of :data:`PARTS`)."""
+        boxes = getattr(self, str(part))
         if len(boxes) == 0:
             return 0.0
         w = self.ranges[:, 1] - self.ranges[:, 0]
@@ -140,7 +120,7 @@ class DesignResult:
 
     @property
     def complete(self) -> bool:
-        return self.status == DesignStatus.COMPLETE
+        return self.status == SearchStatus.COMPLETE
 
     @property
     def best_box(self) -> np.ndarray | None:
@@ -171,12 +151,13 @@ class DesignResult:
             "workspace_eps": self.workspace_eps,
             "status": str(self.status),
             "complete": self.complete,
-            "counts": {str(c): int(len(getattr(self, str(c)))) for c in BoxClass},
-            "shares": {str(c): self.share(c) for c in BoxClass},
+            "counts": {c: int(len(getattr(self, c))) for c in PARTS},
+            "shares": {c: self.share(c) for c in PARTS},
             "pairs": self.pairs,
             "resumed_from": self.resumed_from,
             "parameter_boxes": self.parameter_boxes,
             "time": self.time,
+            "stats": self.stats.to_dict(),
             "best": best,
             "definitions": {
                 "good": "for every parameter value in the box and every pose of the workspace, "
@@ -189,8 +170,8 @@ class DesignResult:
             "notes": list(self.notes),
         }
         if boxes:
-            for c in BoxClass:
-                out[f"{c}_boxes"] = getattr(self, str(c)).tolist()
+            for c in PARTS:
+                out[f"{c}_boxes"] = getattr(self, c).tolist()
             out["good_margins"] = self.margin.tolist()
             out["bad_witnesses"] = self.witness.tolist()
         return out
@@ -213,84 +194,59 @@ def _rotation(robot: Robot, orientation) -> tuple[np.ndarray | None, list[float]
     return R, ang
 
 
-class _Boxes:
-    """Parameter boxes of the search and their bookkeeping (arrays grown by doubling)."""
-
-    def __init__(self, k: int):
-        self.n = 0
-        self.lo = np.zeros((16, k))
-        self.hi = np.zeros((16, k))
-        self.open = np.zeros(16, dtype=np.int64)  # pairs of the box still queued
-        self.bad = np.zeros(16, dtype=bool)
-        self.done = np.zeros(16, dtype=bool)  # classified or split
-        self.margin = np.zeros(16)
-        self.cls: dict[int, BoxClass] = {}  # final class (split boxes have none)
-        self.witness: dict[int, np.ndarray] = {}
-        self.deferred: dict[int, list[np.ndarray]] = {}  # pose boxes waiting for a split
-
-    def add(self, lo, hi, margin: float, open_pairs: int) -> int:
-        if self.n == len(self.open):
-            for name in ("lo", "hi", "open", "bad", "done", "margin"):
-                a = getattr(self, name)
-                setattr(self, name, np.concatenate([a, np.zeros_like(a)]))
-        i = self.n
-        self.lo[i], self.hi[i] = lo, hi
-        self.open[i], self.bad[i], self.done[i], self.margin[i] = open_pairs, False, False, margin
-        self.n += 1
-        return i
-
-    def ready(self) -> np.ndarray:
-        """Boxes whose pairs are all processed and that are not classified yet."""
-        n = self.n
-        return np.flatnonzero((self.open[:n] == 0) & ~self.done[:n])
-
-
 def design(
-    robot=None,
-    parameters=None,
-    workspace=None,
-    min_force: float | None = None,
+    spec: DesignSpec | str | os.PathLike | Mapping[str, Any],
     *,
-    spec=None,
-    orientation=None,
-    eps: float | None = None,
-    workspace_eps: float | None = None,
-    progress: Callable[[DesignProgress], bool | None] | None = None,
+    progress: ProgressCallback | None = None,
+    cancel: Any = None,
     timeout: float | None = None,
     max_boxes: int | None = None,
     batch: int = 1024,
-    checkpoint: Checkpoint | None = None,
+    checkpoint: Saver | None = None,
 ) -> DesignResult:
-    """Classify the parameter boxes (module docstring).
+    """Classify the parameter boxes of ``spec`` (module docstring).
 
-    Either ``spec`` (a path, JSON text, dict or :class:`~.design_spec.DesignSpec`) or the
-    fields ``robot`` (a path or robot object), ``parameters`` (a list of dicts
-    ``{"name", "path", "mode", "range"[, "centre"]}``), ``workspace`` (``[xmin, xmax, ymin,
-    ymax[, zmin, zmax]]``) and ``min_force`` (N); keyword arguments override the spec's
-    ``orientation``, ``eps`` (fraction of each parameter range) and ``workspace_eps`` (cm;
-    default 1/16 of the largest workspace side).  ``progress`` is called after every batch
-    with a :class:`DesignProgress`; returning ``False`` stops the search.  ``max_boxes``
-    limits the evaluated pairs.  Raises :class:`~.design_spec.DesignSpecError` (a
-    ``ValueError``) naming the field for bad input.
-
-    ``checkpoint`` (:class:`~certsolve.solver.checkpoint.Checkpoint`): save the search (its
-    parameter boxes and queued pairs) every ``checkpoint.interval`` seconds and when it
-    stops, and resume from a saved one of the same problem; ``timeout`` and ``max_boxes``
-    apply to each run.
+    ``spec``: a :class:`~.design_spec.DesignSpec`, or what
+    :func:`~.design_spec.load_design_spec` reads (a path, JSON text, a dict).  The rest are
+    the search's options, those of the driver (:func:`~certsolve.solver.search.run_search`):
+    ``progress`` is called after every batch of ``batch`` pairs with a
+    :class:`~certsolve.solver.search.Progress` (``boxes``: pairs taken, ``pending``: pairs
+    queued, ``solutions``: good boxes, ``undecided``; ``extra``: ``good``, ``bad``,
+    ``undecided``, ``pairs`` evaluated and ``good_share``); returning ``False``, or
+    ``cancel.is_set()``, stops the search (status ``cancelled``).  ``timeout`` (seconds) and
+    ``max_boxes`` (pairs taken from the queue) stop it too, with the undecided parameter
+    boxes pending.  ``checkpoint`` (:class:`~certsolve.solver.checkpoint.Checkpoint`): save
+    the search as it goes and resume from a saved one of the same problem; the limits
+    apply to each run.  Raises :class:`~.design_spec.DesignSpecError` (a ``ValueError``)
+    naming the field for bad input.
     """
     t0 = time.perf_counter()
-    if spec is None:
-        spec = {"robot": robot, "parameters": parameters, "workspace": workspace}
-        spec["min_force"] = min_force
-    ds: DesignSpec = load_design_spec(spec)
-    overrides = {"orientation": orientation, "eps": eps, "workspace_eps": workspace_eps}
-    data = ds.model_dump()
-    data.update({k: v for k, v in overrides.items() if v is not None})
-    ds = load_design_spec(data)
+    ds = load_design_spec(spec)
     if timeout is not None and not timeout > 0:
         raise DesignSpecError("timeout must be positive (seconds)")
     if max_boxes is not None and max_boxes < 1:
         raise DesignSpecError("max_boxes must be at least 1")
+    problem = _problem(ds)
+    W = problem.W
+    step = DesignStep(problem, batch)
+    root = np.concatenate([[0.0], W[:, 0]]), np.concatenate([[0.0], W[:, 1]])
+    run = run_search(
+        step,
+        root[0][None],
+        root[1][None],
+        limits=Limits(timeout=timeout, max_boxes=max_boxes),
+        progress=progress,
+        cancel=cancel,
+        checkpoint=checkpoint,
+    )
+    res = _result(ds, problem, run.state, run.status, t0)
+    res.resumed_from = run.state.restored_pairs
+    res.stats = run.stats
+    return res
+
+
+def _problem(ds: DesignSpec) -> DesignProblem:
+    """The spec checked against its robot and turned into arrays (errors name the field)."""
     try:
         affine = AffineRobot(ds.robot, ds.definitions())
     except RobotFileError as exc:
@@ -298,201 +254,50 @@ def design(
     except ValueError as exc:
         raise DesignSpecError(str(exc).replace("\n", "; ")) from None
     rb = affine.robot
-    d = rb.dim
     try:
-        W = parse_box(ds.workspace, d)
+        W = parse_box(ds.workspace, rb.dim)
     except ValueError as exc:
         raise DesignSpecError(f"workspace: {exc}".replace("box: ", "")) from None
-    R, angles = _rotation(rb, ds.orientation)
+    R, _ = _rotation(rb, ds.orientation)
     if rb.m < rb.wrench_dim:
         raise DesignSpecError(
             f"robot {rb.name!r}: {rb.m} wires cannot resist a force in every direction"
         )
-    F = float(ds.min_force)
-    k = len(ds.parameters)
     theta = affine.box
-    pscale = ds.eps * (theta[:, 1] - theta[:, 0])
     weps = ds.workspace_eps
     if weps is None:
         weps = float(np.max(W[:, 1] - W[:, 0])) / 16 or 1.0
-
-    boxes = _Boxes(k)
-    root = boxes.add(theta[:, 0], theta[:, 1], np.inf, 1)
-    q_pid = np.array([root])
-    q_lo = W[None, :, 0].copy()
-    q_hi = W[None, :, 1].copy()
-    pairs = 0
-    status = DesignStatus.COMPLETE
-    resumed_from = None
-    if checkpoint is not None:
-        about = (
-            f"design\nrobot: {rb.spec.model_dump_json()}\n"
-            f"spec: {ds.model_dump_json(exclude={'robot'})}\nbatch: {int(batch)}"
-        )
-        saved = checkpoint.begin_records(about)
-        if saved is not None:
-            boxes, q_pid, q_lo, q_hi, pairs = _restore(saved, k)
-            resumed_from = checkpoint.resumed_from = pairs
-    pairs0 = pairs  # limits apply to each run
-
-    def finalize(pid: int):
-        """All pairs of ``pid`` are done: classify it, or split it and queue its halves."""
-        nonlocal q_pid, q_lo, q_hi
-        boxes.done[pid] = True
-        deferred = boxes.deferred.pop(pid, [])
-        if boxes.bad[pid]:
-            boxes.cls[pid] = BoxClass.BAD
-            return
-        if not deferred:
-            boxes.cls[pid] = BoxClass.GOOD
-            return
-        rel = (boxes.hi[pid] - boxes.lo[pid]) / pscale
-        if rel.max() <= 1.0:
-            boxes.cls[pid] = BoxClass.UNDECIDED
-            return
-        halves = bisect(boxes.lo[pid][None], boxes.hi[pid][None], np.argmax(rel)[None], 0.5)
-        dq = np.stack(deferred)  # (n, d, 2)
-        for lo, hi in halves:
-            child = boxes.add(lo[0], hi[0], boxes.margin[pid], len(dq))
-            q_pid = np.concatenate([q_pid, np.full(len(dq), child)])
-            q_lo = np.concatenate([q_lo, dq[:, :, 0]])
-            q_hi = np.concatenate([q_hi, dq[:, :, 1]])
-
-    while len(q_pid):
-        if timeout is not None and time.perf_counter() - t0 > timeout:
-            status = DesignStatus.TIMEOUT
-            break
-        if max_boxes is not None and pairs - pairs0 >= max_boxes:
-            status = DesignStatus.MAX_BOXES
-            break
-        pid, lo, hi = q_pid[:batch], q_lo[:batch], q_hi[:batch]
-        q_pid, q_lo, q_hi = q_pid[batch:], q_lo[batch:], q_hi[batch:]
-        live = ~boxes.bad[pid]
-        np.subtract.at(boxes.open, pid[~live], 1)
-        pid, lo, hi = pid[live], lo[live], hi[live]
-        n = len(pid)
-        if n:
-            pairs += n
-            prm = affine.bounds(boxes.lo[pid], boxes.hi[pid])
-            glo, ghi, full_rank, wires_ok, nhi = slack_enclosures(
-                rb, lo.T, hi.T, F, rotation=R, params=prm, norms=True
-            )
-            ins = np.all(glo >= 0.0, axis=0) & full_rank & wires_ok
-            out = np.any(ghi < 0.0, axis=0) & wires_ok & ~ins
-            with np.errstate(divide="ignore", invalid="ignore"):
-                low = np.min(np.where(nhi > 0, glo / nhi, np.inf), axis=0)
-            np.minimum.at(boxes.margin, pid[ins], np.where(np.isnan(low), 0.0, low)[ins])
-            for i in np.flatnonzero(out):
-                p = int(pid[i])
-                if not boxes.bad[p]:
-                    boxes.bad[p] = True
-                    boxes.witness[p] = np.stack([lo[i], hi[i]], axis=1)
-            und = ~ins & ~out
-            rel_pose = np.max((hi - lo) / weps, axis=1)
-            rel_par = np.max((boxes.hi[pid] - boxes.lo[pid]) / pscale, axis=1)
-            split = und & (rel_pose > 1.0) & (rel_pose >= rel_par)
-            defer = und & ~split
-            for i in np.flatnonzero(defer):
-                boxes.deferred.setdefault(int(pid[i]), []).append(np.stack([lo[i], hi[i]], axis=1))
-            np.subtract.at(boxes.open, pid, 1)
-            if split.any():
-                slo, shi, sp = lo[split], hi[split], pid[split]
-                (l_lo, l_hi), (r_lo, r_hi) = bisect(slo, shi, np.argmax(shi - slo, axis=1), 0.5)
-                q_pid = np.concatenate([q_pid, sp, sp])
-                q_lo = np.concatenate([q_lo, l_lo, r_lo])
-                q_hi = np.concatenate([q_hi, l_hi, r_hi])
-                np.add.at(boxes.open, sp, 2)
-        for p in boxes.ready():
-            finalize(int(p))
-        if checkpoint is not None and checkpoint.due():
-            checkpoint.save_records("design", _records(boxes, q_pid, q_lo, q_hi, pairs))
-        if progress is not None:
-            info = _progress(boxes, theta, pairs, len(q_pid), t0)
-            if progress(info) is False:
-                status = DesignStatus.STOPPED if len(q_pid) else status
-                break
-
-    if checkpoint is not None:
-        checkpoint.save_records("design", _records(boxes, q_pid, q_lo, q_hi, pairs))
-    res = _result(ds, affine, W, angles, weps, boxes, status, pairs, t0)
-    res.resumed_from = resumed_from
-    return res
-
-
-def _records(boxes: _Boxes, q_pid, q_lo, q_hi, pairs: int) -> dict:
-    """The search's state as arrays (for a checkpoint; dicts flattened in their order)."""
-    n = boxes.n
-    dpid = [p for p, parts in boxes.deferred.items() for _ in parts]
-    dbox = [b for parts in boxes.deferred.values() for b in parts]
-    d = q_lo.shape[1]
-    return {
-        **{name: getattr(boxes, name)[:n] for name in ("lo", "hi", "open", "bad", "done")},
-        "margin": boxes.margin[:n],
-        "cls_id": np.array(list(boxes.cls), dtype=np.int64),
-        "cls": [str(c) for c in boxes.cls.values()],
-        "witness_id": np.array(list(boxes.witness), dtype=np.int64),
-        "witness": np.array(list(boxes.witness.values())).reshape(-1, d, 2),
-        "deferred_id": np.array(dpid, dtype=np.int64),
-        "deferred": np.array(dbox).reshape(-1, d, 2),
-        "q_pid": q_pid,
-        "q_lo": q_lo,
-        "q_hi": q_hi,
-        "pairs": int(pairs),
-    }
-
-
-def _restore(saved: dict, k: int):
-    """``(boxes, q_pid, q_lo, q_hi, pairs)`` from :func:`_records`."""
-    boxes = _Boxes(k)
-    for name in ("lo", "hi", "open", "bad", "done", "margin"):
-        setattr(boxes, name, np.array(saved[name]))
-    boxes.n = len(boxes.open)
-    boxes.cls = {
-        int(p): BoxClass(c) for p, c in zip(saved["cls_id"].tolist(), saved["cls"], strict=True)
-    }
-    boxes.witness = {int(p): w for p, w in zip(saved["witness_id"].tolist(), saved["witness"])}
-    boxes.deferred = {}
-    for p, b in zip(saved["deferred_id"].tolist(), saved["deferred"], strict=True):
-        boxes.deferred.setdefault(int(p), []).append(b)
-    q = (np.array(saved["q_pid"]), np.array(saved["q_lo"]), np.array(saved["q_hi"]))
-    return (boxes, *q, int(saved["pairs"]))
-
-
-def _progress(boxes: _Boxes, theta, pairs, queued, t0) -> DesignProgress:
-    counts = {c: 0 for c in BoxClass}
-    good_share = 0.0
-    w = theta[:, 1] - theta[:, 0]
-    for p, c in boxes.cls.items():
-        counts[c] += 1
-        if c is BoxClass.GOOD:
-            good_share += float(np.prod((boxes.hi[p] - boxes.lo[p]) / w))
-    return DesignProgress(
-        pairs=pairs,
-        queued=queued,
-        good=counts[BoxClass.GOOD],
-        bad=counts[BoxClass.BAD],
-        undecided=counts[BoxClass.UNDECIDED],
-        elapsed=time.perf_counter() - t0,
-        good_share=good_share,
+    return DesignProblem(
+        affine=affine,
+        theta=theta,
+        W=W,
+        R=R,
+        min_force=float(ds.min_force),
+        pscale=ds.eps * (theta[:, 1] - theta[:, 0]),
+        workspace_eps=float(weps),
+        about=f"design\nrobot: {rb.spec.model_dump_json()}\n"
+        f"spec: {ds.model_dump_json(exclude={'robot'})}",
     )
 
 
-def _result(ds, affine: AffineRobot, W, angles, weps, boxes: _Boxes, status, pairs, t0):
-    k = len(ds.parameters)
-    d = W.shape[0]
-    cls: dict[BoxClass, list[int]] = {c: [] for c in BoxClass}
+def _result(
+    ds: DesignSpec, pb: DesignProblem, state: DesignState, status: SearchStatus, t0: float
+) -> DesignResult:
+    boxes, affine, W = state.boxes, pb.affine, pb.W
+    k, d = len(pb.theta), W.shape[0]
+    parts: dict[str, list[int]] = {c: [] for c in PARTS}
     for p in range(boxes.n):
-        if p in boxes.cls:
-            cls[boxes.cls[p]].append(p)
+        if p in boxes.verdict:
+            parts[str(boxes.verdict[p])].append(p)
         elif not boxes.done[p]:  # the search stopped before this box was decided
-            cls[BoxClass.BAD if boxes.bad[p] else BoxClass.PENDING].append(p)
+            parts["bad" if boxes.bad[p] else "pending"].append(p)
 
     def arr(ids):
         if not ids:
             return np.zeros((0, k, 2))
         return np.stack([boxes.lo[ids], boxes.hi[ids]], axis=2)
 
-    good = cls[BoxClass.GOOD]
+    good = parts["good"]
     margin = boxes.margin[good] if good else np.zeros(0)
     if good:
         grid = _grid_margin(ds, affine, W, boxes.lo[good], boxes.hi[good])
@@ -511,7 +316,7 @@ def _result(ds, affine: AffineRobot, W, angles, weps, boxes: _Boxes, status, pai
             best_robot = None
     if ds.orientation is None and affine.robot.dof != 2:
         notes.append("orientation: identity (fixed)")
-    witness = [boxes.witness[p] for p in cls[BoxClass.BAD]]
+    witness = [boxes.witness[p] for p in parts["bad"]]
     return DesignResult(
         robot=affine.robot.name,
         dof=affine.robot.dof,
@@ -520,20 +325,20 @@ def _result(ds, affine: AffineRobot, W, angles, weps, boxes: _Boxes, status, pai
         modes=[p.mode for p in ds.parameters],
         ranges=affine.box,
         workspace=W,
-        orientation=angles,
+        orientation=_rotation(affine.robot, ds.orientation)[1],
         min_force=float(ds.min_force),
         eps=float(ds.eps),
-        workspace_eps=float(weps),
+        workspace_eps=pb.workspace_eps,
         good=arr(good),
         margin=np.asarray(margin, dtype=float),
-        bad=arr(cls[BoxClass.BAD]),
+        bad=arr(parts["bad"]),
         witness=np.stack(witness) if witness else np.zeros((0, d, 2)),
-        undecided=arr(cls[BoxClass.UNDECIDED]),
-        pending=arr(cls[BoxClass.PENDING]),
+        undecided=arr(parts["undecided"]),
+        pending=arr(parts["pending"]),
         best=best,
         best_robot=best_robot,
         status=status,
-        pairs=pairs,
+        pairs=boxes.pairs,
         parameter_boxes=boxes.n,
         time=time.perf_counter() - t0,
         notes=notes,

@@ -122,6 +122,16 @@ class DesignOptions(_Strict):
     def definitions(self) -> list[ParameterDef]:
         return [p.definition() for p in self.parameters]
 
+    def spec(self, robot: str | dict) -> DesignSpec:
+        """The design spec of these fields with ``robot`` (a path or a robot object): what
+        :func:`~.design.design` takes.  Only the fields of :class:`DesignOptions` are
+        taken (a subclass's others, such as a job's limits, are not the spec's)."""
+        fields = self.model_dump(include=set(DesignOptions.model_fields), exclude_none=True)
+        try:
+            return DesignSpec.model_validate({**fields, "robot": robot})
+        except ValidationError as exc:
+            raise DesignSpecError(format_validation_error(exc).replace("\n", "; ")) from None
+
 
 class DesignSpec(DesignOptions):
     robot: str | dict = Field(description="robot file path (relative to the spec) or object")

@@ -20,7 +20,7 @@ from certsolve.force.plots import plot_design
 HERE = Path(__file__).parent
 
 for name, axes in (("krut3", (0, 1)), ("krut4", (0, 1)), ("planar", (1, 2))):
-    res = certsolve.design(spec=HERE / f"{name}-spec.json")
+    res = certsolve.design(HERE / f"{name}-spec.json")
     plot_design(res, HERE / f"{name}-design.png", axes=axes)
     shares = ", ".join(
         f"{c} {100 * res.share(c):.1f} % ({len(getattr(res, c))})"

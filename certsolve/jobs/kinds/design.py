@@ -119,15 +119,8 @@ class DesignJob(Job):
 
 def run_design(job: DesignJob, ctx: RunContext) -> Any:
     design = library_function("design", "certsolve.force.design", "design")
-    p = job.params
     return design(
-        robot=job.robot.model_dump(exclude_none=True),
-        parameters=[q.model_dump(exclude_none=True) for q in p.parameters],
-        workspace=list(p.workspace),
-        min_force=p.min_force,
-        orientation=p.orientation,
-        eps=p.eps,
-        workspace_eps=p.workspace_eps,
+        job.params.spec(job.robot.model_dump(exclude_none=True)),
         progress=ctx.progress,
         timeout=ctx.time_limit,
         max_boxes=ctx.max_boxes,
