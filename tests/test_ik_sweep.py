@@ -146,7 +146,7 @@ def test_progress_can_stop_and_arguments_are_checked():
         return info.points < 3
 
     res = ik_sweep(PLANAR, [90, 60, 0], start=0, stop=1, count=10, progress=progress)
-    assert res.status == "stopped" and len(res.points) == 3 and calls == [1, 2, 3]
+    assert res.status == "cancelled" and len(res.points) == 3 and calls == [1, 2, 3]
     with pytest.raises(ValueError, match="count"):
         ik_sweep(PLANAR, [90, 60, 0], start=0, stop=1, count=1)
     with pytest.raises(ValueError, match="joint 5"):

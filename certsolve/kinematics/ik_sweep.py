@@ -47,6 +47,7 @@ import numpy as np
 
 from ..robot.geometry import Pose
 from ..robot.model import Robot
+from ..solver.search import SearchStatus
 from .ik_alg2 import ik_algorithm2
 from .ik_enclose import enclose_pose, tension_range
 from .ik_inputs import as_pose, as_robot
@@ -55,14 +56,6 @@ from .ik_result import Violation, json_float, json_floats
 __all__ = ["PointStatus", "SweepPoint", "SweepProgress", "IKSweepResult", "ik_sweep"]
 
 MAX_POINTS = 100_000
-
-
-class SweepStatus(StrEnum):
-    """How a sweep ended (:class:`IKSweepResult`)."""
-
-    COMPLETE = "complete"
-    TIMEOUT = "timeout"
-    STOPPED = "stopped"
 
 
 class PointStatus(StrEnum):
@@ -124,9 +117,10 @@ class SweepProgress:
 class IKSweepResult:
     """A sweep of ``u_joint`` at a fixed pose.
 
-    ``status`` is ``complete`` (every requested point computed), ``timeout`` or ``stopped``
-    (the progress callback returned ``False``); ``points`` then holds the points computed
-    before the stop, in sweep order.
+    ``status`` is a search's (:class:`~certsolve.solver.search.SearchStatus`): ``complete``
+    (every requested point computed), ``timeout`` or ``cancelled`` (the progress callback
+    returned ``False``); ``points`` then holds the points computed before the stop, in
+    sweep order.
     """
 
     robot: str
@@ -137,7 +131,7 @@ class IKSweepResult:
     stop: float
     count: int
     points: list[SweepPoint]
-    status: SweepStatus
+    status: SearchStatus
     time: float  # seconds
 
     @property
@@ -268,10 +262,10 @@ def ik_sweep(
     values = np.linspace(float(start), float(stop), int(count))
     points: list[SweepPoint] = []
     done: list[tuple[float, np.ndarray]] = []  # (value, u) of the solved points
-    status = SweepStatus.COMPLETE
+    status = SearchStatus.COMPLETE
     for value in values.tolist():
         if timeout is not None and time.perf_counter() - t0 > timeout:
-            status = SweepStatus.TIMEOUT
+            status = SearchStatus.TIMEOUT
             break
         pred = _predict(done, value)
         guess = pred if pred is not None else u_start
@@ -289,7 +283,7 @@ def ik_sweep(
                 elapsed=time.perf_counter() - t0,
             )
             if progress(info) is False:
-                status = SweepStatus.STOPPED if len(points) < count else SweepStatus.COMPLETE
+                status = SearchStatus.CANCELLED if len(points) < count else SearchStatus.COMPLETE
                 break
     return IKSweepResult(
         robot=robot.name,
