@@ -169,5 +169,5 @@ def load_design_spec(source) -> DesignSpec:
         and not robot.lstrip().startswith("{")
         and not Path(robot).is_absolute()
     ):
-        spec = spec.model_copy(update={"robot": str(base / spec.robot)})
+        spec = spec.model_copy(update={"robot": str(base / robot)})
     return spec

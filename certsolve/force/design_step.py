@@ -296,7 +296,7 @@ class DesignStep:
         if rel.max() <= 1.0:
             self._decide(p, DesignVerdict.UNDECIDED, state)
             return
-        halves = bisect(t.lo[p][None], t.hi[p][None], np.argmax(rel)[None], 0.5)
+        halves = bisect(t.lo[p][None], t.hi[p][None], np.array([np.argmax(rel)]), 0.5)
         dq = np.stack(deferred)  # (n, d, 2)
         for lo, hi in halves:
             child = t.add(lo[0], hi[0], t.margin[p], len(dq))
