@@ -120,7 +120,9 @@ def run(args: argparse.Namespace) -> int:
             TrackParams, args, {"u": u, "near_pose": near}, robot=spec, option={"near_pose": "near"}
         )
         pose = Pose.from_params(robot.dof, track.near_pose)
-        res = Tracker(robot, params.formulation).step(track.u, pose, track.half_width)
+        res = Tracker(robot, params.formulation, stability=True).step(
+            track.u, pose, track.half_width
+        )
         if args.json:
             print_json(res.to_dict())
         else:
@@ -168,6 +170,8 @@ def _pose_lines(robot, s) -> list[str]:
     lines = [
         f"  position ({'x, y, z' if robot.dof == 6 else 'x, y'}) = ({pos}) cm",
         f"  orientation ({names}) = ({ang}) deg",
+        f"  stability: {s.stability.stability}, smallest Hessian eigenvalue in "
+        f"[{s.stability.eig_lo:.6g}, {s.stability.eig_hi:.6g}]",
         "  wire      rho (cm)    tau (N)    B_i (world, cm)",
     ]
     for i in range(robot.m):

@@ -9,6 +9,7 @@ in its box, plus undecided and pending boxes -- the solver's guarantees, read ba
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -27,6 +28,7 @@ from .fk_systems import (
     rotation_from_points,
     search_domain,
 )
+from .stability import EnergyHessian, StabilityVerdict
 
 __all__ = ["FKPose", "FKResult", "FKSolver", "with_tau_max"]
 
@@ -53,6 +55,9 @@ class FKPose:
     variables: list[str]
     certificate: str = "unique"
     verified: bool | None = None
+    #: stable / unstable / undecided over ``box``, with an enclosure of the Hessian's
+    #: smallest eigenvalue (:mod:`.stability`)
+    stability: StabilityVerdict = field(default_factory=StabilityVerdict.unknown)
 
     @property
     def euler_deg(self) -> np.ndarray:
@@ -72,6 +77,7 @@ class FKPose:
             "verified": self.verified,
             "box": self.box,
             "variables": list(self.variables),
+            **self.stability.to_dict(),
         }
 
 
@@ -279,15 +285,35 @@ class FKSolver:
             checkpoint=checkpoint,
             domain=dom,
         )
-        sols = [self.decode(s.lo, s.hi, u, s) for s in res.solutions]
+        sols = self.decode_all(res.solutions, u)
         return FKResult(self.robot.name, self.formulation, u, res.status, sols, res, notes=notes)
 
-    def decode(self, lo, hi, u, sol=None, point=None) -> FKPose:
+    @functools.cached_property
+    def hessian(self) -> EnergyHessian:
+        """The interval Hessian of the potential energy (compiled on first use)."""
+        return EnergyHessian(self.form)
+
+    def decode_all(self, solutions, u) -> list[FKPose]:
+        """:meth:`decode` of the solver's solutions, with one batched stability verdict."""
+        if not solutions:
+            return []
+        lo = np.array([s.lo for s in solutions])
+        hi = np.array([s.hi for s in solutions])
+        verdicts = self.hessian.verdicts(lo, hi, u)
+        return [
+            self.decode(s.lo, s.hi, u, s, verdict=v)
+            for s, v in zip(solutions, verdicts, strict=True)
+        ]
+
+    def decode(self, lo, hi, u, sol=None, point=None, verdict=None) -> FKPose:
         """Read a robot pose from a (tight) solution box of the system's variables.
 
         The pose is taken at ``point`` if given (e.g. a converged Newton point inside the
-        box), else at the box midpoint.
+        box), else at the box midpoint.  ``verdict``: its stability over the box (computed
+        here if not given: :class:`.EnergyHessian`).
         """
+        if verdict is None:
+            verdict = self.hessian.verdicts(np.asarray(lo)[None], np.asarray(hi)[None], u)[0]
         x = 0.5 * np.asarray(lo) + 0.5 * np.asarray(hi) if point is None else np.asarray(point)
         f = self.form
         r = self.robot
@@ -312,4 +338,5 @@ class FKSolver:
             list(f.system.variables),
             certificate=getattr(sol, "certificate", "unique"),
             verified=getattr(sol, "verified", None),
+            stability=verdict,
         )

@@ -169,7 +169,7 @@ def seeded_forward_kinematics(
         from ..solver.verify import verify_solutions  # mpmath: imported when asked
 
         verify_solutions(fk.csys, res.solutions)
-    sols = [fk.decode(s.lo, s.hi, u, s) for s in res.solutions]
+    sols = fk.decode_all(res.solutions, u)
     seeding = {
         "planar_solutions": len(res2.solutions),
         "planar_status": str(res2.status),
