@@ -66,6 +66,12 @@ def register(sub) -> None:
         help="with --seed-planar: skip the rest of the domain (incomplete answer)",
     )
     p.add_argument(
+        "--stable-only",
+        action="store_true",
+        help="stable equilibria only (Hessian of the energy positive definite); a complete "
+        "answer then proves no other stable pose exists",
+    )
+    p.add_argument(
         "--near",
         default=None,
         help="tracking: a known nearby pose x,y,z[,yaw,pitch,roll] (cm, degrees)",
@@ -100,6 +106,7 @@ def run(args: argparse.Namespace) -> int:
             flag
             for flag, value in (
                 ("--seed-planar", args.seed_planar),
+                ("--stable-only", args.stable_only),
                 ("--verify", args.verify),
                 ("--timeout", args.timeout is not None),
                 ("--max-boxes", args.max_boxes is not None),
@@ -146,6 +153,7 @@ def run(args: argparse.Namespace) -> int:
                 max_solutions=params.max_solutions,
                 seed_planar=params.seed_planar,
                 seeded_only=params.seeded_only,
+                stable_only=params.stable_only,
                 progress=deadline.progress(show),
                 executor=executor,
                 verify=args.verify,

@@ -28,7 +28,8 @@ from .fk_systems import (
     rotation_from_points,
     search_domain,
 )
-from .stability import EnergyHessian, StabilityVerdict
+from .stability import EnergyHessian, Stability, StabilityVerdict
+from .stable_only import StableOnly
 
 __all__ = ["FKPose", "FKResult", "FKSolver", "with_tau_max"]
 
@@ -152,7 +153,13 @@ def _newton_groups(names) -> list[np.ndarray]:
 
 
 class FKSolver:
-    """Compile a formulation once, solve forward kinematics for many control vectors."""
+    """Compile a formulation once, solve forward kinematics for many control vectors.
+
+    ``stable_only``: search for the stable equilibria only (:mod:`.stable_only`: boxes
+    whose interval Hessian of the energy is proven not positive definite are dropped, and
+    so are the certified poses proven unstable); ``complete`` then means that no other
+    stable equilibrium is in the domain.
+    """
 
     def __init__(
         self,
@@ -161,6 +168,7 @@ class FKSolver:
         *,
         eps: float = 1e-8,
         batch_size: int = 2048,
+        stable_only: bool = False,
     ):
         # batch_size: boxes per numpy call.  The FK systems' batches are large enough for
         # numpy's per-call cost to matter: 2048 against 512 is 25-30 % less CPU with the
@@ -201,6 +209,10 @@ class FKSolver:
             relax=False,  # fewer boxes, more CPU (see Solver's ``relax``)
         )
         self.csys = self.solver.csys
+        #: search for stable equilibria only: boxes proven to hold none are dropped
+        self.stable_only = stable_only
+        if stable_only:
+            self.solver.partial.append(StableOnly(self.hessian, self.csys))
 
     @property
     def formulation(self) -> str:
@@ -286,6 +298,9 @@ class FKSolver:
             domain=dom,
         )
         sols = self.decode_all(res.solutions, u)
+        if len(sols) < len(res.solutions):
+            left = len(res.solutions) - len(sols)
+            notes.append(f"stable only: {left} unstable pose(s) left out")
         return FKResult(self.robot.name, self.formulation, u, res.status, sols, res, notes=notes)
 
     @functools.cached_property
@@ -294,7 +309,8 @@ class FKSolver:
         return EnergyHessian(self.form)
 
     def decode_all(self, solutions, u) -> list[FKPose]:
-        """:meth:`decode` of the solver's solutions, with one batched stability verdict."""
+        """:meth:`decode` of the solver's solutions, with one batched stability verdict
+        (``stable_only``: the poses proven unstable are left out)."""
         if not solutions:
             return []
         lo = np.array([s.lo for s in solutions])
@@ -303,6 +319,7 @@ class FKSolver:
         return [
             self.decode(s.lo, s.hi, u, s, verdict=v)
             for s, v in zip(solutions, verdicts, strict=True)
+            if not (self.stable_only and v.stability == Stability.UNSTABLE)
         ]
 
     def decode(self, lo, hi, u, sol=None, point=None, verdict=None) -> FKPose:

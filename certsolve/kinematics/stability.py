@@ -16,14 +16,23 @@ local coordinates ``δ = (δp, δω)`` of the displaced pose ``B_i(δ) = G + δp
 (a translation of the centre of mass and a rotation about it; the gravity term
 ``-W·(G + δp)`` is then linear and drops out of the Hessian).  Only the 2-jet of the
 rotation matters at ``δ = 0``: ``exp([ω]×) r = r + ω × r + ½ ω × (ω × r) + O(|ω|³)`` (in
-the plane, ``r + θ r⊥ - ½ θ² r``).  ``H(X)`` is the Hessian of ``U(B(δ))`` at ``δ = 0``,
-taken by the expression DAG's symbolic derivatives (:meth:`~certsolve.expr.Graph.derivative`)
-and evaluated with interval arithmetic (:class:`~certsolve.expr.Program`) over a box of the
-formulation's variables (``δ = [0, 0]``).  At an equilibrium ``∇U = 0``, so the Hessians of
-two charts are congruent (``H' = Jᵀ H J``): ``H(X*)`` decides stability at ``X*`` by
-Sylvester's law of inertia.  If a box holds an equilibrium ``X*``, its ``H(X*)`` is a member
-of the box's interval Hessian, because ``G`` and ``r_i`` are affine in the chosen points
-(eq. 8) and the enclosure is taken over the whole box.
+the plane, ``r + θ r⊥ - ½ θ² r``).  With ``q_i(δ) = |B_i(δ) - A_i|² - ρ_i²`` (``= O(δ)``
+at a pose, where ``ρ_i = |B_i - A_i|``), the wire's energy is, to second order,
+
+    E_i = E_i(ρ_i) + (w_i / 2) q_i + (τ'_i - w_i) / (8 ρ_i²) q_i² + O(q_i³),
+    w_i = τ_i / ρ_i,  τ'_i = dτ_i/dρ_i = k_i L0_i / L_i²,
+
+so ``H(X)``, the Hessian of ``U(B(δ))`` at ``δ = 0``, is that of the right-hand side: taken
+by the expression DAG's symbolic derivatives (:meth:`~certsolve.expr.Graph.derivative`)
+and evaluated with interval arithmetic (:class:`~certsolve.expr.Program`) over a box of
+the formulation's variables (``δ = [0, 0]``).  ``ρ_i`` is the formulation's own variable
+(narrowed by the length equations), and no ``(B_i - A_i) / ρ_i`` is enclosed: over a wide
+box this is much tighter than differentiating ``E_i(|B_i(δ) - A_i|)``.  At an equilibrium
+``∇U = 0``, so the Hessians of two charts are congruent (``H' = Jᵀ H J``): ``H(X*)``
+decides stability at ``X*`` by Sylvester's law of inertia.  If a box holds an equilibrium
+``X*``, its ``H(X*)`` is a member of the box's interval Hessian, because ``G`` and ``r_i``
+are affine in the chosen points (eq. 8), ``ρ_i = |B_i - A_i|`` there, and the enclosure
+is taken over the whole box.
 
 **The verdict** (:func:`classify`, batched over boxes):
 
@@ -54,7 +63,7 @@ from enum import StrEnum
 
 import numpy as np
 
-from ..expr import Expr, Graph, Program, const, cos, esum, log, param, sin, sqr, sqrt, var
+from ..expr import Expr, Graph, Program, const, cos, esum, param, sin, sqr, var
 from ..interval import arith
 from ..interval.linalg import gamma, mr_from_bounds, mr_matmul
 from ..interval.rounding import down, up
@@ -110,14 +119,15 @@ def _cross(a, b):
     return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 
 
-def _displaced(r: list[Expr], w: list[Expr]) -> list[Expr]:
-    """The 2-jet of ``exp([ω]×) r`` (3-D) or of the plane rotation by ``θ = w[0]``."""
+def _turn(r: list[Expr], w: list[Expr]) -> list[Expr]:
+    """``exp([ω]×) r - r`` to second order (3-D), or the same for the plane rotation by
+    ``θ = w[0]``."""
     if len(r) == 3:
         wr = _cross(w, r)
         wwr = _cross(w, wr)
-        return [r[c] + wr[c] + 0.5 * wwr[c] for c in range(3)]
+        return [wr[c] + 0.5 * wwr[c] for c in range(3)]
     th = w[0]
-    return [r[0] - th * r[1] - 0.5 * sqr(th) * r[0], r[1] + th * r[0] - 0.5 * sqr(th) * r[1]]
+    return [-th * r[1] - 0.5 * sqr(th) * r[0], th * r[0] - 0.5 * sqr(th) * r[1]]
 
 
 def _levers(form: FKFormulation) -> tuple[list[Expr], list[list[Expr]]]:
@@ -177,6 +187,26 @@ def _apply(R: list[list[Expr]], b: np.ndarray) -> list[Expr]:
     ]
 
 
+def _energy(form: FKFormulation, dp: list[Expr], dw: list[Expr]) -> Expr:
+    """The second-order model of ``U(B(δ))`` at ``δ = (dp, dw)`` (module docstring), less
+    its constant and gravity's linear term."""
+    robot = form.robot
+    d = robot.dim
+    G, r = _levers(form)
+    terms: list[Expr] = []
+    for i in range(robot.m):
+        rho = var(f"rho{i + 1}")
+        L = rho + float(robot.V[i]) + float(robot.K[i]) * param(f"u{i + 1}")
+        w = float(robot.k[i]) * (1.0 - float(robot.L0[i]) / L) / rho  # τ_i / ρ_i
+        dtau = float(robot.k[i] * robot.L0[i]) * (1.0 / sqr(L))  # dτ_i / dρ_i
+        t = _turn(r[i], dw)
+        move = [dp[c] + t[c] for c in range(d)]  # B_i(δ) - B_i
+        arm = [G[c] + r[i][c] - float(robot.A[i, c]) for c in range(d)]  # B_i - A_i
+        q = esum(2.0 * arm[c] * move[c] + sqr(move[c]) for c in range(d))
+        terms.append(0.5 * w * q + (dtau - w) / (8.0 * sqr(rho)) * sqr(q))
+    return esum(terms)
+
+
 class EnergyHessian:
     """The interval Hessian ``H(X)`` of the module docstring, compiled once per formulation.
 
@@ -187,42 +217,35 @@ class EnergyHessian:
     def __init__(self, form: FKFormulation):
         robot = form.robot
         d = robot.dim
-        self.form = form
-        self.size = 3 if d == 2 else 6  # the platform's degrees of freedom
-        chart = [f"_dp{c}" for c in range(d)] + [f"_dw{c}" for c in range(self.size - d)]
+        s = self.size = 3 if d == 2 else 6  # the platform's degrees of freedom
+        chart = [f"_dp{c}" for c in range(d)] + [f"_dw{c}" for c in range(s - d)]
         names = list(form.system.variables)
-        self.n_vars = len(names)
-        params = [f"u{i + 1}" for i in range(robot.m)]
-        graph = Graph(names + chart, params)
-        dp = [var(c) for c in chart[:d]]
-        dw = [var(c) for c in chart[d:]]
-        G, r = _levers(form)
-        terms: list[Expr] = []
-        for i in range(robot.m):
-            b = _displaced(r[i], dw)
-            rho = sqrt(esum(sqr(G[c] + dp[c] + b[c] - float(robot.A[i, c])) for c in range(d)))
-            L = rho + float(robot.V[i]) + float(robot.K[i]) * param(f"u{i + 1}")
-            terms.append(float(robot.k[i]) * (L - float(robot.L0[i]) * log(L)))
+        self.n_vars = n = len(names)
+        #: the parameters, in the order :meth:`enclose` takes them
+        self.parameters = [f"u{i + 1}" for i in range(robot.m)]
+        graph = Graph(names + chart, self.parameters)
         # gravity, -W·(G + δp), is linear in δ: no part of the Hessian
-        U = graph.add_expr(esum(terms))
-        first = [self.n_vars + a for a in range(self.size)]
-        self.pairs = [(a, b) for a in range(self.size) for b in range(a, self.size)]
+        U = graph.add_expr(_energy(form, [var(c) for c in chart[:d]], [var(c) for c in chart[d:]]))
+        self.pairs = [(a, b) for a in range(s) for b in range(a, s)]
         zero = graph.const(0.0)
-        outs = []
-        for a, b in self.pairs:
-            da = graph.derivative(U, first[a])
-            dab = None if da is None else graph.derivative(da, first[b])
-            outs.append(zero if dab is None else dab)
-        self.program = Program(graph, outs)
 
-    def enclose(self, lo, hi, u) -> tuple[np.ndarray, np.ndarray]:
-        """Bounds ``(N, s, s)`` of the Hessian over boxes ``lo, hi`` ``(N, n)`` at control ``u``."""
+        def second(node, a, b):
+            da = graph.derivative(node, a)
+            dab = None if da is None else graph.derivative(da, b)
+            return zero if dab is None else dab
+
+        self.program = Program(graph, [second(U, n + a, n + b) for a, b in self.pairs])
+
+    def enclose(self, lo, hi, u, u_hi=None) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds ``(N, s, s)`` of the Hessian over boxes ``lo, hi`` ``(N, n)`` at control ``u``
+        (or any control in ``[u, u_hi]``)."""
         lo = np.atleast_2d(np.asarray(lo, dtype=float))
         hi = np.atleast_2d(np.asarray(hi, dtype=float))
         N = lo.shape[0]
         z = np.zeros((N, self.size))
-        uu = np.asarray(u, dtype=float).ravel()
-        LO, HI = self.program.eval_interval(np.hstack([lo, z]), np.hstack([hi, z]), uu, uu)
+        ulo = np.asarray(u, dtype=float).ravel()
+        uhi = ulo if u_hi is None else np.asarray(u_hi, dtype=float).ravel()
+        LO, HI = self.program.eval_interval(np.hstack([lo, z]), np.hstack([hi, z]), ulo, uhi)
         out = self.program.outputs
         s = self.size
         Hlo = np.empty((N, s, s))

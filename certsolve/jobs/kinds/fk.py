@@ -75,6 +75,10 @@ class FkParams(Params):
     )
     seed_planar: bool = False
     seeded_only: bool = False
+    stable_only: bool = Field(
+        default=False,
+        description="stable equilibria only; complete then means no other stable one exists",
+    )
 
     @classmethod
     def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
@@ -160,6 +164,7 @@ def run_fk(job: FkJob, ctx: RunContext) -> Any:
         formulation=p.formulation,
         seed_planar=p.seed_planar,
         seeded_only=p.seeded_only,
+        stable_only=p.stable_only,
         progress=ctx.progress,
         checkpoint=None if p.seed_planar else ctx.checkpoint,  # one search only
     )
