@@ -75,7 +75,8 @@ def test_contractor_drops_boxes_around_unstable_poses_only():
     u = _u(robot, [90.0, 60.0, 0.0])
     fk = FKSolver(with_tau_max(robot, 60.0))
     res = fk.solve(u)
-    prune = StableOnly(fk.hessian, fk.csys)
+    rho = [j for j, v in enumerate(fk.form.system.variables) if v.startswith("rho")]
+    prune = StableOnly(fk.hessian, fk.csys, fk.robot, rho)
     by = {s.stability.stability: s for s in res.solutions}
     assert set(by) == {Stability.STABLE, Stability.UNSTABLE}
     for kind, dropped in ((Stability.STABLE, False), (Stability.UNSTABLE, True)):

@@ -212,7 +212,8 @@ class FKSolver:
         #: search for stable equilibria only: boxes proven to hold none are dropped
         self.stable_only = stable_only
         if stable_only:
-            self.solver.partial.append(StableOnly(self.hessian, self.csys))
+            rho = [j for j, v in enumerate(self.form.system.variables) if v.startswith("rho")]
+            self.solver.partial.append(StableOnly(self.hessian, self.csys, robot, rho))
 
     @property
     def formulation(self) -> str:

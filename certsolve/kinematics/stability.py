@@ -136,15 +136,16 @@ def _levers(form: FKFormulation) -> tuple[list[Expr], list[list[Expr]]]:
     Point formulations: ``G = P_1 + Σ_{j>=2} lG_j E_j`` and ``B_i - G = Σ_{j>=2} (l_ij -
     lG_j) E_j`` with the edge vectors ``E_j`` (variables of the frame formulation, ``P_j -
     P_1`` of the paper's).  The pose formulation: ``G = p + R c`` and ``r_i = R (b_i - c)``
-    with ``R`` from the Z-Y-X angles.
+    with ``R`` from the Z-Y-X angles.  The differences of coefficients are outward-rounded
+    interval constants: the enclosures cover the exact ``B_i - G``.
     """
     robot = form.robot
     d = robot.dim
     axes = "xyz"[:d]
     if form.kind == "pose":
         R = _rotation(d)
-        G = [var(a) + e for a, e in zip(axes, _apply(R, robot.com), strict=True)]
-        return G, [_apply(R, robot.B[i] - robot.com) for i in range(robot.m)]
+        G = [var(a) + g for a, g in zip(axes, _apply(R, robot.com, robot.com), strict=True)]
+        return G, [_apply(R, *_difference(robot.B[i], robot.com)) for i in range(robot.m)]
     k = form.n_points
     P1 = [var(f"{a}1") for a in axes]
     if form.kind == "frame":
@@ -153,15 +154,26 @@ def _levers(form: FKFormulation) -> tuple[list[Expr], list[list[Expr]]]:
         E = [[var(f"{a}{j + 1}") - P1[c] for c, a in enumerate(axes)] for j in range(1, k)]
     assert form.L is not None and form.lG is not None
 
-    def rel(coefs) -> list[Expr]:
-        nz = [j for j in range(1, k) if coefs[j] != 0.0]
+    def rel(lo, hi) -> list[Expr]:
+        nz = [j for j in range(1, k) if lo[j] != 0.0 or hi[j] != 0.0]
         if not nz:
             return [const(0.0)] * d
-        return [esum(float(coefs[j]) * E[j - 1][c] for j in nz) for c in range(d)]
+        return [esum(_coef(lo[j], hi[j]) * E[j - 1][c] for j in nz) for c in range(d)]
 
-    g = rel(form.lG)
-    G = [P1[c] + g[c] for c in range(d)]
-    return G, [rel(form.L[i] - form.lG) for i in range(robot.m)]
+    G = [P1[c] + g for c, g in enumerate(rel(form.lG, form.lG))]
+    return G, [rel(*_difference(form.L[i], form.lG)) for i in range(robot.m)]
+
+
+def _difference(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of ``a - b``: one float where the difference is surely exact (``a == b``, or
+    one of them 0), else rounded outward."""
+    d = a - b
+    exact = (a == b) | (a == 0.0) | (b == 0.0)
+    return np.where(exact, d, down(d)), np.where(exact, d, up(d))
+
+
+def _coef(lo: float, hi: float) -> Expr:
+    return const(float(lo)) if lo == hi else const(float(lo), float(hi))
 
 
 def _rotation(d: int) -> list[list[Expr]]:
@@ -179,12 +191,13 @@ def _rotation(d: int) -> list[list[Expr]]:
     ]
 
 
-def _apply(R: list[list[Expr]], b: np.ndarray) -> list[Expr]:
+def _apply(R: list[list[Expr]], lo: np.ndarray, hi: np.ndarray) -> list[Expr]:
+    """``R b`` for ``b`` in the box ``[lo, hi]`` (a point when ``lo == hi``)."""
     d = len(R)
-    return [
-        esum(float(b[c]) * R[r][c] for c in range(d) if b[c] != 0.0) if np.any(b) else const(0.0)
-        for r in range(d)
-    ]
+    nz = [c for c in range(d) if lo[c] != 0.0 or hi[c] != 0.0]
+    if not nz:
+        return [const(0.0)] * d
+    return [esum(_coef(lo[c], hi[c]) * R[r][c] for c in nz) for r in range(d)]
 
 
 def _energy(form: FKFormulation, dp: list[Expr], dw: list[Expr]) -> Expr:
@@ -198,7 +211,7 @@ def _energy(form: FKFormulation, dp: list[Expr], dw: list[Expr]) -> Expr:
         rho = var(f"rho{i + 1}")
         L = rho + float(robot.V[i]) + float(robot.K[i]) * param(f"u{i + 1}")
         w = float(robot.k[i]) * (1.0 - float(robot.L0[i]) / L) / rho  # τ_i / ρ_i
-        dtau = float(robot.k[i] * robot.L0[i]) * (1.0 / sqr(L))  # dτ_i / dρ_i
+        dtau = float(robot.k[i]) * (float(robot.L0[i]) / sqr(L))  # dτ_i / dρ_i
         t = _turn(r[i], dw)
         move = [dp[c] + t[c] for c in range(d)]  # B_i(δ) - B_i
         arm = [G[c] + r[i][c] - float(robot.A[i, c]) for c in range(d)]  # B_i - A_i

@@ -15,7 +15,8 @@ the step says so and the caller should fall back to the full search
 (:func:`~.fk.forward_kinematics`).
 
 :class:`Tracker` compiles the formulation once; a step costs a few float Newton
-iterations and one batched Krawczyk test.
+iterations and one batched Krawczyk test.  With ``stability=True`` (:func:`track`, the
+CLI) a certified step also says whether the pose is stable (:mod:`.stability`).
 """
 
 from __future__ import annotations
