@@ -10,7 +10,8 @@ complete all-solutions search with each worker count, with the status, certified
 boxes and bisections beside them.  Cases marked ``target`` are the targets of issue 10
 (../shared/TARGETS.md); ``u~S(seed)`` is u drawn uniformly in the strokes with that seed,
 ``random-general-N`` / ``random-T-N`` the perturbed designs of
-:func:`certsolve.robot.presets.random_marionet`.
+:func:`certsolve.robot.presets.random_marionet`; ``u=IK(P)`` the control vector of IK
+Algorithm 2 at ``REAL_POSE``; ``stable-only`` cases search for stable equilibria only.
 
 ``--curve``: how time and boxes grow with tau_max (10, 20, 40, 60 N) and with the stroke
 range (u drawn in 1/4, 1/2 and all of the strokes, seed 1), for T-16 and general-19, one
@@ -38,6 +39,9 @@ from certsolve.robot.presets import random_marionet
 
 R = "examples/robots"
 ZERO4, ZERO7 = [0.0] * 4, [0.0] * 7
+#: a real pose: ``u = IK(P)`` is computed by IK Algorithm 2 on the robot file (its own
+#: tension limits), so the robot is at P (issue 29)
+REAL_POSE = (111.0, 58.0, 107.0, 0.0, 0.0, 0.0)
 #: name -> (robot, tau_max, u: a list, or ("S", seed, fraction) drawn in the strokes)
 CASES = {
     "planar-10 tau<=10": ("planar", 10.0, [0.5, 0.5, 0.5, 0.5]),
@@ -58,6 +62,10 @@ CASES = {
     "random-general-0 tau<=40 u~S(7)": ("random-general-0", 40.0, ("S", 7, 1.0)),
     "random-general-0 tau<=60 u~S(7)": ("random-general-0", 60.0, ("S", 7, 1.0)),
     "random-general-1 tau<=60 u~S(7)": ("random-general-1", 60.0, ("S", 7, 1.0)),
+    "T-16 tau<=60 u=IK(P)": ("marionet-t", 60.0, ("IK", REAL_POSE)),
+    "T-16 tau<=60 u=IK(P) stable-only (target)": ("marionet-t", 60.0, ("IK", REAL_POSE)),
+    "general-19 tau<=60 u=IK(P)": ("marionet", 60.0, ("IK", REAL_POSE)),
+    "general-19 tau<=60 u=IK(P) stable-only (target)": ("marionet", 60.0, ("IK", REAL_POSE)),
 }
 CURVE_TAUS = (10.0, 20.0, 40.0, 60.0)
 CURVE_STROKES = (0.25, 0.5, 1.0)
@@ -76,9 +84,12 @@ def load(name: str) -> Robot:
     return Robot.load(f"{R}/{name}.json")
 
 
-def control(robot: Robot, u) -> np.ndarray:
-    """A control vector: given, or ``("S", seed, fraction)``: uniform in that share of the
-    strokes around their middle."""
+def control(robot: Robot, u, base: Robot | None = None) -> np.ndarray:
+    """A control vector: given, ``("IK", pose)``: IK Algorithm 2 at ``pose`` on ``base``
+    (the robot file, before ``tau_max``), or ``("S", seed, fraction)``: uniform in that
+    share of the strokes around their middle."""
+    if isinstance(u, tuple) and u[0] == "IK":
+        return inverse_kinematics(base or robot, list(u[1]), method="alg2").u
     if isinstance(u, tuple):
         _, seed, frac = u
         mid = 0.5 * (robot.u_min + robot.u_max)
@@ -87,11 +98,11 @@ def control(robot: Robot, u) -> np.ndarray:
     return np.asarray(u, dtype=float)
 
 
-def run_case(robot: Robot, u, args, workers: int):
+def run_case(robot: Robot, u, args, workers: int, stable_only: bool = False):
     """Median wall and CPU over ``args.runs`` runs, and the last result."""
     walls, cpus, res = [], [], None
     for _ in range(args.runs):
-        fk = FKSolver(robot, args.formulation)
+        fk = FKSolver(robot, args.formulation, stable_only=stable_only)
         t, c = time.perf_counter(), time.process_time()
         res = fk.solve(u, timeout=args.timeout, workers=workers)
         walls.append(time.perf_counter() - t)
@@ -100,14 +111,14 @@ def run_case(robot: Robot, u, args, workers: int):
 
 
 HEAD = (
-    f"{'case':<36} {'w':>2} {'status':<10} {'poses':>5} {'boxes':>8} {'bisect':>7} "
+    f"{'case':<48} {'w':>2} {'status':<10} {'poses':>5} {'boxes':>8} {'bisect':>7} "
     f"{'wall s':>8} {'cpu s':>8}"
 )
 
 
 def row(name, w, res, wall, cpu) -> str:
     return (
-        f"{name:<36} {w:>2} {res.status:<10} {len(res.solutions):>5} {res.stats.boxes:>8} "
+        f"{name:<48} {w:>2} {res.status:<10} {len(res.solutions):>5} {res.stats.boxes:>8} "
         f"{res.stats.bisections:>7} {wall:>8.2f} {cpu:>8.2f}"
     )
 
@@ -116,10 +127,11 @@ def bench_fk(args) -> None:
     print(HEAD)
     for name in args.cases or CASES:
         robot_name, tau, u = CASES[name]
-        robot = with_tau_max(load(robot_name), tau)
-        uu = control(robot, u)
+        base = load(robot_name)
+        robot = with_tau_max(base, tau)
+        uu = control(robot, u, base)
         for w in args.workers:
-            wall, cpu, res = run_case(robot, uu, args, w)
+            wall, cpu, res = run_case(robot, uu, args, w, "stable-only" in name)
             print(row(name, w, res, wall, cpu), flush=True)
 
 
@@ -155,7 +167,7 @@ def bench_startup(args) -> None:
                 [sys.executable, "-m", "certsolve", *argv], check=True, capture_output=True
             )
             times.append(time.perf_counter() - t)
-        print(f"{name:<36} {statistics.median(times):>9.3f} {min(times):>7.3f}", flush=True)
+        print(f"{name:<48} {statistics.median(times):>9.3f} {min(times):>7.3f}", flush=True)
 
 
 def trajectory(robot, start, n, seed=0):

@@ -689,7 +689,7 @@ function renderFk(job, r, out) {
       el(
         "article",
         { class: "pose", "data-pose": k },
-        el("h3", { text: `pose ${k + 1} of ${poses.length}` }),
+        el("h3", { text: `pose ${k + 1} of ${poses.length}` + (p.stability ? ` (${p.stability})` : "") }),
         el(
           "div",
           { class: "pose-body" },
@@ -701,6 +701,7 @@ function renderFk(job, r, out) {
               ["position (cm)", vec(p.position, 7)],
               [angles, fixed(p.euler || [], 4)],
               ["certificate", `${p.certificate}` + (p.verified === true ? ", verified with mpmath" : p.verified === false ? ", NOT verified" : "")],
+              ["stability", p.stability ? `${p.stability}, smallest Hessian eigenvalue in [${(p.eig_min || []).map((v, i) => (v === null ? (i ? "∞" : "−∞") : num(v, 6))).join(", ")}]` : "not given"],
               ["existence box", `${(p.box || []).length} variables, widths ≤ ${num(Math.max(...(p.box || [[0, 0]]).map((b) => b[1] - b[0])), 2)}`],
             ]),
             el("table", { class: "tensions" }, el("thead", {}, el("tr", {}, el("th", { text: "wire" }), el("th", { text: "tension τ (N)" }), el("th", { text: "length ρ (cm)" }))), el("tbody", {}, wires))

@@ -70,6 +70,12 @@ def register(sub) -> None:
         help="with --seed-planar: skip the rest of the domain (incomplete answer)",
     )
     p.add_argument(
+        "--stable-only",
+        action="store_true",
+        help="stable equilibria only (Hessian of the energy positive definite); a complete "
+        "answer then proves no other stable pose exists",
+    )
+    p.add_argument(
         "--near",
         default=None,
         help="tracking: a known nearby pose x,y,z[,yaw,pitch,roll] (cm, degrees)",
@@ -104,6 +110,7 @@ def run(args: argparse.Namespace) -> int:
             flag
             for flag, value in (
                 ("--seed-planar", args.seed_planar),
+                ("--stable-only", args.stable_only),
                 ("--verify", args.verify),
                 ("--timeout", args.timeout is not None),
                 ("--max-boxes", args.max_boxes is not None),
@@ -124,7 +131,9 @@ def run(args: argparse.Namespace) -> int:
             TrackParams, args, {"u": u, "near_pose": near}, robot=spec, option={"near_pose": "near"}
         )
         pose = Pose.from_params(robot.dof, track.near_pose)
-        res = Tracker(robot, params.formulation).step(track.u, pose, track.half_width)
+        res = Tracker(robot, params.formulation, stability=True).step(
+            track.u, pose, track.half_width
+        )
         if args.json:
             print_json(res.to_dict())
         else:
@@ -148,6 +157,7 @@ def run(args: argparse.Namespace) -> int:
                 max_solutions=params.max_solutions,
                 seed_planar=params.seed_planar,
                 seeded_only=params.seeded_only,
+                stable_only=params.stable_only,
                 progress=deadline.progress(show),
                 executor=executor,
                 verify=args.verify,
@@ -171,6 +181,8 @@ def _pose_lines(s: Mapping) -> list[str]:
     lines = [
         f"  position ({'x, y, z' if spatial else 'x, y'}) = ({pos}) cm",
         f"  orientation ({names}) = ({ang}) deg",
+        f"  stability: {s.stability.stability}, smallest Hessian eigenvalue in "
+        f"[{s.stability.eig_lo:.6g}, {s.stability.eig_hi:.6g}]",
         "  wire      rho (cm)    tau (N)    B_i (world, cm)",
     ]
     for i, (rho, tau, point) in enumerate(

@@ -32,6 +32,7 @@ def forward_kinematics(
     tau_max: float | None = None,
     seed_planar: bool = False,
     seeded_only: bool = False,
+    stable_only: bool = False,
     progress=None,
     executor: Any = None,
     verify: bool = False,
@@ -50,8 +51,11 @@ def forward_kinematics(
     ``tau_max`` overrides every wire's maximum tension; ``seed_planar`` solves the planar
     counterpart first and searches around its solutions before the rest of the domain
     (:func:`.seeding.seeded_forward_kinematics`); ``seeded_only`` skips the rest (the rest
-    is then reported pending).  ``executor`` (or the older ``workers``), ``verify``, the
-    limits, ``progress`` and ``cancel`` apply to either search (see :meth:`.Solver.solve`);
+    is then reported pending).  ``stable_only`` returns the stable equilibria only (and
+    those whose verdict is undecided); ``complete`` then means that no other stable
+    equilibrium is in the domain (:mod:`.stable_only`).  ``executor`` (or the older
+    ``workers``), ``verify``, the limits, ``progress`` and ``cancel`` apply to either search
+    (see :meth:`.Solver.solve`);
     ``checkpoint`` (:class:`~certsolve.solver.checkpoint.Checkpoint`) to the plain search
     only.
     """
@@ -67,6 +71,7 @@ def forward_kinematics(
             "formulation": formulation,
             "seed_planar": seed_planar,
             "seeded_only": seeded_only,
+            "stable_only": stable_only,
         },
     )
     check_controls(robot.m, opts.u)
@@ -84,13 +89,14 @@ def forward_kinematics(
         "executor": executor,
         "verify": verify,
         "cancel": cancel,
+        "stable_only": stable_only,
     }
     if seed_planar:
         return seeded_forward_kinematics(
             robot, u, formulation=formulation, eps=eps, seeded_only=seeded_only, **search
         )
     t0 = time.perf_counter()
-    fk = FKSolver(robot, formulation, eps=eps)
+    fk = FKSolver(robot, formulation, eps=eps, stable_only=search.pop("stable_only"))
     compile_time = time.perf_counter() - t0
     res = fk.solve(u, checkpoint=checkpoint, **search)
     res.notes.append(f"compiled in {compile_time:.3f} s")

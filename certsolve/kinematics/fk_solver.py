@@ -9,6 +9,7 @@ in its box, plus undecided and pending boxes -- the solver's guarantees, read ba
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -31,6 +32,8 @@ from .fk_systems import (
     rotation_from_points,
     search_domain,
 )
+from .stability import EnergyHessian, Stability, StabilityVerdict
+from .stable_only import StableOnly
 
 __all__ = ["FKPose", "FKResult", "FKSolver", "with_tau_max"]
 
@@ -57,6 +60,9 @@ class FKPose:
     variables: list[str]
     certificate: str = "unique"
     verified: bool | None = None
+    #: stable / unstable / undecided over ``box``, with an enclosure of the Hessian's
+    #: smallest eigenvalue (:mod:`.stability`)
+    stability: StabilityVerdict = field(default_factory=StabilityVerdict.unknown)
 
     @property
     def euler_deg(self) -> np.ndarray:
@@ -76,6 +82,7 @@ class FKPose:
             "verified": self.verified,
             "box": self.box,
             "variables": list(self.variables),
+            **self.stability.to_dict(),
         }
 
 
@@ -150,7 +157,13 @@ def _newton_groups(names) -> list[np.ndarray]:
 
 
 class FKSolver:
-    """Compile a formulation once, solve forward kinematics for many control vectors."""
+    """Compile a formulation once, solve forward kinematics for many control vectors.
+
+    ``stable_only``: search for the stable equilibria only (:mod:`.stable_only`: boxes
+    whose interval Hessian of the energy is proven not positive definite are dropped, and
+    so are the certified poses proven unstable); ``complete`` then means that no other
+    stable equilibrium is in the domain.
+    """
 
     def __init__(
         self,
@@ -159,6 +172,7 @@ class FKSolver:
         *,
         eps: float = 1e-8,
         batch_size: int = 2048,
+        stable_only: bool = False,
     ):
         # batch_size: boxes per numpy call.  The FK systems' batches are large enough for
         # numpy's per-call cost to matter: 2048 against 512 is 25-30 % less CPU with the
@@ -196,6 +210,12 @@ class FKSolver:
             subsystems=subsystems,
             newton_groups=_newton_groups(self.form.system.variables),
         )
+        #: search for stable equilibria only: boxes proven to hold none are dropped, after
+        #: HC4 and the partial Newton, before the full Newton step
+        self.stable_only = stable_only
+        if stable_only:
+            rho = [j for j, v in enumerate(self.form.system.variables) if v.startswith("rho")]
+            newton.insert(-1, StableOnly(self.hessian, csys, robot, rho))
         self.solver = Solver(
             csys,
             Sequence(FixPoint(Sequence(*newton)), Inflate()),
@@ -288,15 +308,40 @@ class FKSolver:
             checkpoint=checkpoint,
             domain=dom,
         )
-        sols = [self.decode(s.lo, s.hi, u, s) for s in res.solutions]
+        sols = self.decode_all(res.solutions, u)
+        if len(sols) < len(res.solutions):
+            left = len(res.solutions) - len(sols)
+            notes.append(f"stable only: {left} unstable pose(s) left out")
         return FKResult(self.robot.name, self.formulation, u, res.status, sols, res, notes=notes)
 
-    def decode(self, lo, hi, u, sol=None, point=None) -> FKPose:
+    @functools.cached_property
+    def hessian(self) -> EnergyHessian:
+        """The interval Hessian of the potential energy (compiled on first use)."""
+        return EnergyHessian(self.form)
+
+    def decode_all(self, solutions, u) -> list[FKPose]:
+        """:meth:`decode` of the solver's solutions, with one batched stability verdict
+        (``stable_only``: the poses proven unstable are left out)."""
+        if not solutions:
+            return []
+        lo = np.array([s.lo for s in solutions])
+        hi = np.array([s.hi for s in solutions])
+        verdicts = self.hessian.verdicts(lo, hi, u)
+        return [
+            self.decode(s.lo, s.hi, u, s, verdict=v)
+            for s, v in zip(solutions, verdicts, strict=True)
+            if not (self.stable_only and v.stability == Stability.UNSTABLE)
+        ]
+
+    def decode(self, lo, hi, u, sol=None, point=None, verdict=None) -> FKPose:
         """Read a robot pose from a (tight) solution box of the system's variables.
 
         The pose is taken at ``point`` if given (e.g. a converged Newton point inside the
-        box), else at the box midpoint.
+        box), else at the box midpoint.  ``verdict``: its stability over the box (computed
+        here if not given: :class:`.EnergyHessian`).
         """
+        if verdict is None:
+            verdict = self.hessian.verdicts(np.asarray(lo)[None], np.asarray(hi)[None], u)[0]
         x = 0.5 * np.asarray(lo) + 0.5 * np.asarray(hi) if point is None else np.asarray(point)
         f = self.form
         r = self.robot
@@ -321,4 +366,5 @@ class FKSolver:
             list(f.system.variables),
             certificate=getattr(sol, "certificate", "unique"),
             verified=getattr(sol, "verified", None),
+            stability=verdict,
         )

@@ -81,6 +81,7 @@ def seeded_forward_kinematics(
     max_boxes: int | None = None,
     max_solutions: int | None = None,
     seeded_only: bool = False,
+    stable_only: bool = False,
     radius: float = 6.0,
     progress=None,
     executor: Any = None,
@@ -93,6 +94,7 @@ def seeded_forward_kinematics(
     limits, ``progress`` and ``cancel``, as :meth:`.FKSolver.solve`; ``max_boxes`` applies
     to each.  If the seeded search stops early, or with ``seeded_only``, the rest of the
     domain is reported *pending* (status: the limit that stopped it, or ``cancelled``).
+    ``stable_only`` as :class:`.FKSolver` (the planar search is not restricted).
     """
     t0 = time.perf_counter()
     u = np.asarray(u, dtype=float)
@@ -101,7 +103,7 @@ def seeded_forward_kinematics(
     res2 = fk2.solve(u, timeout=timeout, cancel=cancel)
     t_planar = time.perf_counter() - t0
 
-    fk = FKSolver(robot, formulation, eps=eps)
+    fk = FKSolver(robot, formulation, eps=eps, stable_only=stable_only)
     if fk.form.kind not in ("points", "frame") or fk.form.n_points != 3:
         raise ValueError("planar seeding needs a 3-point formulation (almost-planar-13)")
     u, dom, ok = fk._prepare(u)
@@ -169,7 +171,7 @@ def seeded_forward_kinematics(
         from ..solver.verify import verify_solutions  # mpmath: imported when asked
 
         verify_solutions(fk.csys, res.solutions)
-    sols = [fk.decode(s.lo, s.hi, u, s) for s in res.solutions]
+    sols = fk.decode_all(res.solutions, u)
     seeding = {
         "planar_solutions": len(res2.solutions),
         "planar_status": str(res2.status),

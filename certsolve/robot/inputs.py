@@ -89,6 +89,10 @@ class FkOptions(StrictModel):
     )
     seed_planar: bool = False
     seeded_only: bool = False
+    stable_only: bool = Field(
+        default=False,
+        description="stable equilibria only; complete then means no other stable one exists",
+    )
 
 
 class TrackOptions(StrictModel):

@@ -137,6 +137,7 @@ def run_fk(job: FkJob, ctx: RunContext) -> Any:
         formulation=p.formulation,
         seed_planar=p.seed_planar,
         seeded_only=p.seeded_only,
+        stable_only=p.stable_only,
         progress=ctx.progress,
         checkpoint=None if p.seed_planar else ctx.checkpoint,  # one search only
     )
