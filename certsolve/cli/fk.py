@@ -181,8 +181,7 @@ def _pose_lines(s: Mapping) -> list[str]:
     lines = [
         f"  position ({'x, y, z' if spatial else 'x, y'}) = ({pos}) cm",
         f"  orientation ({names}) = ({ang}) deg",
-        f"  stability: {s.stability.stability}, smallest Hessian eigenvalue in "
-        f"[{s.stability.eig_lo:.6g}, {s.stability.eig_hi:.6g}]",
+        _stability_line(s),
         "  wire      rho (cm)    tau (N)    B_i (world, cm)",
     ]
     for i, (rho, tau, point) in enumerate(
@@ -191,6 +190,17 @@ def _pose_lines(s: Mapping) -> list[str]:
         b = ", ".join(f"{v:9.4f}" for v in point)
         lines.append(f"  {i + 1:4d}  {rho:12.6f}  {tau:9.5f}    ({b})")
     return lines
+
+
+def _stability_line(s: Mapping) -> str:
+    """The pose's stability verdict and its enclosure of the smallest Hessian eigenvalue
+    (``None`` bounds: unbounded); a stored result from before verdicts has neither."""
+    if "stability" not in s:
+        return "  stability: not computed"
+    lo, hi = s["eig_min"]
+    lo_s = "-inf" if lo is None else f"{lo:.6g}"
+    hi_s = "inf" if hi is None else f"{hi:.6g}"
+    return f"  stability: {s['stability']}, smallest Hessian eigenvalue in [{lo_s}, {hi_s}]"
 
 
 def format_result(res: Mapping) -> str:
