@@ -67,7 +67,7 @@ from ..interval.rounding import down, up
 from ..robot import Robot
 from ..robot.params import RobotBounds
 from .loads import force_rows
-from .meanvalue import MV, phi_mv, pmatmul, wedge_mv
+from .meanvalue import MV, Limit, LimitMV, Pair, mv_sum, phi_mv, pmatmul, wedge_mv
 from .wedge import basis_groups, facet_subsets
 
 __all__ = ["interval_rotation", "slack_enclosures"]
@@ -232,7 +232,7 @@ def _tscale(lo, hi, t):
 
 
 # -- the robot's columns ------------------------------------------------------------------
-def _columns(robot: Robot, plo, phi, R, A, Bp):
+def _columns(robot: Robot, plo, phi, R, A: Pair, Bp: Pair):
     """Natural enclosures over the box: ``e = A - p``, ``b = R B``, ``a = e - b`` ``(m, d, B)``
     and the unnormalised columns ``ĥ`` ``(w, m, B)`` (dof 3, 6); ``A``, ``Bp`` interval pairs
     ``(m, d, n)``."""
@@ -370,8 +370,8 @@ def _parts_point(robot: Robot, plo, phi, prm: RobotBounds):
     c1 = arith.sub(
         *arith.mul(*comp(Aj, 0), *comp(Ai, 1)), *arith.mul(*comp(Aj, 1), *comp(Ai, 0))
     )  # (K, m, n)
-    dx = arith.sub(*comp(Ai, 0), *comp(Aj, 0))
-    dy = arith.sub(*comp(Ai, 1), *comp(Aj, 1))
+    dx: Pair = arith.sub(*comp(Ai, 0), *comp(Aj, 0))
+    dy: Pair = arith.sub(*comp(Ai, 1), *comp(Aj, 1))
     t1 = arith.mul(*dx, plo[1], phi[1])
     t2 = arith.mul(*dy, plo[0], phi[0])
     cr = arith.add(*c1, *arith.sub(*t1, *t2))
@@ -487,12 +487,12 @@ def _rigid(robot: Robot, plo, phi, f_req, external, alo, ahi, rotation, prm: Rob
         Rb = np.broadcast_to(Rp[:, :, None], (d, d, B))
         R, dR, Rmid = (Rb, Rb), [], (Rb, Rb)
     pmid = np.minimum(np.maximum(0.5 * plo + 0.5 * phi, plo), phi)
-    radii = [np.maximum(up(phi - pmid), up(pmid - plo))]
+    radius_rows = [np.maximum(up(phi - pmid), up(pmid - plo))]
     if alo is not None:
-        radii.append(np.maximum(up(ahi - amid), up(amid - alo)))
+        radius_rows.append(np.maximum(up(ahi - amid), up(amid - alo)))
     if prm.k:  # the design parameters are slope dimensions too
-        radii.append(np.broadcast_to(prm.radius, (prm.k, B)))
-    radii = np.concatenate(radii)  # (nd, B)
+        radius_rows.append(np.broadcast_to(prm.radius, (prm.k, B)))
+    radii = np.concatenate(radius_rows)  # (nd, B)
     nd = radii.shape[0]
 
     e, b, _, hx = _columns(robot, plo, phi, R, prm.A, prm.B)
@@ -504,7 +504,7 @@ def _rigid(robot: Robot, plo, phi, f_req, external, alo, ahi, rotation, prm: Rob
     a = h.apply(lambda t: t[:d])
     sq = a.apply(lambda t: t[0]).sqr()
     for r in range(1, d):
-        sq = sq + a.apply(lambda t, r=r: t[r]).sqr()
+        sq = sq + a.take(r).sqr()
     rho = sq.sqrt()  # (m, B)
     rho = rho.tighten(radii)
     wires_ok = np.all(rho.x[0] > 0.0, axis=0)
@@ -544,9 +544,9 @@ def _rigid(robot: Robot, plo, phi, f_req, external, alo, ahi, rotation, prm: Rob
         g_lo, g_hi, n_hi, ok = _rigid_basis(
             robot,
             b0,
-            h.apply(lambda t, s=sel: t[..., s]),
-            rho.apply(lambda t, s=sel: t[..., s]),
-            wext.apply(lambda t, s=sel: t[..., s]),
+            h.take((..., sel)),
+            rho.take((..., sel)),
+            wext.take((..., sel)),
             radii[:, sel],
             f_req,
             nf,
@@ -613,45 +613,39 @@ def _rigid_basis(robot: Robot, b0, h: MV, rho: MV, wext: MV, radii, f_req, nf, p
             one = np.ones((1, Kt, B))
             lam = MV.const(one, one, len(radii))
         else:
-            lam = wedge_mv(y.apply(lambda a, F=F, T=T: a[F.T[:, None, :], T.T[None, :, :]]))
+            lam = wedge_mv(y.take((F.T[:, None, :], T.T[None, :, :])))
             lam = lam.tighten(radii)
         # c · ĥ_l for l in F (λ) and l in R (λ · Y[F, l])
         cols = [np.array(b0)[F.T]]  # (t+1, Kt) column ids
-        qs = [lam / rho.apply(lambda a, c=cols[0]: a[c])]
+        qs = [lam / rho.take(cols[0])]
         if Rr.shape[1]:
-            YF = y.apply(lambda a, F=F, Rr=Rr: a[F.T[:, None, :], Rr.T[None, :, :]])
-            DR = None
-            for f in range(t + 1):
-                term = lam.apply(lambda a, f=f: a[f][None]) * YF.apply(lambda a, f=f: a[f])
-                DR = term if DR is None else DR + term  # (e-t, Kt, B)
+            YF = y.take((F.T[:, None, :], Rr.T[None, :, :]))
+            DR = mv_sum(lam.take(f).take(None) * YF.take(f) for f in range(t + 1))  # (e-t, Kt, B)
             DR = DR.tighten(radii)
             cR = np.array(nn)[Rr.T]
             cols.append(cR)
-            qs.append(DR / rho.apply(lambda a, c=cR: a[c]))
-        Np = Nm = None
+            qs.append(DR / rho.take(cR))
+        pos_terms, neg_terms = [], []
         for q, c in zip(qs, cols):
             tmin = _tau_mv(prm.tau_min, prm.tau_min_mid, prm.dtau_min, c, nd)
             tmax = _tau_mv(prm.tau_max, prm.tau_max_mid, prm.dtau_max, c, nd)
             pp = phi_mv(q, tmin, tmax)
             pm = phi_mv(-q, tmin, tmax)
             for i in range(c.shape[0]):
-                a1 = pp.apply(lambda a, i=i: a[i])
-                a2 = pm.apply(lambda a, i=i: a[i])
-                Np = a1 if Np is None else Np + a1
-                Nm = a2 if Nm is None else Nm + a2
-        cw = cf = None
+                pos_terms.append(pp.take(i))
+                neg_terms.append(pm.take(i))
+        Np, Nm = mv_sum(pos_terms), mv_sum(neg_terms)
+        w_terms, f_terms = [], []
         for f in range(t + 1):
-            lf = lam.apply(lambda a, f=f: a[f])  # (Kt, B)
-            t1 = lf * z.apply(lambda a, f=f, F=F: a[F[:, f]])
-            t2 = lf.apply(lambda a: a[None]) * Gf.apply(
-                lambda a, f=f, F=F: np.moveaxis(a[F[:, f]], 1, 0)
-            )
-            cw = t1 if cw is None else cw + t1
-            cf = t2 if cf is None else cf + t2  # (nf, Kt, B)
+            lf = lam.take(f)  # (Kt, B)
+            w_terms.append(lf * z.take(F[:, f]))
+            f_terms.append(lf.take(None) * Gf.take(F[:, f]).apply(lambda a: np.moveaxis(a, 1, 0)))
+        cw = mv_sum(w_terms)
+        cf = mv_sum(f_terms)  # (nf, Kt, B)
         cf = cf.tighten(radii)
         n2 = cf.apply(lambda a: a[0]).sqr()
         for r in range(1, nf):
-            n2 = n2 + cf.apply(lambda a, r=r: a[r]).sqr()
+            n2 = n2 + cf.take(r).sqr()
         nrm = n2.sqrt()
         n_hi.append(nrm.enclose(radii)[1])
         fr = nrm.scale(float(f_req))
@@ -666,17 +660,17 @@ def _rigid_basis(robot: Robot, b0, h: MV, rho: MV, wext: MV, radii, f_req, nf, p
     return glo, ghi, np.concatenate(n_hi + n_hi), ok
 
 
-def _tau_mv(box, mid, deriv, c, nd: int):
+def _tau_mv(box: Pair, mid: Pair, deriv: np.ndarray, c: np.ndarray, nd: int) -> Limit:
     """Tension limits of the wires ``c`` as a slope triple (an interval pair without design
     parameters): slopes 0 in the pose axes, the exact derivatives in the parameters."""
-    box = (box[0][c], box[1][c])
+    cbox = (box[0][c], box[1][c])
     if deriv.shape[0] == 0:
-        return box
-    slopes = [None] * (nd - deriv.shape[0])
+        return cbox
+    slopes: list[Pair | None] = [None] * (nd - deriv.shape[0])
     for dt in deriv:
         v = dt[c][..., None]
         slopes.append((v, v) if np.any(v) else None)
-    return MV((mid[0][c], mid[1][c]), box, slopes)
+    return LimitMV(m=(mid[0][c], mid[1][c]), x=cbox, s=slopes)
 
 
 def _point_slacks(robot, f_req, external, prm: RobotBounds, subsets, rho, D, c, cf):

@@ -53,8 +53,10 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from itertools import combinations
 from math import comb
+from typing import Literal, overload
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..inputs import check_count, checked
 from ..robot import Robot, wrench_matrix
@@ -231,14 +233,37 @@ def _index_batch_basis(Ht, wt, tau_min, tau_max, nf: int):
     return f, status, direction
 
 
+@overload
 def isotropic_values(
     robot: Robot,
-    positions,
-    rotations=None,
-    external=None,
+    positions: ArrayLike,
+    rotations: ArrayLike | None = None,
+    external: ArrayLike | None = None,
+    chunk: int | None = None,
+    return_direction: Literal[False] = False,
+) -> tuple[np.ndarray, np.ndarray]: ...
+
+
+@overload
+def isotropic_values(
+    robot: Robot,
+    positions: ArrayLike,
+    rotations: ArrayLike | None = None,
+    external: ArrayLike | None = None,
+    chunk: int | None = None,
+    *,
+    return_direction: Literal[True],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+
+
+def isotropic_values(
+    robot: Robot,
+    positions: ArrayLike,
+    rotations: ArrayLike | None = None,
+    external: ArrayLike | None = None,
     chunk: int | None = None,
     return_direction: bool = False,
-):
+) -> tuple[np.ndarray, np.ndarray] | tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``f_min`` (see the module docstring) for ``P`` poses, without a Python loop per pose.
 
     ``positions`` ``(P, d)``; ``rotations`` ``(P, d, d)`` or one ``(d, d)`` matrix (identity
@@ -277,9 +302,9 @@ def isotropic_values(
         core = _index_batch_basis if robot.dof == 6 and robot.m >= 6 else _index_batch
         res = core(np.moveaxis(H, 0, -1), w_ext.T, robot.tau_min, robot.tau_max, nf)
         out[sl], status[sl] = res[0], res[1]
-        if return_direction:
+        if direction is not None:
             direction[sl] = res[2].T
-    if return_direction:
+    if direction is not None:
         return out, status, direction
     return out, status
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -71,7 +72,7 @@ class IsotropicMap:
     def summary(self) -> dict:
         v = self.values
         ok = self.status == INSIDE
-        out = {
+        out: dict[str, Any] = {
             "poses": self.poses,
             "inside": int(ok.sum()),
             "outside": int((self.status == 1).sum()),

@@ -26,7 +26,9 @@ Arrays follow the enclosure module's layout (any shape, batch last).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -35,7 +37,7 @@ from ..interval.linalg import mr_from_bounds, mr_matmul, mr_to_bounds
 from ..interval.rounding import down, up
 from .wedge import wedge_tables
 
-__all__ = ["MV", "wedge_mv", "phi_mv", "pmatmul"]
+__all__ = ["MV", "LimitMV", "mv_sum", "wedge_mv", "phi_mv", "pmatmul"]
 
 Pair = tuple[np.ndarray, np.ndarray]
 
@@ -80,6 +82,10 @@ class MV:
             (fn(self.x[0]), fn(self.x[1])),
             [(fn(a), fn(b)) for a, b in self.s],
         )
+
+    def take(self, index: Any) -> MV:
+        """``a[index]`` on every part (any numpy index: an integer, arrays, a tuple)."""
+        return self.apply(lambda a: a[index])
 
     def where(self, mask: np.ndarray, value: float) -> MV:
         """Parts replaced by the exact constant ``value`` where ``mask`` holds."""
@@ -147,7 +153,7 @@ class MV:
         return MV(f(self.m), f(self.x), [f(p) for p in self.s])
 
     def sqr(self) -> MV:
-        t = arith.add(*self.x, *self.m)
+        t: Pair = arith.add(*self.x, *self.m)
         return MV(arith.sqr(*self.m), arith.sqr(*self.x), [arith.mul(*t, *s) for s in self.s])
 
     def sqrt(self) -> MV:
@@ -180,11 +186,37 @@ class MV:
         return MV(self.m, self.enclose(radii), self.s)
 
 
-def _sum_axis0(u: MV) -> MV:
-    acc = u.apply(lambda a: a[0])
-    for t in range(1, u.m[0].shape[0]):
-        acc = acc + u.apply(lambda a, t=t: a[t])
+@dataclass(frozen=True, kw_only=True, slots=True)
+class LimitMV:
+    """A tension limit that moves with the design parameters, in the slope form of :class:`MV`.
+
+    ``m`` and ``x`` are as in :class:`MV`; ``s[j]`` is ``None`` where the limit does not
+    depend on slope variable ``j`` (the pose axes), so that :func:`phi_mv` adds no term
+    for it rather than a product with a zero slope.
+    """
+
+    m: Pair
+    x: Pair
+    s: list[Pair | None]
+
+
+Limit = float | np.ndarray | Pair | LimitMV
+"""A tension limit for :func:`phi_mv`: a point (float or array), an interval pair, or a triple."""
+
+
+def mv_sum(terms: Iterable[MV]) -> MV:
+    """``t_0 + t_1 + ...`` from the left, for at least one term."""
+    it = iter(terms)
+    acc = next(it, None)
+    if acc is None:
+        raise ValueError("mv_sum needs at least one term")
+    for t in it:
+        acc = acc + t
     return acc
+
+
+def _sum_axis0(u: MV) -> MV:
+    return mv_sum(u.take(t) for t in range(u.m[0].shape[0]))
 
 
 def wedge_mv(M: MV) -> MV:
@@ -202,26 +234,28 @@ def wedge_mv(M: MV) -> MV:
     extra = (1,) * (M.m[0].ndim - 2)
     D = M.apply(lambda a: a[:, 0])
     for r, (row_idx, prev_idx, sign) in enumerate(levels, start=1):
-        col = M.apply(lambda a, r=r, ri=row_idx: a[:, r][ri])
-        prod = col * D.apply(lambda a, p=prev_idx: a[p])  # (r, C, ...)
+        col = M.take((slice(None), r)).take(row_idx)
+        prod = col * D.take(prev_idx)  # (r, C, ...)
         prod = prod.signed((sign > 0).reshape(sign.shape + extra))
         D = _sum_axis0(prod)
     D = D.apply(lambda a: a[order])
     return D.signed((csign > 0).reshape((w,) + extra))
 
 
-def phi_mv(u: MV, tmin, tmax) -> MV:
+def phi_mv(u: MV, tmin: Limit, tmax: Limit) -> MV:
     """``φ(u) = τmax max(u, 0) + τmin min(u, 0)`` with its slope.
 
     ``tmin``, ``tmax`` (broadcast with ``u``): floats; interval pairs ``(lo, hi)``; or, when
-    the limits depend on the slope variables (design parameters), :class:`MV` triples whose
-    slopes may be ``None`` (zero).  Then, from
+    the limits depend on the slope variables (design parameters), :class:`LimitMV` triples
+    whose slopes may be ``None`` (zero).  Then, from
     ``φ(u, τ) - φ(u_m, τ_m) = [φ(u, τ) - φ(u_m, τ)] + [φ(u_m, τ) - φ(u_m, τ_m)]``, the slope
     is ``S s_u + max(u_m, 0) s_τmax + min(u_m, 0) s_τmin`` with ``S`` the slope set of ``φ``
     in ``u`` over the box (hull over the tension values).
     """
-    if isinstance(tmin, MV) or isinstance(tmax, MV):
+    if isinstance(tmin, LimitMV) and isinstance(tmax, LimitMV):
         return _phi_mv_param(u, tmin, tmax)
+    if isinstance(tmin, LimitMV) or isinstance(tmax, LimitMV):
+        raise TypeError("phi_mv: tmin and tmax are both LimitMV triples or neither is")
     nlo, nhi = tmin if isinstance(tmin, tuple) else (tmin, tmin)
     xlo_, xhi_ = tmax if isinstance(tmax, tuple) else (tmax, tmax)
     point = (nlo is nhi or np.array_equal(nlo, nhi)) and (
@@ -267,7 +301,7 @@ def _phi_slopes(xlo, xhi, tmin, tmax, point: bool):
     return np.minimum(slo, shi), np.maximum(slo, shi)  # u ≡ 0: any slope, keep it non-empty
 
 
-def _phi_mv_param(u: MV, tmin: MV, tmax: MV) -> MV:
+def _phi_mv_param(u: MV, tmin: LimitMV, tmax: LimitMV) -> MV:
     """:func:`phi_mv` with tension limits that are slope triples (see its docstring)."""
     slo, shi = _phi_slopes(*u.x, tmin.x, tmax.x, point=False)
     pos = np.maximum(u.m[0], 0.0), np.maximum(u.m[1], 0.0)
@@ -275,10 +309,11 @@ def _phi_mv_param(u: MV, tmin: MV, tmax: MV) -> MV:
     s = []
     for j, sj in enumerate(u.s):
         acc = arith.mul(slo, shi, *sj)
-        if tmax.s[j] is not None:
-            acc = arith.add(*acc, *arith.mul(*pos, *tmax.s[j]))
-        if tmin.s[j] is not None:
-            acc = arith.add(*acc, *arith.mul(*neg, *tmin.s[j]))
+        smax, smin = tmax.s[j], tmin.s[j]
+        if smax is not None:
+            acc = arith.add(*acc, *arith.mul(*pos, *smax))
+        if smin is not None:
+            acc = arith.add(*acc, *arith.mul(*neg, *smin))
         s.append(acc)
     m = _phi(u.m, tmin.m, tmax.m, point=False)
     x = _phi(u.x, tmin.x, tmax.x, point=False)

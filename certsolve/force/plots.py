@@ -180,9 +180,10 @@ def _panel_points(panel) -> np.ndarray:
 
 
 def _draw_panel(ax, pic: ForcePicture, panel, half: float):
+    from matplotlib.artist import Artist
     from matplotlib.patches import Circle, Polygon
 
-    handles = []
+    handles: list[Artist] = []
     if panel.polygon is not None:
         what = "force polytope" if pic.dof == 2 else "force section F(μ)"
         facets = f", {pic.n_facets} facets" if pic.n_facets is not None else ""
@@ -200,8 +201,8 @@ def _draw_panel(ax, pic: ForcePicture, panel, half: float):
         )  # fmt: skip
         ax.add_patch(circle)
         handles.append(circle)
-    if panel.ellipse is not None:
-        semi = pic.ellipse_semi_axes if pic.dof == 6 else panel.ellipse_semi_axes
+    semi = pic.ellipse_semi_axes if pic.dof == 6 else panel.ellipse_semi_axes
+    if panel.ellipse is not None and semi is not None:  # set together by force_picture
         what = "ellipsoid" if pic.dof == 6 else "ellipse"
         (line,) = ax.plot(
             panel.ellipse[:, 0], panel.ellipse[:, 1], "--", color="#27ae60", lw=1.3,

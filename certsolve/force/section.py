@@ -47,8 +47,8 @@ def slice_vertices(A: np.ndarray, b, tau_min, tau_max, tol: float = 1e-9) -> np.
         return box_vertices(tmin, tmax)
     span = float(np.max(tmax - tmin)) if m else 1.0
     out = []
-    for basic in combinations(range(m), k):
-        basic = list(basic)
+    for subset in combinations(range(m), k):
+        basic = list(subset)
         non = [i for i in range(m) if i not in basic]
         Ab = A[:, basic]
         if abs(np.linalg.det(Ab)) <= 1e-12 * max(1.0, float(np.abs(Ab).max())) ** k:

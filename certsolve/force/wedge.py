@@ -38,7 +38,9 @@ def facet_subsets(m: int, w: int) -> np.ndarray:
 
 
 @lru_cache(maxsize=16)
-def wedge_tables(w: int):
+def wedge_tables(
+    w: int,
+) -> tuple[list[tuple[np.ndarray, np.ndarray, np.ndarray]], np.ndarray, np.ndarray]:
     """Index tables of the Laplace recursion for ``w``-vectors, ``w - 1`` columns.
 
     Returns a list over ``r = 2..w-1`` of ``(rows_r, terms)`` where ``rows_r`` are the sorted
@@ -47,8 +49,8 @@ def wedge_tables(w: int):
     Also returns the final ``(w-1)``-subsets (``w`` of them, row ``k`` left out is subset
     ``w-1-k`` in lexicographic order) and the cofactor signs.
     """
-    levels = []
-    prev = [(s,) for s in range(w)]
+    levels: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    prev: list[tuple[int, ...]] = [(s,) for s in range(w)]
     for r in range(2, w):
         rows = list(combinations(range(w), r))
         pos_prev = {s: i for i, s in enumerate(prev)}
