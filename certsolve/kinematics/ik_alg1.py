@@ -81,7 +81,8 @@ def ik_algorithm1(
         res = float(np.max(np.abs(H @ tau + wg)))
         F = np.array(out.params, dtype=np.int64)
         S = np.array([j for j in range(m) if j not in out.params], dtype=np.int64)
-        cert = unique_in_box(u, F, S, out.box_lo[S], out.box_hi[S], out.enc_lo[S], out.enc_hi[S])
+        box_lo, box_hi, enc_lo, enc_hi = out.unicity_boxes()
+        cert = unique_in_box(u, F, S, box_lo[S], box_hi[S], enc_lo[S], enc_hi[S])
         violations = limit_violations(robot, tau, u)
         status = IKStatus.LIMITS_VIOLATED if violations else IKStatus.OK
     elif out.verdict == Verdict.INFEASIBLE:

@@ -172,17 +172,21 @@ def _fix_controls(robot: Robot, enc: PoseEnclosure, F, opts: Alg2Options):
     Ht, wg = enc.Ht, enc.wg
     u = np.zeros(m)
     u_fixed, tau_fixed = opts.u_fixed, opts.tau_fixed
-    if F.size == 1 and (u_fixed is None or np.ndim(u_fixed) == 0) and np.ndim(tau_fixed) == 0:
+    if (
+        F.size == 1
+        and (u_fixed is None or np.ndim(u_fixed) == 0)
+        and (tau_fixed is None or np.ndim(tau_fixed) == 0)
+    ):
         # one fixed wire (MARIONET, planar): scalar arithmetic
         j = int(F[0])
         k, K, L0, W = float(robot.k[j]), float(robot.K[j]), float(robot.L0[j]), float(enc.W[j])
         if u_fixed is not None:
-            uj = float(u_fixed)  # type: ignore[arg-type]
+            uj = float(u_fixed)  # type: ignore[arg-type]  # ndim 0: a number, not a sequence
         else:
             tj = (
                 0.5 * (float(robot.tau_min[j]) + float(robot.tau_max[j]))
                 if tau_fixed is None
-                else float(tau_fixed)  # type: ignore[arg-type]
+                else float(tau_fixed)  # type: ignore[arg-type]  # ndim 0, as u_fixed
             )
             if not tj < k:
                 raise ValueError("tau_fixed must be below the wire constant k")

@@ -82,7 +82,7 @@ class _Consts:
     eF: list
     com: list
     wg_const: tuple | None  # (wg, ewg) when the gravity wrench does not depend on the pose
-    per_free: dict  # SquareSystem constants per set of free wires
+    per_free: dict[bytes, tuple[np.ndarray, ...]]  # SquareSystem constants per set of free wires
 
 
 def _consts(robot: Robot) -> _Consts:
@@ -154,7 +154,14 @@ class PoseEnclosure:
 
     @property
     def H_err(self) -> np.ndarray:
-        return self.Ht_err.T
+        return _bound(self.Ht_err).T
+
+
+def _bound(err: np.ndarray | None) -> np.ndarray:
+    """An error radius of a pose enclosed with its bounds (``enclose_pose(..., bounds=True)``)."""
+    if err is None:
+        raise ValueError("this pose was enclosed without error bounds (bounds=False)")
+    return err
 
 
 def _xprod(a, ea, b, eb, i, j):
@@ -306,12 +313,25 @@ def jacobian_mr(enc: PoseEnclosure, cols, dc, dr):
     Returns ``(Jc, Jr)`` of shape ``(..., w, n)``.
     """
     Hs = enc.Ht[cols].T
-    eHs = enc.Ht_err[cols].T
+    eHs = _bound(enc.Ht_err)[cols].T
     dc = np.asarray(dc)[..., None, :]
     dr = np.asarray(dr)[..., None, :]
     Jc = Hs * dc
     Jr = np.abs(Hs) * dr + eHs * (np.abs(dc) + dr) + (2.0 * U) * np.abs(Jc)
     return Jc, Jr * SAFE + UNDERFLOW
+
+
+def _per_free(cs: _Consts, S: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The constants of :class:`SquareSystem` that depend only on the free wires ``S``."""
+    return (
+        cs.K[S] * (1.0 + 4.0 * U),
+        cs.kL0K[S] * ((1.0 + 16.0 * U) / (1.0 - 8.0 * U) ** 2),
+        cs.kL0K[S] * ((1.0 - 16.0 * U) / (1.0 + 8.0 * U) ** 2),
+        cs.kL0 * ((1.0 + 4.0 * U) * SAFE),
+        cs.k[S],
+        cs.kL0[S] / cs.K[S],
+        1.0 / cs.K[S],
+    )
 
 
 class SquareSystem:
@@ -336,6 +356,7 @@ class SquareSystem:
         self.enc = enc
         S = self.free = np.asarray(free, dtype=np.int64)
         Hs = enc.Ht[S].T
+        eHt = _bound(enc.Ht_err)
         n = Hs.shape[1]
         if Hs.shape[0] != n:
             raise ValueError("the free wires must make the system square")
@@ -345,28 +366,18 @@ class SquareSystem:
         self.aGt = aG.T
         self.g = g = gamma(n)
         self.DeltaT = (
-            (np.abs(G @ Hs - np.eye(n)) * (1.0 + 4.0 * U) + aG @ (g * np.abs(Hs) + enc.Ht_err[S].T))
-            * SAFE
+            (np.abs(G @ Hs - np.eye(n)) * (1.0 + 4.0 * U) + aG @ (g * np.abs(Hs) + eHt[S].T)) * SAFE
             + UNDERFLOW
         ).T
         aHt = np.abs(enc.Ht)
         gm = gamma(enc.Ht.shape[0] + 2)
-        self._A1 = enc.Ht_err + (gm * SAFE) * aHt
-        self._A2 = (aHt + enc.Ht_err) * SAFE
-        self._c0 = enc.wg_err + (gm * SAFE) * np.abs(enc.wg) + UNDERFLOW
+        self._A1 = eHt + (gm * SAFE) * aHt
+        self._A2 = (aHt + eHt) * SAFE
+        self._c0 = _bound(enc.wg_err) + (gm * SAFE) * np.abs(enc.wg) + UNDERFLOW
         key = S.tobytes()
         per = cs.per_free.get(key)
         if per is None:
-            per = (
-                cs.K[S] * (1.0 + 4.0 * U),
-                cs.kL0K[S] * ((1.0 + 16.0 * U) / (1.0 - 8.0 * U) ** 2),
-                cs.kL0K[S] * ((1.0 - 16.0 * U) / (1.0 + 8.0 * U) ** 2),
-                cs.kL0 * ((1.0 + 4.0 * U) * SAFE),
-                cs.k[S],
-                cs.kL0[S] / cs.K[S],
-                1.0 / cs.K[S],
-            )
-            cs.per_free[key] = per
+            per = cs.per_free[key] = _per_free(cs, S)
         self._Kr, self._Chi, self._Clo, self._CkL0, self._kS, self._aS, self._iKS = per
         self._WS = enc.W[S]
         self._cs = cs

@@ -192,6 +192,12 @@ class SearchOutcome:
             return Verdict.UNKNOWN
         return Verdict.UNDECIDED if self.undecided else Verdict.INFEASIBLE
 
+    def unicity_boxes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(box_lo, box_hi, enc_lo, enc_hi)`` of the certified point (``certified`` only)."""
+        if self.box_lo is None or self.box_hi is None or self.enc_lo is None or self.enc_hi is None:
+            raise ValueError("no certified point: the search outcome has no unicity box")
+        return self.box_lo, self.box_hi, self.enc_lo, self.enc_hi
+
 
 def _certify(robot, enc, pc, sq, lo, hi, ulo, uhi, box_radius):
     """Try to certify one solution per tension box; data of the first success or None."""
