@@ -149,7 +149,7 @@ def _orientation_ranges(robot: Robot, text: str | None):
     items = [t for t in text.replace(" ", "").split(",") if t != ""]
     if len(items) != n:
         raise CliError(f"--orientation: expected {n} angle(s), got {len(items)}")
-    out = []
+    out: list[float | tuple[float, float]] = []
     for it in items:
         parts = it.split(":")
         try:
@@ -231,15 +231,15 @@ def run_isotropic(args: argparse.Namespace) -> int:
     rotation = _fixed_orientation(robot, args.orientation)
     xs = np.linspace(xmin, xmax, int(nx))
     ys = np.linspace(ymin, ymax, int(ny))
-    res = isotropic_map(robot, xs, ys, z=args.z, rotation=rotation, external=external)
+    fmap = isotropic_map(robot, xs, ys, z=args.z, rotation=rotation, external=external)
     if args.plot:
         from ..force.plots import plot_map
 
-        plot_map(res, args.plot, vmax=args.vmax)
+        plot_map(fmap, args.plot, vmax=args.vmax)
     print_result(
         args.json,
-        res,
-        lambda: format_map(plain(res.to_dict(values=False)), args.plot),
+        fmap,
+        lambda: format_map(plain(fmap.to_dict(values=False)), args.plot),
         plot=args.plot,
     )
     return 0
