@@ -21,27 +21,27 @@ from .model import Robot
 __all__ = ["tension", "control", "length", "length_bounds", "control_bounds"]
 
 
-def tension(robot: Robot, rho, u):
+def tension(robot: Robot, rho: np.ndarray | float, u: np.ndarray | float) -> np.ndarray:
     """Eq. (6)."""
     L = rho + robot.V + robot.K * u
     return robot.k * (L - robot.L0) / L
 
 
-def control(robot: Robot, rho, tau):
+def control(robot: Robot, rho: np.ndarray | float, tau: np.ndarray | float) -> np.ndarray:
     """Eq. (5)."""
     return robot.k * robot.L0 / (robot.K * (robot.k - tau)) - (rho + robot.V) / robot.K
 
 
-def length(robot: Robot, tau, u):
+def length(robot: Robot, tau: np.ndarray | float, u: np.ndarray | float) -> np.ndarray:
     """Eq. (7)."""
     return robot.k * robot.L0 / (robot.k - tau) - robot.V - robot.K * u
 
 
-def length_bounds(robot: Robot, u) -> tuple[np.ndarray, np.ndarray]:
+def length_bounds(robot: Robot, u: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     """``[ρ_min, ρ_max]`` per wire from ``[τ_min, τ_max]`` at control ``u`` (eq. 7)."""
     return length(robot, robot.tau_min, u), length(robot, robot.tau_max, u)
 
 
-def control_bounds(robot: Robot, rho) -> tuple[np.ndarray, np.ndarray]:
+def control_bounds(robot: Robot, rho: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     """``[u_lo, u_hi]`` per wire keeping the tension within its limits at length ``ρ`` (eq. 5)."""
     return control(robot, rho, robot.tau_min), control(robot, rho, robot.tau_max)

@@ -16,9 +16,11 @@ All functions are vectorised over ``P`` poses: positions ``(P, d)``, rotations `
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .model import Robot
 
@@ -35,7 +37,7 @@ __all__ = [
 ]
 
 
-def rotation_zyx(yaw, pitch, roll) -> np.ndarray:
+def rotation_zyx(yaw: ArrayLike, pitch: ArrayLike, roll: ArrayLike) -> np.ndarray:
     """``Rz(yaw) Ry(pitch) Rx(roll)`` for arrays of angles in radians; shape ``(..., 3, 3)``."""
     yaw, pitch, roll = np.broadcast_arrays(
         *(np.asarray(a, dtype=float) for a in (yaw, pitch, roll))
@@ -65,7 +67,7 @@ def euler_zyx(R: np.ndarray) -> np.ndarray:
     return np.stack([yaw, pitch, roll], axis=-1)
 
 
-def rotation_2d(theta) -> np.ndarray:
+def rotation_2d(theta: ArrayLike) -> np.ndarray:
     theta = np.asarray(theta, dtype=float)
     c, s = np.cos(theta), np.sin(theta)
     R = np.empty(theta.shape + (2, 2))
@@ -84,7 +86,7 @@ class Pose:
     rotation: np.ndarray  # (d, d)
 
     @classmethod
-    def from_params(cls, dof: int, params) -> Pose:
+    def from_params(cls, dof: int, params: Sequence[float] | np.ndarray) -> Pose:
         """From ``x,y,z,yaw,pitch,roll`` (dof 6), ``x,y,theta`` (dof 3), ``x,y`` (dof 2).
 
         Lengths in cm, angles in degrees; missing angles are 0.
@@ -133,13 +135,15 @@ def _batch(positions, rotations):
     return p, R
 
 
-def platform_points(robot: Robot, positions, rotations) -> np.ndarray:
+def platform_points(robot: Robot, positions: ArrayLike, rotations: ArrayLike) -> np.ndarray:
     """World coordinates of every attachment B_i: ``(P, m, d)``."""
     p, R = _batch(positions, rotations)
     return p[:, None, :] + np.einsum("pij,mj->pmi", R, robot.B)
 
 
-def wire_geometry(robot: Robot, positions, rotations):
+def wire_geometry(
+    robot: Robot, positions: ArrayLike, rotations: ArrayLike
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(rho, n, CB)``: lengths ``(P, m)``, unit vectors B->A ``(P, m, d)``, and the
     attachment vectors from the platform origin in world axes ``(P, m, d)``."""
     p, R = _batch(positions, rotations)
@@ -155,7 +159,7 @@ def _cross2(a, b):
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
 
-def wrench_matrix(robot: Robot, positions, rotations) -> np.ndarray:
+def wrench_matrix(robot: Robot, positions: ArrayLike, rotations: ArrayLike) -> np.ndarray:
     """``H`` of shape ``(P, w, m)``: column i is the wrench of a unit tension in wire i."""
     _, n, CB = wire_geometry(robot, positions, rotations)
     if robot.dof == 2:
@@ -167,7 +171,7 @@ def wrench_matrix(robot: Robot, positions, rotations) -> np.ndarray:
     return np.concatenate([np.transpose(n, (0, 2, 1)), np.transpose(mom, (0, 2, 1))], axis=1)
 
 
-def gravity_wrench(robot: Robot, rotations) -> np.ndarray:
+def gravity_wrench(robot: Robot, rotations: ArrayLike) -> np.ndarray:
     """External wrench of the weight on the platform, about the platform origin: ``(P, w)``."""
     R = np.asarray(rotations, dtype=float)
     if R.ndim == 2:

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .schema import RobotFileError, RobotSpec, load_robot_spec
+from .schema import RobotFileError, RobotSource, RobotSpec, load_robot_spec
 
 __all__ = ["Robot", "default_domain"]
 
@@ -89,7 +89,7 @@ class Robot:
         )
 
     @classmethod
-    def load(cls, source) -> Robot:
+    def load(cls, source: RobotSource) -> Robot:
         """From a path, JSON text, dict or :class:`RobotSpec` (raises :class:`RobotFileError`)."""
         return cls.from_spec(load_robot_spec(source))
 

@@ -40,11 +40,12 @@ from dataclasses import dataclass, replace
 from itertools import product
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..interval import arith
 from ..interval.rounding import up
 from .model import Robot
-from .schema import RobotFileError, load_robot_spec
+from .schema import RobotFileError, RobotSource, load_robot_spec
 
 __all__ = ["ParameterDef", "RobotBounds", "AffineRobot", "parse_path", "MODES"]
 
@@ -111,7 +112,7 @@ class RobotBounds:
             dtau_min=np.zeros((0, m)), dtau_max=np.zeros((0, m)),
         )  # fmt: skip
 
-    def take(self, idx) -> RobotBounds:
+    def take(self, idx: np.ndarray | slice) -> RobotBounds:
         """The boxes ``idx`` of the batch (a batch of one is shared by every box)."""
         if self.radius.shape[-1] == 1:
             return self
@@ -174,7 +175,7 @@ class AffineRobot:
     robot at a corner of the parameter box.
     """
 
-    def __init__(self, source, params: list[ParameterDef]):
+    def __init__(self, source: RobotSource, params: list[ParameterDef]) -> None:
         self.spec = load_robot_spec(source)
         self.robot = Robot.from_spec(self.spec)
         self.params = list(params)
@@ -266,12 +267,12 @@ class AffineRobot:
         """``(k, 2)`` the parameter ranges."""
         return np.array([[float(v) for v in p.range] for p in self.params])
 
-    def values(self, theta) -> dict[str, np.ndarray]:
+    def values(self, theta: ArrayLike) -> dict[str, np.ndarray]:
         """Float arrays ``A``, ``B``, ``tau`` at the parameter values ``theta`` ``(k,)``."""
         t = np.asarray(theta, dtype=float)
         return {f: self._const[f] + np.tensordot(t, self._coef[f], axes=1) for f in self._const}
 
-    def spec_at(self, theta) -> dict:
+    def spec_at(self, theta: ArrayLike) -> dict:
         """The robot file (a dict) at ``theta``: the selected numbers replaced."""
         vals = self.values(theta)
         data = self.spec.model_dump(mode="json", exclude_none=True)
@@ -287,10 +288,10 @@ class AffineRobot:
                 wire[key] = arr
         return data
 
-    def robot_at(self, theta) -> Robot:
+    def robot_at(self, theta: ArrayLike) -> Robot:
         return Robot.load(self.spec_at(theta))
 
-    def bounds(self, lo, hi) -> RobotBounds:
+    def bounds(self, lo: ArrayLike, hi: ArrayLike) -> RobotBounds:
         """Interval arrays over parameter boxes ``[lo, hi]`` ``(n, k)`` (outward rounded)."""
         lo = np.asarray(lo, dtype=float)
         hi = np.asarray(hi, dtype=float)

@@ -177,7 +177,9 @@ def planar(tau_max: float = 10.0) -> dict:
     return _calibrate(spec, _PLANAR_CENTRE, rotation_2d(0.0))
 
 
-def krut_planar(n: int = 3, radius: float = 100.0, tau=(50.0, 500.0)) -> dict:
+def krut_planar(
+    n: int = 3, radius: float = 100.0, tau: tuple[float, float] = (50.0, 500.0)
+) -> dict:
     """Krut et al. (2004): n motors on a circle of radius 1000 mm (100 cm), point platform."""
     theta = np.radians(90.0 - 180.0 / n + 360.0 * np.arange(n) / n)
     wires = [

@@ -23,17 +23,20 @@ from __future__ import annotations
 import copy
 import json
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import (
     BaseModel,
     ConfigDict,
     Field,
+    GetJsonSchemaHandler,
     TypeAdapter,
     ValidationError,
     field_validator,
     model_validator,
 )
+from pydantic.json_schema import JsonSchemaValue
+from pydantic_core import CoreSchema
 
 __all__ = [
     "WireSpec",
@@ -41,6 +44,7 @@ __all__ = [
     "DomainSpec",
     "RobotSpec",
     "RobotFileError",
+    "RobotSource",
     "format_validation_error",
     "load_robot_spec",
     "array_length",
@@ -148,7 +152,9 @@ class RobotSpec(_Strict):
     domain: DomainSpec | None = None
 
     @classmethod
-    def __get_pydantic_json_schema__(cls, core_schema, handler):
+    def __get_pydantic_json_schema__(
+        cls, core_schema: CoreSchema, handler: GetJsonSchemaHandler
+    ) -> JsonSchemaValue:
         ref = handler(core_schema)  # the schema is one variant per dof
         target = handler.resolve_ref_schema(ref)
         target.clear()
@@ -215,7 +221,11 @@ def format_validation_error(err: ValidationError) -> str:
     return "\n".join(lines)
 
 
-def load_robot_spec(source) -> RobotSpec:
+RobotSource = RobotSpec | str | Path | dict[str, Any]
+"""What :func:`load_robot_spec` reads: a spec, a path, JSON text or a dict."""
+
+
+def load_robot_spec(source: RobotSource) -> RobotSpec:
     """Validate a robot from a path, a JSON string or a dict; raise :class:`RobotFileError`."""
     if isinstance(source, RobotSpec):
         return source

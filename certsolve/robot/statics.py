@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.optimize import linprog
 
 __all__ = ["TensionDistribution", "max_margin_tensions"]
@@ -28,7 +29,9 @@ class TensionDistribution:
     feasible: bool  # margin >= 0
 
 
-def max_margin_tensions(H, w_ext, tau_min, tau_max) -> TensionDistribution:
+def max_margin_tensions(
+    H: ArrayLike, w_ext: ArrayLike, tau_min: ArrayLike, tau_max: ArrayLike
+) -> TensionDistribution:
     """Solve the max-margin LP above for one pose."""
     H = np.asarray(H, dtype=float)
     w_ext = np.asarray(w_ext, dtype=float)
