@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..robot.geometry import Pose
 from ..robot.model import Robot
@@ -35,7 +36,7 @@ def ik_algorithm1(
     robot: Robot,
     pose: Pose,
     *,
-    u_last=None,
+    u_last: ArrayLike | None = None,
     window: float | None = None,
     max_boxes: int = 20000,
     timeout: float | None = 10.0,
@@ -75,13 +76,12 @@ def ik_algorithm1(
     cert = no_certificate()
     violations: list[Violation] = []
     if out.verdict == Verdict.CERTIFIED:
-        u = out.u
+        u, box_lo, box_hi, enc_lo, enc_hi = out.certified_point()
         tau, _ = tension_mr(robot, enc, u)
         margin = margin_of(tau, robot.tau_min, robot.tau_max)
         res = float(np.max(np.abs(H @ tau + wg)))
         F = np.array(out.params, dtype=np.int64)
         S = np.array([j for j in range(m) if j not in out.params], dtype=np.int64)
-        box_lo, box_hi, enc_lo, enc_hi = out.unicity_boxes()
         cert = unique_in_box(u, F, S, box_lo[S], box_hi[S], enc_lo[S], enc_hi[S])
         violations = limit_violations(robot, tau, u)
         status = IKStatus.LIMITS_VIOLATED if violations else IKStatus.OK

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
+from numpy.typing import ArrayLike
 
 from ..robot.geometry import Pose
 from ..robot.model import Robot
@@ -59,7 +60,7 @@ def ik_algorithm2(
     tau_fixed: float | Sequence[float] | None = None,
     u_fixed: float | Sequence[float] | None = None,
     solve: str = "tau",
-    u_last=None,
+    u_last: ArrayLike | None = None,
     window: float | None = None,
     box_radius: float = 1e-4,
     certify: bool = True,

@@ -38,6 +38,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..interval.linalg import UNDERFLOW, U, gamma, krawczyk_mr
 from ..robot.model import Robot
@@ -128,7 +129,9 @@ def is_elastic(robot: Robot) -> bool:
     return _consts(robot).elastic
 
 
-def float_geometry(robot: Robot, position, rotation):
+def float_geometry(
+    robot: Robot, position: np.ndarray, rotation: ArrayLike
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Plain floating-point ``(rho, H, w_g)`` for one pose (no error bounds; fast)."""
     enc = enclose_pose(robot, position, rotation, bounds=False)
     return enc.rho, enc.H, enc.wg
@@ -207,7 +210,9 @@ _C_M1 = (1.0 + 4 * U) * SAFE
 _C_M2 = 6.0 * U * SAFE
 
 
-def enclose_pose(robot: Robot, position, rotation, bounds: bool = True) -> PoseEnclosure:
+def enclose_pose(
+    robot: Robot, position: np.ndarray, rotation: ArrayLike, bounds: bool = True
+) -> PoseEnclosure:
     """``ρ``, ``H`` and ``w_g`` at the pose with rigorous error bounds (module docstring)."""
     cs = _consts(robot)
     dof = cs.dof
@@ -248,11 +253,11 @@ def _length_mr(cs: _Consts, enc: PoseEnclosure, u):
     """``L = ρ + V + K u`` (eq. 2) with its error bound; ``u`` broadcasts over wires."""
     Ku = cs.K * u
     L = enc.W + Ku
-    eL = enc.W_err + (2.0 * U * SAFE) * (np.abs(Ku) + np.abs(L))
+    eL = _bound(enc.W_err) + (2.0 * U * SAFE) * (np.abs(Ku) + np.abs(L))
     return L, eL
 
 
-def tension_mr(robot: Robot, enc: PoseEnclosure, u):
+def tension_mr(robot: Robot, enc: PoseEnclosure, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Eq. (6) at the float controls ``u`` (shape ``(..., m)``): ``(τ̃, e)`` with ``|τ - τ̃| <= e``.
 
     ``|τ(L) - τ(L̃)| = k L0 |L - L̃| / (L L̃)``, plus ``γ_3 |τ|`` for ``k (L - L0) / L``.  The
@@ -268,14 +273,18 @@ def tension_mr(robot: Robot, enc: PoseEnclosure, u):
     return tau, e
 
 
-def tension_range(robot: Robot, enc: PoseEnclosure, ulo, uhi):
+def tension_range(
+    robot: Robot, enc: PoseEnclosure, ulo: np.ndarray, uhi: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Rigorous bounds of ``τ`` over ``u ∈ [ulo, uhi]`` (eq. 6 increases with ``u``, ``K > 0``)."""
     tlo, elo = tension_mr(robot, enc, ulo)
     thi, ehi = tension_mr(robot, enc, uhi)
     return np.nextafter(tlo - elo, -np.inf), np.nextafter(thi + ehi, np.inf)
 
 
-def dtension_range(robot: Robot, enc: PoseEnclosure, ulo, uhi):
+def dtension_range(
+    robot: Robot, enc: PoseEnclosure, ulo: np.ndarray, uhi: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """``dτ/du = k L0 K / L²`` over ``u ∈ [ulo, uhi]`` as midpoint-radius ``(c, r)``.
 
     ``L`` increases with ``u``, so the derivative is largest at ``ulo`` and smallest at ``uhi``.
@@ -294,20 +303,25 @@ def dtension_range(robot: Robot, enc: PoseEnclosure, ulo, uhi):
     return c, r
 
 
-def residual_mr(enc: PoseEnclosure, tau, tau_err):
+def residual_mr(
+    enc: PoseEnclosure, tau: np.ndarray, tau_err: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """``f = H τ + w_g`` for enclosed tensions ``(..., m)``: ``(f̃, e)`` of shape ``(..., w)``.
 
     ``|Hτ - H̃τ̃| <= E_H |τ̃| + (|H̃| + E_H) e_τ``; rounding ``γ_{m+1} (|H̃||τ̃| + |w̃|)``.
     """
-    Ht, eHt = enc.Ht, enc.Ht_err
+    Ht, eHt = enc.Ht, _bound(enc.Ht_err)
     aHt = np.abs(Ht)
     g = gamma(Ht.shape[0] + 1)
     f = tau @ Ht + enc.wg
-    e = np.abs(tau) @ (eHt + g * aHt) + tau_err @ (aHt + eHt) + (enc.wg_err + g * np.abs(enc.wg))
+    ewg = _bound(enc.wg_err)
+    e = np.abs(tau) @ (eHt + g * aHt) + tau_err @ (aHt + eHt) + (ewg + g * np.abs(enc.wg))
     return f, e * SAFE + UNDERFLOW
 
 
-def jacobian_mr(enc: PoseEnclosure, cols, dc, dr):
+def jacobian_mr(
+    enc: PoseEnclosure, cols: np.ndarray, dc: ArrayLike, dr: ArrayLike
+) -> tuple[np.ndarray, np.ndarray]:
     """``J = H[:, cols] diag(dτ/du)`` with the derivative enclosed by ``(dc, dr)`` ``(..., n)``.
 
     Returns ``(Jc, Jr)`` of shape ``(..., w, n)``.
@@ -350,7 +364,7 @@ class SquareSystem:
     agree).  ``Y`` is used only through these bounds; any ``Y`` is sound.
     """
 
-    def __init__(self, robot: Robot, enc: PoseEnclosure, free):
+    def __init__(self, robot: Robot, enc: PoseEnclosure, free: ArrayLike) -> None:
         cs = _consts(robot)
         self.robot = robot
         self.enc = enc
@@ -383,16 +397,16 @@ class SquareSystem:
         self._cs = cs
         self._kq = SAFE * (1.0 + gamma(n + 4))
 
-    def controls(self, tau_S):
+    def controls(self, tau_S: np.ndarray) -> np.ndarray:
         """Eq. (5) for the free wires, in floating point (a candidate, no bound)."""
         return self._aS / (self._kS - tau_S) - self._WS * self._iKS
 
-    def tensions(self, u):
+    def tensions(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Float tensions at ``u`` ``(B, m)`` with error bounds, and ``L``, ``eL`` (eq. 2, 6)."""
         cs, enc = self._cs, self.enc
         Ku = cs.K * u
         L = enc.W + Ku
-        eL = enc.W_err + (2.0 * U * SAFE) * (np.abs(Ku) + np.abs(L))
+        eL = _bound(enc.W_err) + (2.0 * U * SAFE) * (np.abs(Ku) + np.abs(L))
         tau = cs.k * (L - cs.L0) / L
         Llo = L - eL
         etau = self._CkL0 * eL / (Llo * L) + (2.0 * _G3 * SAFE) * np.abs(tau)
@@ -400,14 +414,14 @@ class SquareSystem:
             etau = np.where(Llo > 0.0, etau, np.inf)
         return tau, etau, L, eL
 
-    def residual(self, u):
+    def residual(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Float tensions at ``u`` ``(B, m)`` and the enclosure ``(fc, fr)`` of ``f(u)``."""
         tau, etau, _, _ = self.tensions(u)
         fc = tau @ self.enc.Ht + self.enc.wg
         fr = np.abs(tau) @ self._A1 + etau @ self._A2 + self._c0
         return tau, fc, fr
 
-    def krawczyk(self, u, rad):
+    def krawczyk(self, u: np.ndarray, rad: np.ndarray) -> tuple[np.ndarray, ...]:
         """Krawczyk test on ``X = [u_S - rad, u_S + rad]`` (``u`` ``(B, m)``, fixed wires exact).
 
         Returns ``(xlo, xhi, klo, khi, proven, tau, fc)`` over the free wires (``tau``, ``fc``:

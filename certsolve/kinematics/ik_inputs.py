@@ -7,12 +7,16 @@ into float64 arrays, with clear errors.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..robot.geometry import Pose
 from ..robot.inputs import as_pose as pose_of
 from ..robot.model import Robot
-from ..robot.schema import RobotFileError
+from ..robot.schema import RobotFileError, RobotSource
+from .ik_enclose import PoseEnclosure
 from .ik_search import control_point
 
 __all__ = [
@@ -26,13 +30,13 @@ __all__ = [
 ]
 
 
-def as_pose(robot: Robot, pose) -> Pose:
+def as_pose(robot: Robot, pose: Any) -> Pose:
     """A :class:`Pose` with float64 arrays of the robot's dimension, from a pose, its
     parameters or their text (:func:`certsolve.robot.inputs.as_pose`)."""
     return pose_of(robot.dof, pose)
 
 
-def check_pose(pose: Pose, enc) -> None:
+def check_pose(pose: Pose, enc: PoseEnclosure) -> None:
     """Clear errors for a pose whose geometry is undefined."""
     if enc.valid:
         return
@@ -41,17 +45,19 @@ def check_pose(pose: Pose, enc) -> None:
     raise ValueError("pose: a platform attachment coincides with its base anchor (ρ = 0)")
 
 
-def as_robot(robot) -> Robot:
+def as_robot(robot: Robot | RobotSource) -> Robot:
     return robot if isinstance(robot, Robot) else Robot.load(robot)
 
 
-def controls(robot: Robot, rho, tau):
+def controls(robot: Robot, rho: np.ndarray, tau: np.ndarray) -> np.ndarray:
     """Eq. (5); NaN where the tension reaches ``k`` (no length can produce it)."""
     u = control_point(robot, rho, tau)
     return np.where(tau < robot.k, u, np.nan)
 
 
-def search_window(robot: Robot, u_last, window):
+def search_window(
+    robot: Robot, u_last: ArrayLike | None, window: float | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """Control box: strokes ∩ ``u_last ± window / 2`` (window in cm, full width).
 
     Returns ``(lo, hi, u_last)`` with ``u_last`` checked (``None`` when not given).

@@ -8,10 +8,12 @@ control outside its stroke ``[u_min, u_max]`` or outside the search window, by m
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from enum import StrEnum
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..robot.geometry import Pose
 from ..robot.model import Robot
@@ -47,17 +49,17 @@ class IKStatus(StrEnum):
     SINGULAR = "singular"  # the free wires' wrench matrix is singular
 
 
-def json_float(x):
+def json_float(x: float) -> float | None:
     """JSON-ready float (None for NaN/inf)."""
     x = float(x)
     return x if np.isfinite(x) else None
 
 
-def json_floats(a):
+def json_floats(a: ArrayLike | None) -> list[float | None] | None:
     return None if a is None else [json_float(v) for v in np.asarray(a, dtype=float)]
 
 
-def box_list(lo, hi):
+def box_list(lo: Iterable[float], hi: Iterable[float]) -> list[list[float]]:
     return [[float(a), float(b)] for a, b in zip(lo, hi, strict=True)]
 
 
@@ -131,7 +133,9 @@ def _outside(values, lo, hi, quantity: str, tol: float) -> list[Violation]:
     return out
 
 
-def limit_violations(robot: Robot, tau, u, tol: float = LIMIT_TOL) -> list[Violation]:
+def limit_violations(
+    robot: Robot, tau: np.ndarray | None, u: np.ndarray | None, tol: float = LIMIT_TOL
+) -> list[Violation]:
     """Every tension outside ``[τ_min, τ_max]`` and control outside its stroke (a NaN
     control -- the tension would reach ``k`` -- is reported as undefined)."""
     out: list[Violation] = []
@@ -151,7 +155,9 @@ def limit_violations(robot: Robot, tau, u, tol: float = LIMIT_TOL) -> list[Viola
     return out
 
 
-def window_violations(u, u_last, window: float, tol: float = LIMIT_TOL) -> list[Violation]:
+def window_violations(
+    u: ArrayLike, u_last: np.ndarray, window: float, tol: float = LIMIT_TOL
+) -> list[Violation]:
     """Every control outside the search window ``u_last ± window / 2``."""
     half = 0.5 * window
     out = _outside(np.asarray(u, dtype=float), u_last - half, u_last + half, "u-window", tol)
@@ -182,12 +188,22 @@ def no_certificate() -> Certificate:
     return Certificate(kind="none", statement="floating-point result, not certified")
 
 
-def unique_in_box(u, F, S, xlo, xhi, klo, khi, slo=None, shi=None) -> Certificate:
+def unique_in_box(
+    u: np.ndarray,
+    F: np.ndarray,
+    S: np.ndarray,
+    xlo: np.ndarray,
+    xhi: np.ndarray,
+    klo: np.ndarray,
+    khi: np.ndarray,
+    slo: np.ndarray | None = None,
+    shi: np.ndarray | None = None,
+) -> Certificate:
     """Certificate from the unicity box ``[xlo, xhi]`` and a Krawczyk image ``[klo, khi]`` of
     a box ``[slo, shi]`` (default: the same box) inside it, over the free wires ``S``; the
     wires ``F`` are fixed at ``u[F]``."""
-    if slo is None:
-        slo, shi = xlo, xhi
+    slo = xlo if slo is None else slo
+    shi = xhi if shi is None else shi
     blo, bhi = u.copy(), u.copy()
     blo[S], bhi[S] = xlo, xhi
     elo, ehi = u.copy(), u.copy()

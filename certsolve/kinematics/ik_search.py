@@ -69,7 +69,12 @@ __all__ = [
 ]
 
 
-def control_point(robot: Robot, rho, tau, idx=slice(None)):
+def control_point(
+    robot: Robot,
+    rho: np.ndarray | float,
+    tau: np.ndarray | float,
+    idx: np.ndarray | slice | int = slice(None),
+) -> np.ndarray:
     """Eq. (5) in floating point for the wires ``idx`` (no error bound: a candidate only)."""
     k, K, V, L0 = robot.k[idx], robot.K[idx], robot.V[idx], robot.L0[idx]
     return k * L0 / (K * (k - tau)) - (rho + V) / K
@@ -108,7 +113,9 @@ def preconditioner(enc: PoseEnclosure) -> Preconditioner:
     return Preconditioner(P, basis, params, rank, Mc, Mr, bc, br, usable)
 
 
-def contract(pc: Preconditioner, lo, hi, sweeps: int = 8):
+def contract(
+    pc: Preconditioner, lo: np.ndarray, hi: np.ndarray, sweeps: int = 8
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Interval Gauss–Seidel (Jacobi order) on ``M τ + b = 0`` for a batch ``(B, m)``.
 
     Returns ``(lo, hi, empty)``; sound: every solution in a box stays in its contraction.
@@ -192,11 +199,15 @@ class SearchOutcome:
             return Verdict.UNKNOWN
         return Verdict.UNDECIDED if self.undecided else Verdict.INFEASIBLE
 
-    def unicity_boxes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """``(box_lo, box_hi, enc_lo, enc_hi)`` of the certified point (``certified`` only)."""
-        if self.box_lo is None or self.box_hi is None or self.enc_lo is None or self.enc_hi is None:
-            raise ValueError("no certified point: the search outcome has no unicity box")
-        return self.box_lo, self.box_hi, self.enc_lo, self.enc_hi
+    def certified_point(
+        self,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(u, box_lo, box_hi, enc_lo, enc_hi)``: the certified point, its unicity box and
+        its enclosure (verdict ``certified`` only)."""
+        u, blo, bhi, elo, ehi = self.u, self.box_lo, self.box_hi, self.enc_lo, self.enc_hi
+        if u is None or blo is None or bhi is None or elo is None or ehi is None:
+            raise ValueError("no certified point in this search outcome")
+        return u, blo, bhi, elo, ehi
 
 
 def _certify(robot, enc, pc, sq, lo, hi, ulo, uhi, box_radius):
@@ -251,13 +262,25 @@ class ControlState:
 class ControlSearch:
     """Algorithm 1 as a step of the search driver: contract, certify, bisect tension boxes."""
 
-    def __init__(self, robot, enc, pc, sq, ulo, uhi, eps, box_radius, dom_w, batch_size):
+    def __init__(
+        self,
+        robot: Robot,
+        enc: PoseEnclosure,
+        pc: Preconditioner,
+        sq: SquareSystem | None,
+        ulo: np.ndarray,
+        uhi: np.ndarray,
+        eps: float,
+        box_radius: float,
+        dom_w: np.ndarray,
+        batch_size: int,
+    ) -> None:
         self.robot, self.enc, self.pc, self.sq = robot, enc, pc, sq
         self.ulo, self.uhi = ulo, uhi
         self.eps, self.box_radius, self.dom_w = eps, box_radius, dom_w
         self.batch_size = int(batch_size)
 
-    def start(self, known=None) -> ControlState:
+    def start(self, known: object = None) -> ControlState:
         return ControlState(BoxStack(self.ulo.size))
 
     def tally(self, state: ControlState) -> Tally:
@@ -266,10 +289,10 @@ class ControlSearch:
     def known(self, state: ControlState) -> None:
         return None
 
-    def found(self, state: ControlState):
+    def found(self, state: ControlState) -> tuple[tuple | None, list]:
         return state.found, state.undecided
 
-    def merge(self, state: ControlState, found) -> None:
+    def merge(self, state: ControlState, found: tuple[tuple | None, list]) -> None:
         point, undecided = found
         if state.found is None:
             state.found = point
@@ -307,8 +330,8 @@ class ControlSearch:
 def search_controls(
     robot: Robot,
     enc: PoseEnclosure,
-    ulo,
-    uhi,
+    ulo: np.ndarray,
+    uhi: np.ndarray,
     *,
     max_boxes: int = 20000,
     timeout: float | None = 10.0,

@@ -42,11 +42,14 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..robot.geometry import Pose
 from ..robot.model import Robot
+from ..robot.schema import RobotSource
 from ..solver.search import SearchStatus
 from .ik_alg2 import ik_algorithm2
 from .ik_enclose import enclose_pose, tension_range
@@ -205,14 +208,14 @@ def _rigorous_limits(robot: Robot, enc, elo, ehi) -> tuple[tuple, str]:
 
 
 def ik_sweep(
-    robot,
-    pose,
+    robot: Robot | RobotSource,
+    pose: Any,
     *,
     joint: int = 1,
     start: float,
     stop: float,
     count: int,
-    u_start=None,
+    u_start: ArrayLike | None = None,
     box_radius: float = 1e-4,
     progress: Callable[[SweepProgress], bool | None] | None = None,
     timeout: float | None = None,

@@ -55,7 +55,7 @@ class TensionChoice:
         return bool(self.equilibrium and self.margin >= -1e-9)
 
 
-def margin_of(tau, tau_min, tau_max) -> float:
+def margin_of(tau: np.ndarray, tau_min: np.ndarray, tau_max: np.ndarray) -> float:
     return float(np.min(np.minimum(tau - tau_min, tau_max - tau)))
 
 
@@ -68,7 +68,9 @@ def _scale(H, wg, tau) -> float:
     return max(1.0, float(np.max(np.abs(wg), initial=0.0)), float(np.max(t, initial=0.0)))
 
 
-def closed_form(tau_p, v, tau_min, tau_max):
+def closed_form(
+    tau_p: np.ndarray, v: np.ndarray, tau_min: np.ndarray, tau_max: np.ndarray
+) -> tuple[float, float, tuple[float, float]]:
     """Exact max-margin ``λ`` on ``τ = τ_p + λ v`` and the admissible ``λ`` interval.
 
     Returns ``(lam, margin, (lam_lo, lam_hi))``.  ``g(λ) = min_k (c_k + s_k λ)`` with slopes
@@ -101,7 +103,15 @@ def _lstsq(H, wg):
     return tau
 
 
-def distribute_tensions(H, wg, tau_min, tau_max, *, mode: str = "auto", check_lp: bool = False):
+def distribute_tensions(
+    H: np.ndarray,
+    wg: np.ndarray,
+    tau_min: np.ndarray,
+    tau_max: np.ndarray,
+    *,
+    mode: str = "auto",
+    check_lp: bool = False,
+) -> TensionChoice:
     """Choose tensions at a pose (see the module docstring).
 
     ``mode``: ``"auto"`` (closed form when the null space is a line, LP when larger, the
