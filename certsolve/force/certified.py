@@ -26,11 +26,12 @@ product of position and angle widths, so shares stay meaningful) are sums of box
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..robot import Robot
 from ..solver.buffer import BoxStack
@@ -165,7 +166,7 @@ class CertifiedWorkspace:
         )
 
 
-def parse_box(box, d: int) -> np.ndarray:
+def parse_box(box: ArrayLike, d: int) -> np.ndarray:
     """``[[xmin, xmax], ...]`` or ``[xmin, xmax, ymin, ymax, ...]`` -> ``(d, 2)`` array."""
     b = np.asarray(box, dtype=float)
     if b.shape == (2 * d,):
@@ -234,7 +235,17 @@ class PavingStep:
     outside, keep the narrow undecided ones as boundary, bisect the rest (see the module
     docstring).  Picklable: it holds the robot and the numbers of the request."""
 
-    def __init__(self, robot: Robot, min_force, external, d, use_rot, scale, total, batch):
+    def __init__(
+        self,
+        robot: Robot,
+        min_force: float,
+        external: ArrayLike | None,
+        d: int,
+        use_rot: bool,
+        scale: np.ndarray,
+        total: float,
+        batch: int,
+    ) -> None:
         self.robot = robot
         self.min_force = float(min_force)
         self.external = external
@@ -244,7 +255,7 @@ class PavingStep:
         self.total = total
         self.batch_size = int(batch)
 
-    def start(self, known=None) -> PavingState:
+    def start(self, known: object = None) -> PavingState:
         return PavingState(BoxStack(self.scale.size))
 
     def fingerprint(self) -> str:
@@ -302,10 +313,10 @@ class PavingStep:
     def known(self, state: PavingState) -> None:
         return None  # boxes are decided independently of each other
 
-    def found(self, state: PavingState):
+    def found(self, state: PavingState) -> tuple[list, list, list, float]:
         return state.inside, state.outside, state.boundary, state.inside_measure
 
-    def merge(self, state: PavingState, found) -> None:
+    def merge(self, state: PavingState, found: tuple[list, list, list, float]) -> None:
         inside, outside, boundary, measure = found
         for key, parts in (("inside", inside), ("outside", outside), ("boundary", boundary)):
             getattr(state, key).extend(parts)
@@ -316,13 +327,13 @@ class PavingStep:
 def certified_workspace(
     robot: Robot,
     min_force: float,
-    box,
+    box: ArrayLike,
     eps: float,
     progress: Callable[[Progress], bool | None] | None = None,
     timeout: float | None = None,
-    orientation=None,
+    orientation: float | Sequence[float | tuple[float, float]] | None = None,
     eps_angle: float = 1.0,
-    external=None,
+    external: ArrayLike | None = None,
     max_boxes: int | None = None,
     batch: int = 1024,
     *,

@@ -43,10 +43,10 @@ proof covers it).
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -195,7 +195,7 @@ def _rotation(robot: Robot, orientation) -> tuple[np.ndarray | None, list[float]
 
 
 def design(
-    spec: DesignSpec | str | os.PathLike | Mapping[str, Any],
+    spec: DesignSpec | str | Path | Mapping[str, Any],
     *,
     progress: ProgressCallback | None = None,
     cancel: Any = None,

@@ -22,8 +22,9 @@ Paths and modes are those of :mod:`certsolve.robot.params`.  Errors name the fie
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
@@ -137,7 +138,7 @@ class DesignSpec(DesignOptions):
     robot: str | dict = Field(description="robot file path (relative to the spec) or object")
 
 
-def load_design_spec(source) -> DesignSpec:
+def load_design_spec(source: DesignSpec | str | Path | Mapping[str, Any]) -> DesignSpec:
     """From a path, JSON text, dict or :class:`DesignSpec`; a relative robot path is read
     relative to the spec file.  Raises :class:`DesignSpecError`."""
     if isinstance(source, DesignSpec):

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from math import gamma, pi
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.optimize import minimize
 
 from .polytope import ForcePolytope
@@ -52,7 +53,7 @@ def _sym(x: np.ndarray, n: int) -> np.ndarray:
     return M + M.T - np.diag(np.diag(M))
 
 
-def largest_centred_ellipsoid(poly: ForcePolytope, centre) -> CentredEllipsoid:
+def largest_centred_ellipsoid(poly: ForcePolytope, centre: ArrayLike) -> CentredEllipsoid:
     """The largest-area (volume) ellipsoid centred at ``centre`` inside ``poly``."""
     x0 = np.asarray(centre, dtype=float)
     N = poly.normals

@@ -60,6 +60,7 @@ from __future__ import annotations
 from itertools import combinations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..interval import arith, elementary
 from ..interval.linalg import mr_from_bounds
@@ -156,7 +157,7 @@ def _rotation_parts(dof: int, alo: np.ndarray, ahi: np.ndarray, derivatives: boo
     return R, dR
 
 
-def interval_rotation(dof: int, alo: np.ndarray, ahi: np.ndarray):
+def interval_rotation(dof: int, alo: np.ndarray, ahi: np.ndarray) -> Pair:
     """Enclosure ``(Rlo, Rhi)`` ``(d, d, B)`` of the rotations over angle boxes (degrees)."""
     return _rotation_parts(dof, alo, ahi, derivatives=False)[0]
 
@@ -325,13 +326,13 @@ def slack_enclosures(
     plo: np.ndarray,
     phi: np.ndarray,
     f_req: float,
-    external=None,
+    external: ArrayLike | None = None,
     alo: np.ndarray | None = None,
     ahi: np.ndarray | None = None,
     rotation: np.ndarray | None = None,
     params: RobotBounds | None = None,
     norms: bool = False,
-):
+) -> tuple[np.ndarray, ...]:
     """Enclosures of every ``g_k^±`` over ``B`` boxes (batch last).
 
     ``plo``, ``phi``: ``(d, B)`` position bounds (cm); ``alo``, ``ahi``: ``(na, B)`` angle
@@ -439,7 +440,7 @@ class _BasisInverse:
     ``G V = u + F u`` with ``u = P V`` and ``|(F u)_ij| ≤ β' max_k |u_kj|``.
     """
 
-    def __init__(self, P: np.ndarray, M):
+    def __init__(self, P: np.ndarray, M: Pair) -> None:
         w = P.shape[-1]
         Elo, Ehi = pmatmul(P, M)
         eye = np.eye(w)
@@ -451,7 +452,7 @@ class _BasisInverse:
         self.beta = np.where(self.ok, bp, np.inf)
         self.P = P
 
-    def apply(self, V):
+    def apply(self, V: Pair) -> Pair:
         ulo, uhi = pmatmul(self.P, V)
         mag = np.max(np.maximum(np.abs(ulo), np.abs(uhi)), axis=-2, keepdims=True)
         with np.errstate(invalid="ignore"):

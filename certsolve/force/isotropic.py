@@ -53,7 +53,7 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from itertools import combinations
 from math import comb
-from typing import Literal, overload
+from typing import Any, Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -115,7 +115,9 @@ def _ratio(num: np.ndarray, den: np.ndarray) -> np.ndarray:
     return r
 
 
-def section_index(normals, offsets, w_ext, n_force: int) -> tuple[float, int]:
+def section_index(
+    normals: ArrayLike, offsets: ArrayLike, w_ext: ArrayLike, n_force: int
+) -> tuple[float, int]:
     """``min_k (d_k + n_k · w_ext) / ||n_k,f||`` over given facets of ``W``; and the argmin."""
     normals = np.asarray(normals, dtype=float)
     num = np.asarray(offsets, dtype=float) + normals @ np.asarray(w_ext, dtype=float)
@@ -371,9 +373,9 @@ class IsotropicForceResult:
 
 def isotropic_force(
     robot: Robot,
-    pose,
+    pose: Any,
     algorithm: str = "shifting",
-    external=None,
+    external: ArrayLike | None = None,
     section: bool = True,
     ellipse: bool = False,
 ) -> IsotropicForceResult:
@@ -429,7 +431,7 @@ def isotropic_force(
     section_check = None
     if robot.dof == 2:
         poly = poly_full
-    elif section and status != IsotropicStatus.DEGENERATE:
+    elif section and status != IsotropicStatus.DEGENERATE and moment is not None:
         try:
             poly = force_section(H, robot.tau_min, robot.tau_max, moment, nf)
             section_check = poly.signed_distance(centre)

@@ -34,6 +34,7 @@ from itertools import combinations
 from math import comb
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .polytope import FlatPolytopeError, ForcePolytope, dedupe_facets
 from .wedge import wedge_float
@@ -41,7 +42,7 @@ from .wedge import wedge_float
 __all__ = ["krut_polytope", "box_vertices"]
 
 
-def box_vertices(tau_min, tau_max) -> np.ndarray:
+def box_vertices(tau_min: ArrayLike, tau_max: ArrayLike) -> np.ndarray:
     """Step 1 (eq. 7): the ``2^m`` vertices, row ``l - 1`` from the bits of ``l - 1``."""
     tmin = np.asarray(tau_min, dtype=float)
     tmax = np.asarray(tau_max, dtype=float)
@@ -51,7 +52,11 @@ def box_vertices(tau_min, tau_max) -> np.ndarray:
 
 
 def krut_polytope(
-    H: np.ndarray, tau_min, tau_max, max_combinations: int = 1_000_000, tol: float = 1e-9
+    H: np.ndarray,
+    tau_min: ArrayLike,
+    tau_max: ArrayLike,
+    max_combinations: int = 1_000_000,
+    tol: float = 1e-9,
 ) -> ForcePolytope:
     """Operational force polytope of one pose by the paper's six steps (see module doc)."""
     H = np.asarray(H, dtype=float)

@@ -23,6 +23,7 @@ wrench is given.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..robot import Robot, gravity_wrench
 
@@ -36,7 +37,9 @@ def force_rows(robot: Robot) -> int:
     return FORCE_ROWS[robot.dof]
 
 
-def external_wrench(robot: Robot, rotations, extra=None) -> np.ndarray:
+def external_wrench(
+    robot: Robot, rotations: ArrayLike, extra: ArrayLike | None = None
+) -> np.ndarray:
     """``w_ext`` of shape ``(P, w)``: the weight's wrench about the platform origin plus ``extra``.
 
     ``extra`` is an optional constant wrench ``(w,)`` (N, and N·cm for moments).

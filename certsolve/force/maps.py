@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..robot import Robot
 from ..robot.geometry import rotation_2d, rotation_zyx
@@ -23,7 +24,9 @@ from .isotropic import DEGENERATE, INSIDE, OUTSIDE, isotropic_values
 __all__ = ["IsotropicMap", "isotropic_map", "resolve_rotation"]
 
 
-def resolve_rotation(robot: Robot, rotation) -> tuple[np.ndarray, list[float] | None]:
+def resolve_rotation(
+    robot: Robot, rotation: ArrayLike | None
+) -> tuple[np.ndarray, list[float] | None]:
     """A ``(d, d)`` matrix from ``None`` (identity), a matrix, or angles in degrees.
 
     Angles: dof 3 one ``θ``; dof 6 ``(yaw, pitch, roll)`` (Z-Y-X, as
@@ -110,7 +113,7 @@ class IsotropicMap:
         return out
 
     @classmethod
-    def from_dict(cls, data: dict, anchors) -> IsotropicMap:
+    def from_dict(cls, data: dict, anchors: ArrayLike) -> IsotropicMap:
         """The map back from :meth:`to_dict` (with its values) and the robot's anchors.
 
         ``status`` is read off the values as :func:`~.isotropic.isotropic_values` sets it:
@@ -139,11 +142,11 @@ class IsotropicMap:
 
 def isotropic_map(
     robot: Robot,
-    xs,
-    ys,
+    xs: ArrayLike,
+    ys: ArrayLike,
     z: float | None = None,
-    rotation=None,
-    external=None,
+    rotation: ArrayLike | None = None,
+    external: ArrayLike | None = None,
 ) -> IsotropicMap:
     """The maximum isotropic force at every ``(x, y)`` of the grid ``xs × ys``.
 

@@ -71,7 +71,7 @@ class MV:
 
     # -- construction / reshaping ---------------------------------------------------------
     @classmethod
-    def const(cls, lo, hi, nd: int) -> MV:
+    def const(cls, lo: np.ndarray, hi: np.ndarray, nd: int) -> MV:
         z = np.zeros_like(lo)
         return cls((lo, hi), (lo, hi), [(z, z) for _ in range(nd)])
 
@@ -141,7 +141,7 @@ class MV:
         ]
         return MV(arith.div(*self.m, *o.m), arith.div(*self.x, *o.x), s)
 
-    def scale(self, c) -> MV:
+    def scale(self, c: np.ndarray | float) -> MV:
         """``c · u`` for point ``c`` (``0 · inf`` counts as 0)."""
 
         def f(p):

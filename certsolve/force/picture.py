@@ -26,6 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.optimize import linprog
 from scipy.spatial import HalfspaceIntersection, QhullError
 
@@ -96,7 +97,7 @@ class ForcePicture:
         }
 
 
-def halfplane_polygon(normals, offsets) -> np.ndarray | None:
+def halfplane_polygon(normals: ArrayLike, offsets: ArrayLike) -> np.ndarray | None:
     """Vertices (counter-clockwise) of ``{x ∈ R² : normals @ x ≤ offsets}``.
 
     ``None`` when the region is empty, flat or unbounded.

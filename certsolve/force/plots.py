@@ -10,13 +10,22 @@ and equal axes.
 
 from __future__ import annotations
 
+from pathlib import Path
+from typing import TYPE_CHECKING
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..plotting import pyplot, save
 from .certified import CertifiedWorkspace
 from .design import DesignResult
 from .maps import IsotropicMap
 from .picture import ForcePicture
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+PathOrName = str | Path | None
 
 __all__ = ["plot_map", "plot_maps", "plot_paving", "plot_force_picture", "plot_design"]
 
@@ -68,7 +77,13 @@ def _draw_map(ax, res: IsotropicMap, vmax=None, title=None, cmap="jet", colorbar
     return im
 
 
-def plot_map(res: IsotropicMap, path=None, vmax=None, title=None, cmap="jet"):
+def plot_map(
+    res: IsotropicMap,
+    path: PathOrName = None,
+    vmax: float | None = None,
+    title: str | None = None,
+    cmap: str = "jet",
+) -> Figure:
     """One heat map; saved as PNG if ``path`` is given.  Returns the figure."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(6.4, 5.6), dpi=120)
@@ -77,7 +92,13 @@ def plot_map(res: IsotropicMap, path=None, vmax=None, title=None, cmap="jet"):
     return save(fig, path)
 
 
-def plot_maps(maps: list[IsotropicMap], path=None, titles=None, shared_scale=True, cmap="jet"):
+def plot_maps(
+    maps: list[IsotropicMap],
+    path: PathOrName = None,
+    titles: list[str] | None = None,
+    shared_scale: bool = True,
+    cmap: str = "jet",
+) -> Figure:
     """Several maps side by side with one shared colour scale (the paper's Fig. 10)."""
     plt = _plt()
     vmax = max(float(np.nanmax(np.where(m.values >= 0, m.values, np.nan))) for m in maps)
@@ -98,7 +119,13 @@ def plot_maps(maps: list[IsotropicMap], path=None, titles=None, shared_scale=Tru
     return save(fig, path, bbox_inches="tight")
 
 
-def plot_paving(ws: CertifiedWorkspace, path=None, title=None, anchors=None, z=None):
+def plot_paving(
+    ws: CertifiedWorkspace,
+    path: PathOrName = None,
+    title: str | None = None,
+    anchors: np.ndarray | None = None,
+    z: float | None = None,
+) -> Figure:
     """The paving of a planar box (x, y): inside green, outside grey, boundary orange.
 
     For dof 6 the picture is the slice ``z = z`` (default: the middle of the box): the boxes
@@ -232,7 +259,9 @@ def _draw_panel(ax, pic: ForcePicture, panel, half: float):
     return handles
 
 
-def plot_force_picture(pic: ForcePicture, path=None, title=None):
+def plot_force_picture(
+    pic: ForcePicture, path: PathOrName = None, title: str | None = None
+) -> Figure:
     """The force polytope, isotropic circle, centre and ellipse at one pose (Krut Fig. 4).
 
     Planar robots: one panel; dof 6: the three sections through the centre side by side, on
@@ -261,7 +290,13 @@ def plot_force_picture(pic: ForcePicture, path=None, title=None):
     return save(fig, path)
 
 
-def plot_design(res: DesignResult, path=None, axes=(0, 1), at=None, title=None):
+def plot_design(
+    res: DesignResult,
+    path: PathOrName = None,
+    axes: tuple[int, int] = (0, 1),
+    at: ArrayLike | None = None,
+    title: str | None = None,
+) -> Figure:
     """The paving of the design parameters: good green, bad grey, undecided orange, pending
     blue, the best box outlined with its centre starred.
 

@@ -35,6 +35,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .wedge import facet_subsets, wedge_float
 
@@ -82,12 +83,12 @@ class ForcePolytope:
         v[np.abs(self.offsets) <= 1e-12 * max(1.0, float(np.abs(self.offsets).max()))] = np.nan
         return v
 
-    def signed_distance(self, x) -> float:
+    def signed_distance(self, x: ArrayLike) -> float:
         """``min_k (d_k - n_k·x)``: the inscribed radius about ``x`` (negative if outside)."""
         x = np.asarray(x, dtype=float)
         return float(np.min(self.offsets - self.normals @ x))
 
-    def contains(self, x, tol: float = 1e-9) -> bool:
+    def contains(self, x: ArrayLike, tol: float = 1e-9) -> bool:
         return self.signed_distance(x) >= -tol
 
     def to_dict(self) -> dict:
@@ -122,7 +123,9 @@ def _box_mid_rad(tau_min, tau_max):
     return 0.5 * (tmin + tmax), 0.5 * (tmax - tmin)
 
 
-def zonotope_facets_t(Ht: np.ndarray, tau_min, tau_max):
+def zonotope_facets_t(
+    Ht: np.ndarray, tau_min: ArrayLike, tau_max: ArrayLike
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Candidate facets in batch-last layout: ``Ht`` is ``(w, m, P)``.
 
     Returns ``(C, D, d_plus, d_minus)`` of shapes ``(w, K, P)``, ``(K, m, P)``, ``(K, P)``,
@@ -141,7 +144,9 @@ def zonotope_facets_t(Ht: np.ndarray, tau_min, tau_max):
     return C, D, spread + lin, spread - lin
 
 
-def zonotope_facets(H: np.ndarray, tau_min, tau_max):
+def zonotope_facets(
+    H: np.ndarray, tau_min: ArrayLike, tau_max: ArrayLike
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Candidate facets of ``{H τ}`` for a batch of poses.
 
     ``H`` has shape ``(P, w, m)``.  Returns ``(C, D, d_plus, d_minus)``: unnormalised normals
@@ -156,7 +161,9 @@ def zonotope_facets(H: np.ndarray, tau_min, tau_max):
     return np.moveaxis(C, 0, -1).transpose(1, 0, 2), np.moveaxis(D, -1, 0), dp.T, dm.T
 
 
-def dedupe_facets(normals: np.ndarray, offsets: np.ndarray, tol: float = 1e-9):
+def dedupe_facets(
+    normals: np.ndarray, offsets: np.ndarray, tol: float = 1e-9
+) -> tuple[np.ndarray, np.ndarray]:
     """Normalise ``n·f ≤ d`` rows to unit normals and merge rows equal within ``tol``.
 
     The tolerance is relative to the largest offset magnitude (forces of very different
@@ -181,7 +188,7 @@ def dedupe_facets(normals: np.ndarray, offsets: np.ndarray, tol: float = 1e-9):
     return out[:, :-1], out[:, -1] * scale
 
 
-def hyperplane_shifting(H: np.ndarray, tau_min, tau_max) -> ForcePolytope:
+def hyperplane_shifting(H: np.ndarray, tau_min: ArrayLike, tau_max: ArrayLike) -> ForcePolytope:
     """The polytope ``{H τ}`` of one pose (``H`` is ``w × m``) by hyperplane shifting.
 
     Raises ``ValueError`` if ``H`` has rank below ``w`` (the polytope has no interior and no

@@ -24,6 +24,7 @@ from __future__ import annotations
 from itertools import combinations
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.spatial import ConvexHull, QhullError
 
 from .krut import box_vertices
@@ -32,7 +33,9 @@ from .polytope import FlatPolytopeError, ForcePolytope, dedupe_facets
 __all__ = ["slice_vertices", "hull_polytope", "force_section"]
 
 
-def slice_vertices(A: np.ndarray, b, tau_min, tau_max, tol: float = 1e-9) -> np.ndarray:
+def slice_vertices(
+    A: ArrayLike, b: ArrayLike, tau_min: ArrayLike, tau_max: ArrayLike, tol: float = 1e-9
+) -> np.ndarray:
     """Vertices of ``{τ : A τ = b, τ_min ≤ τ ≤ τ_max}`` (``A`` is ``k × m``), possibly repeated.
 
     With ``k = 0`` these are the ``2^m`` box vertices.  Returns ``(nv, m)`` (empty if the
@@ -83,7 +86,9 @@ def hull_polytope(points: np.ndarray, algorithm: str) -> ForcePolytope:
     return ForcePolytope(normals, offsets, algorithm=algorithm, vertices=pts_u[hull.vertices])
 
 
-def force_section(H: np.ndarray, tau_min, tau_max, moment, n_force: int) -> ForcePolytope:
+def force_section(
+    H: np.ndarray, tau_min: ArrayLike, tau_max: ArrayLike, moment: ArrayLike, n_force: int
+) -> ForcePolytope:
     """``F(μ)`` above for one pose: force rows ``H[:n_force]``, moment rows the others."""
     H = np.asarray(H, dtype=float)
     Hf, Hm = H[:n_force], H[n_force:]

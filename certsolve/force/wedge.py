@@ -95,7 +95,9 @@ def wedge_float(M: np.ndarray) -> np.ndarray:
 
 
 @lru_cache(maxsize=64)
-def basis_groups(m: int, w: int, b0: tuple[int, ...]):
+def basis_groups(
+    m: int, w: int, b0: tuple[int, ...]
+) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     r"""Facet subsets relative to a basis ``b0`` of ``w`` columns, grouped by ``t = |S ∩ N|``.
 
     ``N`` are the other columns.  Used by the basis form of the facets (a normal is
