@@ -63,12 +63,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..interval import arith, elementary
+from ..interval.core import Pair
 from ..interval.linalg import mr_from_bounds
 from ..interval.rounding import down, up
 from ..robot import Robot
 from ..robot.params import RobotBounds
 from .loads import force_rows
-from .meanvalue import MV, Limit, LimitMV, Pair, mv_sum, phi_mv, pmatmul, wedge_mv
+from .meanvalue import MV, Limit, LimitMV, mv_sum, phi_mv, pmatmul, wedge_mv
 from .wedge import basis_groups, facet_subsets
 
 __all__ = ["interval_rotation", "slack_enclosures"]
@@ -371,8 +372,8 @@ def _parts_point(robot: Robot, plo, phi, prm: RobotBounds):
     c1 = arith.sub(
         *arith.mul(*comp(Aj, 0), *comp(Ai, 1)), *arith.mul(*comp(Aj, 1), *comp(Ai, 0))
     )  # (K, m, n)
-    dx: Pair = arith.sub(*comp(Ai, 0), *comp(Aj, 0))
-    dy: Pair = arith.sub(*comp(Ai, 1), *comp(Aj, 1))
+    dx = arith.sub(*comp(Ai, 0), *comp(Aj, 0))
+    dy = arith.sub(*comp(Ai, 1), *comp(Aj, 1))
     t1 = arith.mul(*dx, plo[1], phi[1])
     t2 = arith.mul(*dy, plo[0], phi[0])
     cr = arith.add(*c1, *arith.sub(*t1, *t2))

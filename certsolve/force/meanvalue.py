@@ -33,13 +33,12 @@ from typing import Any
 import numpy as np
 
 from ..interval import arith
+from ..interval.core import Pair
 from ..interval.linalg import mr_from_bounds, mr_matmul, mr_to_bounds
 from ..interval.rounding import down, up
 from .wedge import wedge_tables
 
 __all__ = ["MV", "LimitMV", "mv_sum", "wedge_mv", "phi_mv", "pmatmul"]
-
-Pair = tuple[np.ndarray, np.ndarray]
 
 
 def _sym(s: Pair, r: np.ndarray) -> np.ndarray:
@@ -153,7 +152,7 @@ class MV:
         return MV(f(self.m), f(self.x), [f(p) for p in self.s])
 
     def sqr(self) -> MV:
-        t: Pair = arith.add(*self.x, *self.m)
+        t = arith.add(*self.x, *self.m)
         return MV(arith.sqr(*self.m), arith.sqr(*self.x), [arith.mul(*t, *s) for s in self.s])
 
     def sqrt(self) -> MV:

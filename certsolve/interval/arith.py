@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .core import Pair
 from .rounding import down, up
 
 __all__ = [
@@ -49,7 +50,7 @@ __all__ = [
 _INF = np.inf
 
 
-def _keep_empty(lo, hi, *operands):
+def _keep_empty(lo: np.ndarray, hi: np.ndarray, *operands: np.ndarray) -> Pair:
     """Propagate emptiness: where any operand pair is empty, make the result empty."""
     emp = None
     for k in range(0, len(operands), 2):
@@ -61,24 +62,24 @@ def _keep_empty(lo, hi, *operands):
     return lo, hi
 
 
-def add(alo, ahi, blo, bhi):
+def add(alo: np.ndarray, ahi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> Pair:
     return down(alo + blo), up(ahi + bhi)
 
 
-def sub(alo, ahi, blo, bhi):
+def sub(alo: np.ndarray, ahi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> Pair:
     return down(alo - bhi), up(ahi - blo)
 
 
-def neg(alo, ahi):
+def neg(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     return -ahi, -alo  # exact
 
 
-def shift(alo, ahi, c):
+def shift(alo: np.ndarray, ahi: np.ndarray, c: np.ndarray | float) -> Pair:
     """``[a] + c`` for a float (array) ``c``."""
     return down(alo + c), up(ahi + c)
 
 
-def scale(alo, ahi, c):
+def scale(alo: np.ndarray, ahi: np.ndarray, c: np.ndarray | float) -> Pair:
     """``c * [a]`` for a float (array) ``c``."""
     with np.errstate(over="ignore"):  # overflow to ±inf is a valid bound
         p = c * alo
@@ -86,7 +87,7 @@ def scale(alo, ahi, c):
     return down(np.minimum(p, q)), up(np.maximum(p, q))
 
 
-def mul(alo, ahi, blo, bhi):
+def mul(alo: np.ndarray, ahi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> Pair:
     """Product; ``0 * inf`` counts as 0 (``fmin``/``fmax`` ignore the NaN it produces)."""
     with np.errstate(invalid="ignore", over="ignore"):
         p1 = alo * blo
@@ -100,7 +101,7 @@ def mul(alo, ahi, blo, bhi):
     return _keep_empty(down(lo), up(hi), alo, ahi, blo, bhi)
 
 
-def div(alo, ahi, blo, bhi):
+def div(alo: np.ndarray, ahi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> Pair:
     """Quotient with IBEX semantics for divisors containing 0 (see module docstring)."""
     alo, ahi, blo, bhi = np.broadcast_arrays(alo, ahi, blo, bhi)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -136,12 +137,12 @@ def div(alo, ahi, blo, bhi):
     return _keep_empty(lo, hi, alo, ahi, blo, bhi)
 
 
-def recip(alo, ahi):
+def recip(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     one = np.ones_like(alo)
     return div(one, one, alo, ahi)
 
 
-def sqr(alo, ahi):
+def sqr(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     """``{a**2}``: tighter than ``a*a`` (the dependency problem)."""
     p = alo * alo
     q = ahi * ahi
@@ -150,7 +151,7 @@ def sqr(alo, ahi):
     return _keep_empty(lo, hi, alo, ahi)
 
 
-def sqrt(alo, ahi):
+def sqrt(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     """Square root of the non-negative part (empty if there is none)."""
     lo = np.maximum(alo, 0.0)
     with np.errstate(invalid="ignore", over="ignore"):
@@ -162,7 +163,7 @@ def sqrt(alo, ahi):
     return _keep_empty(rlo, rhi, alo, ahi)
 
 
-def _pow_pos(alo, ahi, n: int):
+def _pow_pos(alo: np.ndarray, ahi: np.ndarray, n: int) -> Pair:
     """``x**n`` for n >= 2 by repeated rounded multiplication of non-negative bounds.
 
     For 0 <= x the map is increasing, so bounds are ``lo**n`` rounded down and ``hi**n``
@@ -184,7 +185,7 @@ def _pow_pos(alo, ahi, n: int):
     return np.maximum(rlo, 0.0), rhi
 
 
-def pow_int(alo, ahi, n: int):
+def pow_int(alo: np.ndarray, ahi: np.ndarray, n: int) -> Pair:
     """``x**n`` for an integer ``n`` (``n < 0`` is ``1/x**|n|`` with :func:`div` semantics)."""
     n = int(n)
     if n == 0:
@@ -211,15 +212,15 @@ def pow_int(alo, ahi, n: int):
     return _keep_empty(lo, hi, alo, ahi)
 
 
-def iabs(alo, ahi):
+def iabs(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     lo = np.where(alo >= 0.0, alo, np.where(ahi <= 0.0, -ahi, 0.0))
     hi = np.maximum(-alo, ahi)
     return _keep_empty(lo, hi, alo, ahi)
 
 
-def imin(alo, ahi, blo, bhi):
+def imin(alo: np.ndarray, ahi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> Pair:
     return _keep_empty(np.minimum(alo, blo), np.minimum(ahi, bhi), alo, ahi, blo, bhi)
 
 
-def imax(alo, ahi, blo, bhi):
+def imax(alo: np.ndarray, ahi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> Pair:
     return _keep_empty(np.maximum(alo, blo), np.maximum(ahi, bhi), alo, ahi, blo, bhi)

@@ -22,10 +22,12 @@ All functions are elementwise and vectorised; none of them loops over elements i
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .rounding import up
 
 __all__ = [
+    "Pair",
     "as_interval",
     "empty_like",
     "is_empty",
@@ -45,8 +47,11 @@ __all__ = [
     "is_interior",
 ]
 
+Pair = tuple[np.ndarray, np.ndarray]
+"""An interval array as its bounds ``(lo, hi)``."""
 
-def as_interval(lo, hi=None):
+
+def as_interval(lo: ArrayLike, hi: ArrayLike | None = None) -> Pair:
     """Build ``(lo, hi)`` float64 arrays; ``hi`` defaults to ``lo`` (degenerate intervals)."""
     lo = np.asarray(lo, dtype=np.float64)
     hi = lo if hi is None else np.asarray(hi, dtype=np.float64)
@@ -54,17 +59,17 @@ def as_interval(lo, hi=None):
     return lo.copy(), hi.copy()
 
 
-def empty_like(lo):
+def empty_like(lo: np.ndarray) -> Pair:
     """Empty intervals with the shape of ``lo``."""
     return np.full_like(lo, np.inf, dtype=np.float64), np.full_like(lo, -np.inf, dtype=np.float64)
 
 
-def is_empty(lo, hi):
+def is_empty(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """Boolean mask of empty intervals."""
     return lo > hi
 
 
-def width(lo, hi):
+def width(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """Upper bound of ``hi - lo`` (0 for degenerate intervals)."""
     return up(hi - lo)
 
@@ -83,7 +88,7 @@ def _unbounded_point(lo, hi):
     return np.clip(m, -_MAX, _MAX)
 
 
-def split_point(lo, hi, ratio: float = 0.5):
+def split_point(lo: ArrayLike, hi: ArrayLike, ratio: float = 0.5) -> np.ndarray:
     """A finite float in ``[lo, hi]``: ``lo + ratio (hi - lo)`` for bounded intervals (without
     overflow when ``hi - lo`` does), the unbounded rule of the module docstring otherwise."""
     lo = np.asarray(lo, dtype=np.float64)
@@ -104,7 +109,7 @@ def _finish(m, lo, hi):
     return np.minimum(np.maximum(m, lo), hi)
 
 
-def midpoint(lo, hi):
+def midpoint(lo: ArrayLike, hi: ArrayLike) -> np.ndarray:
     """A finite float inside ``[lo, hi]`` close to its centre (``0.5 lo + 0.5 hi``, which
     cannot overflow; the unbounded rule of the module docstring for infinite bounds)."""
     lo = np.asarray(lo, dtype=np.float64)
@@ -114,7 +119,7 @@ def midpoint(lo, hi):
     return _finish(m, lo, hi)
 
 
-def cut_points(lo, hi, slices: int):
+def cut_points(lo: ArrayLike, hi: ArrayLike, slices: int) -> np.ndarray:
     """``slices + 1`` non-decreasing cut points of each interval, from ``lo`` to ``hi``.
 
     Bounded intervals are cut evenly; an unbounded one at its :func:`split_point` only (the
@@ -138,7 +143,7 @@ def cut_points(lo, hi, slices: int):
     return cuts
 
 
-def splittable_width(lo, hi):
+def splittable_width(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """``hi - lo``, or 0 where no float lies strictly inside (the interval cannot be split)."""
     with np.errstate(invalid="ignore", over="ignore"):
         w = hi - lo
@@ -146,47 +151,47 @@ def splittable_width(lo, hi):
     return np.where((m > lo) & (m < hi), w, 0.0)
 
 
-def radius(lo, hi, mid=None):
+def radius(lo: np.ndarray, hi: np.ndarray, mid: np.ndarray | None = None) -> np.ndarray:
     """Upper bound of the distance from ``mid`` (default :func:`midpoint`) to both bounds."""
     if mid is None:
         mid = midpoint(lo, hi)
     return np.maximum(up(hi - mid), up(mid - lo))
 
 
-def magnitude(lo, hi):
+def magnitude(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """``max |x|`` over the interval."""
     return np.maximum(np.abs(lo), np.abs(hi))
 
 
-def mignitude(lo, hi):
+def mignitude(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """``min |x|`` over the interval (0 when it contains 0)."""
     return np.where((lo <= 0) & (hi >= 0), 0.0, np.minimum(np.abs(lo), np.abs(hi)))
 
 
-def hull(alo, ahi, blo, bhi):
+def hull(alo: np.ndarray, ahi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> Pair:
     """Smallest interval containing both (an empty operand is ignored)."""
     return np.minimum(alo, blo), np.maximum(ahi, bhi)
 
 
-def intersect(alo, ahi, blo, bhi):
+def intersect(alo: np.ndarray, ahi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> Pair:
     """Intersection; empty where the operands are disjoint (``lo > hi``)."""
     return np.maximum(alo, blo), np.minimum(ahi, bhi)
 
 
-def contains(lo, hi, x):
+def contains(lo: np.ndarray, hi: np.ndarray, x: np.ndarray | float) -> np.ndarray:
     """``x in [lo, hi]`` elementwise."""
     return (lo <= x) & (x <= hi)
 
 
-def contains_zero(lo, hi):
+def contains_zero(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return (lo <= 0.0) & (hi >= 0.0)
 
 
-def is_subset(alo, ahi, blo, bhi):
+def is_subset(alo: np.ndarray, ahi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> np.ndarray:
     """``[a] ⊆ [b]`` elementwise (an empty ``a`` is a subset of anything)."""
     return ((alo >= blo) & (ahi <= bhi)) | (alo > ahi)
 
 
-def is_interior(alo, ahi, blo, bhi):
+def is_interior(alo: np.ndarray, ahi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> np.ndarray:
     """``[a] ⊂ int([b])``: strictly inside, the condition of the Krawczyk test."""
     return (alo > blo) & (ahi < bhi)
