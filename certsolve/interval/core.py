@@ -28,6 +28,7 @@ from .rounding import up
 
 __all__ = [
     "Pair",
+    "Quad",
     "as_interval",
     "empty_like",
     "is_empty",
@@ -49,6 +50,8 @@ __all__ = [
 
 Pair = tuple[np.ndarray, np.ndarray]
 """An interval array as its bounds ``(lo, hi)``."""
+Quad = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+"""Two interval arrays ``(xlo, xhi, ylo, yhi)``: the operands a backward projection narrows."""
 
 
 def as_interval(lo: ArrayLike, hi: ArrayLike | None = None) -> Pair:

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .core import Pair
 from .rounding import down, up, widen_down, widen_up
 
 __all__ = [
@@ -67,7 +68,7 @@ _PI_UP = float(np.nextafter(np.pi, np.inf))  # > π
 _PI_LO = float(np.pi)  # < π
 
 
-def exp(alo, ahi):
+def exp(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     with np.errstate(over="ignore"):
         lo = np.maximum(widen_down(np.exp(alo)), 0.0)
         hi = widen_up(np.exp(ahi))
@@ -75,7 +76,7 @@ def exp(alo, ahi):
     return _keep_empty(lo, hi, alo, ahi)
 
 
-def log(alo, ahi):
+def log(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     with np.errstate(divide="ignore", invalid="ignore"):
         lo = np.where(alo <= 0.0, -_INF, widen_down(np.log(np.maximum(alo, 0.0))))
         hi = widen_up(np.log(ahi))
@@ -85,7 +86,7 @@ def log(alo, ahi):
     return lo, hi
 
 
-def half_pi_multiple(m):
+def half_pi_multiple(m: np.ndarray) -> Pair:
     """An enclosure ``[lo, hi]`` of ``m π/2`` for integer-valued floats ``m`` (``|m| < 2^52``):
     the products with the floats around π/2, rounded outward."""
     with np.errstate(invalid="ignore", over="ignore"):
@@ -127,7 +128,7 @@ def _may_hold(alo, ahi, first: int, step: int):
     return hit.reshape(alo.shape)
 
 
-def cos(alo, ahi):
+def cos(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     with np.errstate(invalid="ignore"):
         ca = np.cos(alo)
         cb = np.cos(ahi)
@@ -141,7 +142,7 @@ def cos(alo, ahi):
     return _keep_empty(lo, hi, alo, ahi)
 
 
-def sin(alo, ahi):
+def sin(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     with np.errstate(invalid="ignore"):
         sa = np.sin(alo)
         sb = np.sin(ahi)
@@ -160,7 +161,7 @@ def _keep_empty(lo, hi, alo, ahi):
     return np.where(emp, _INF, lo), np.where(emp, -_INF, hi)
 
 
-def _finite_bounds(lo, hi):
+def _finite_bounds(lo: np.ndarray, hi: np.ndarray) -> Pair:
     """A lower bound never ``+inf`` and an upper bound never ``-inf`` (overflowed values)."""
     return np.minimum(lo, _MAX), np.maximum(hi, -_MAX)
 
@@ -193,7 +194,7 @@ def _empty_where(lo, hi, dead):
     return np.where(dead, _INF, lo), np.where(dead, -_INF, hi)
 
 
-def tan(alo, ahi):
+def tan(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     """``tan`` between poles; ``(-inf, inf)`` when a pole ``π/2 + kπ`` may be inside."""
     with np.errstate(all="ignore"):
         ta = np.tan(alo)
@@ -208,11 +209,11 @@ def tan(alo, ahi):
     return _keep_empty(*_finite_bounds(lo, hi), alo, ahi)
 
 
-def sinh(alo, ahi):
+def sinh(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     return _increasing(np.sinh, alo, ahi)
 
 
-def cosh(alo, ahi):
+def cosh(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     """Even, decreasing then increasing: the minimum 1 is at 0."""
     mig = np.where(ahi < 0.0, -ahi, np.where(alo > 0.0, alo, 0.0))
     mag = np.maximum(np.abs(alo), np.abs(ahi))
@@ -222,26 +223,26 @@ def cosh(alo, ahi):
     return _keep_empty(*_finite_bounds(lo, hi), alo, ahi)
 
 
-def tanh(alo, ahi):
+def tanh(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     return _increasing(np.tanh, alo, ahi, -1.0, 1.0)
 
 
-def atan(alo, ahi):
+def atan(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     return _increasing(np.arctan, alo, ahi, -_HALF_PI_UP, _HALF_PI_UP)
 
 
-def asinh(alo, ahi):
+def asinh(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     return _increasing(np.arcsinh, alo, ahi)
 
 
-def asin(alo, ahi):
+def asin(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     """``asin`` on ``[-1, 1]`` (domain restriction)."""
     lo, hi, dead = _restrict(alo, ahi, -1.0, 1.0)
     rlo, rhi = _increasing(np.arcsin, lo, hi, -_HALF_PI_UP, _HALF_PI_UP)
     return _empty_where(rlo, rhi, dead)
 
 
-def acos(alo, ahi):
+def acos(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     """``acos`` on ``[-1, 1]``, decreasing."""
     lo, hi, dead = _restrict(alo, ahi, -1.0, 1.0)
     with np.errstate(all="ignore"):
@@ -250,21 +251,21 @@ def acos(alo, ahi):
     return _empty_where(rlo, rhi, dead)
 
 
-def acosh(alo, ahi):
+def acosh(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     """``acosh`` on ``[1, inf)``."""
     lo, hi, dead = _restrict(alo, ahi, 1.0, _INF)
     rlo, rhi = _increasing(np.arccosh, lo, hi, 0.0, _INF)
     return _empty_where(rlo, rhi, dead)
 
 
-def atanh(alo, ahi):
+def atanh(alo: np.ndarray, ahi: np.ndarray) -> Pair:
     """``atanh`` on ``(-1, 1)``: an end point at ``±1`` gives an infinite bound."""
     lo, hi, dead = _restrict(alo, ahi, -1.0, 1.0, open_lo=True, open_hi=True)
     rlo, rhi = _increasing(np.arctanh, lo, hi)
     return _empty_where(rlo, rhi, dead)
 
 
-def atan2(ylo, yhi, xlo, xhi):
+def atan2(ylo: np.ndarray, yhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """The angle of ``(x, y)`` in ``(-π, π]`` over a box (see the module docstring).
 
     Empty when the box is the origin alone (no point of the domain).
@@ -297,7 +298,7 @@ def atan2(ylo, yhi, xlo, xhi):
     return _empty_where(lo, hi, dead)
 
 
-def rpow(xlo, xhi, ylo, yhi):
+def rpow(xlo: np.ndarray, xhi: np.ndarray, ylo: np.ndarray, yhi: np.ndarray) -> Pair:
     """``x^y = exp(y log x)`` over ``x > 0`` (``0^y = 0`` for ``y > 0``): min/max of corners.
 
     Empty where the box has no point of the domain (``x < 0``, or ``x = 0`` with ``y <= 0``).

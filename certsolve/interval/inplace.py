@@ -20,6 +20,7 @@ from functools import partial
 
 import numpy as np
 
+from .core import Pair, Quad
 from .projections import _mul_inverse_zero
 from .rounding import down_inplace, up_inplace
 
@@ -52,28 +53,51 @@ up_sum_ = partial(up_inplace, exact_tiny=True)
 # -- forward, into preallocated rows -------------------------------------------------------------
 
 
-def add_into(alo, ahi, blo, bhi, olo, ohi):
+def add_into(
+    alo: np.ndarray,
+    ahi: np.ndarray,
+    blo: np.ndarray,
+    bhi: np.ndarray,
+    olo: np.ndarray,
+    ohi: np.ndarray,
+) -> None:
     np.add(alo, blo, out=olo)
     down_sum_(olo)
     np.add(ahi, bhi, out=ohi)
     up_sum_(ohi)
 
 
-def sub_into(alo, ahi, blo, bhi, olo, ohi):
+def sub_into(
+    alo: np.ndarray,
+    ahi: np.ndarray,
+    blo: np.ndarray,
+    bhi: np.ndarray,
+    olo: np.ndarray,
+    ohi: np.ndarray,
+) -> None:
     np.subtract(alo, bhi, out=olo)
     down_sum_(olo)
     np.subtract(ahi, blo, out=ohi)
     up_sum_(ohi)
 
 
-def shift_into(alo, ahi, c, olo, ohi):
+def shift_into(
+    alo: np.ndarray, ahi: np.ndarray, c: np.ndarray | float, olo: np.ndarray, ohi: np.ndarray
+) -> None:
     np.add(alo, c, out=olo)
     down_sum_(olo)
     np.add(ahi, c, out=ohi)
     up_sum_(ohi)
 
 
-def mul_into(alo, ahi, blo, bhi, olo, ohi):
+def mul_into(
+    alo: np.ndarray,
+    ahi: np.ndarray,
+    blo: np.ndarray,
+    bhi: np.ndarray,
+    olo: np.ndarray,
+    ohi: np.ndarray,
+) -> None:
     with np.errstate(invalid="ignore", over="ignore"):
         p1 = alo * blo
         p2 = alo * bhi
@@ -97,7 +121,14 @@ def mul_into(alo, ahi, blo, bhi, olo, ohi):
 # -- backward projections -------------------------------------------------------------------------
 
 
-def bwd_add(zlo, zhi, xlo, xhi, ylo, yhi):
+def bwd_add(
+    zlo: np.ndarray,
+    zhi: np.ndarray,
+    xlo: np.ndarray,
+    xhi: np.ndarray,
+    ylo: np.ndarray,
+    yhi: np.ndarray,
+) -> Quad:
     """z = x + y: ``x ∩ (z - y)``, then ``y ∩ (z - x')``."""
     nxlo = down_sum_(zlo - yhi)
     np.maximum(nxlo, xlo, out=nxlo)
@@ -110,7 +141,14 @@ def bwd_add(zlo, zhi, xlo, xhi, ylo, yhi):
     return nxlo, nxhi, nylo, nyhi
 
 
-def bwd_sub(zlo, zhi, xlo, xhi, ylo, yhi):
+def bwd_sub(
+    zlo: np.ndarray,
+    zhi: np.ndarray,
+    xlo: np.ndarray,
+    xhi: np.ndarray,
+    ylo: np.ndarray,
+    yhi: np.ndarray,
+) -> Quad:
     """z = x - y: ``x ∩ (z + y)``, then ``y ∩ (x' - z)``."""
     nxlo = down_sum_(zlo + ylo)
     np.maximum(nxlo, xlo, out=nxlo)
@@ -123,7 +161,14 @@ def bwd_sub(zlo, zhi, xlo, xhi, ylo, yhi):
     return nxlo, nxhi, nylo, nyhi
 
 
-def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
+def mul_inverse(
+    zlo: np.ndarray,
+    zhi: np.ndarray,
+    ylo: np.ndarray,
+    yhi: np.ndarray,
+    xlo: np.ndarray,
+    xhi: np.ndarray,
+) -> Pair:
     """``[x] ∩ {t : ∃ y ∈ [y], t·y ∈ [z]}`` (hull), as :func:`.projections.mul_inverse`.
 
     2-D arrays of one shape.  Corner quotients for the whole batch; the entries with
@@ -159,7 +204,14 @@ def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
     return lo, hi
 
 
-def bwd_mul(zlo, zhi, xlo, xhi, ylo, yhi):
+def bwd_mul(
+    zlo: np.ndarray,
+    zhi: np.ndarray,
+    xlo: np.ndarray,
+    xhi: np.ndarray,
+    ylo: np.ndarray,
+    yhi: np.ndarray,
+) -> Quad:
     """z = x * y."""
     nxlo, nxhi = mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi)
     nylo, nyhi = mul_inverse(zlo, zhi, nxlo, nxhi, ylo, yhi)

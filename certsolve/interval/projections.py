@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import arith, elementary
+from .core import Pair, Quad
 from .rounding import down, up, widen_down, widen_up
 
 __all__ = [
@@ -80,7 +81,14 @@ def _hull_of_meets(xlo, xhi, p1lo, p1hi, p2lo, p2hi):
     return lo, hi
 
 
-def mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi):
+def mul_inverse(
+    zlo: np.ndarray,
+    zhi: np.ndarray,
+    ylo: np.ndarray,
+    yhi: np.ndarray,
+    xlo: np.ndarray,
+    xhi: np.ndarray,
+) -> Pair:
     """Narrow ``[x]`` to the hull of ``{t ∈ [x] : ∃ y ∈ [y], t*y ∈ [z]}``.
 
     * ``0 ∉ [y]``: the ordinary quotient ``[z] / [y]`` (four corner quotients; this is
@@ -173,31 +181,49 @@ def _mul_inverse_zero(zlo, zhi, ylo, yhi, xlo, xhi):
     return np.where(z0, xlo, glo), np.where(z0, xhi, ghi)
 
 
-def bwd_add(zlo, zhi, xlo, xhi, ylo, yhi):
+def bwd_add(
+    zlo: np.ndarray,
+    zhi: np.ndarray,
+    xlo: np.ndarray,
+    xhi: np.ndarray,
+    ylo: np.ndarray,
+    yhi: np.ndarray,
+) -> Quad:
     """z = x + y."""
     xlo, xhi = _meet(xlo, xhi, *arith.sub(zlo, zhi, ylo, yhi))
     ylo, yhi = _meet(ylo, yhi, *arith.sub(zlo, zhi, xlo, xhi))
     return xlo, xhi, ylo, yhi
 
 
-def bwd_sub(zlo, zhi, xlo, xhi, ylo, yhi):
+def bwd_sub(
+    zlo: np.ndarray,
+    zhi: np.ndarray,
+    xlo: np.ndarray,
+    xhi: np.ndarray,
+    ylo: np.ndarray,
+    yhi: np.ndarray,
+) -> Quad:
     """z = x - y."""
     xlo, xhi = _meet(xlo, xhi, *arith.add(zlo, zhi, ylo, yhi))
     ylo, yhi = _meet(ylo, yhi, *arith.sub(xlo, xhi, zlo, zhi))
     return xlo, xhi, ylo, yhi
 
 
-def bwd_neg(zlo, zhi, xlo, xhi):
+def bwd_neg(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = -x."""
     return _meet(xlo, xhi, -zhi, -zlo)
 
 
-def bwd_shift(zlo, zhi, xlo, xhi, c):
+def bwd_shift(
+    zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray, c: np.ndarray | float
+) -> Pair:
     """z = x + c."""
     return _meet(xlo, xhi, down(zlo - c), up(zhi - c))
 
 
-def bwd_scale(zlo, zhi, xlo, xhi, c):
+def bwd_scale(
+    zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray, c: np.ndarray | float
+) -> Pair:
     """z = c*x for a float c (no contraction where c == 0)."""
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         p = zlo / c
@@ -207,27 +233,41 @@ def bwd_scale(zlo, zhi, xlo, xhi, c):
     return _meet(xlo, xhi, lo, hi)
 
 
-def bwd_mul(zlo, zhi, xlo, xhi, ylo, yhi):
+def bwd_mul(
+    zlo: np.ndarray,
+    zhi: np.ndarray,
+    xlo: np.ndarray,
+    xhi: np.ndarray,
+    ylo: np.ndarray,
+    yhi: np.ndarray,
+) -> Quad:
     """z = x * y."""
     xlo, xhi = mul_inverse(zlo, zhi, ylo, yhi, xlo, xhi)
     ylo, yhi = mul_inverse(zlo, zhi, xlo, xhi, ylo, yhi)
     return xlo, xhi, ylo, yhi
 
 
-def bwd_div(zlo, zhi, xlo, xhi, ylo, yhi):
+def bwd_div(
+    zlo: np.ndarray,
+    zhi: np.ndarray,
+    xlo: np.ndarray,
+    xhi: np.ndarray,
+    ylo: np.ndarray,
+    yhi: np.ndarray,
+) -> Quad:
     """z = x / y, i.e. x = z*y with y != 0."""
     xlo, xhi = _meet(xlo, xhi, *arith.mul(zlo, zhi, ylo, yhi))
     ylo, yhi = mul_inverse(xlo, xhi, zlo, zhi, ylo, yhi)
     return xlo, xhi, ylo, yhi
 
 
-def bwd_sqr(zlo, zhi, xlo, xhi):
+def bwd_sqr(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = x**2: x ∈ ±sqrt(z ∩ [0, inf))."""
     rlo, rhi = arith.sqrt(zlo, zhi)
     return _hull_of_meets(xlo, xhi, rlo, rhi, -rhi, -rlo)
 
 
-def bwd_sqrt(zlo, zhi, xlo, xhi):
+def bwd_sqrt(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = sqrt(x): x ∈ (z ∩ [0, inf))**2 and x >= 0."""
     zlo = np.maximum(zlo, 0.0)
     slo, shi = arith.sqr(zlo, zhi)
@@ -251,7 +291,7 @@ def _root(zlo, zhi, n):
     return rlo, rhi
 
 
-def bwd_pow(zlo, zhi, xlo, xhi, n: int):
+def bwd_pow(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray, n: int) -> Pair:
     """z = x**n for an integer n."""
     n = int(n)
     if n == 1:
@@ -273,23 +313,30 @@ def bwd_pow(zlo, zhi, xlo, xhi, n: int):
     return _meet(xlo, xhi, lo, hi)
 
 
-def bwd_exp(zlo, zhi, xlo, xhi):
+def bwd_exp(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = exp(x): x ∈ log(z)."""
     return _meet(xlo, xhi, *elementary.log(zlo, zhi))
 
 
-def bwd_log(zlo, zhi, xlo, xhi):
+def bwd_log(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = log(x): x ∈ exp(z)."""
     return _meet(xlo, xhi, *elementary.exp(zlo, zhi))
 
 
-def bwd_abs(zlo, zhi, xlo, xhi):
+def bwd_abs(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = |x|: x ∈ ±(z ∩ [0, inf))."""
     zlo = np.maximum(zlo, 0.0)
     return _hull_of_meets(xlo, xhi, zlo, zhi, -zhi, -zlo)
 
 
-def bwd_min(zlo, zhi, xlo, xhi, ylo, yhi):
+def bwd_min(
+    zlo: np.ndarray,
+    zhi: np.ndarray,
+    xlo: np.ndarray,
+    xhi: np.ndarray,
+    ylo: np.ndarray,
+    yhi: np.ndarray,
+) -> Quad:
     """z = min(x, y): both >= z.lo; the operand that must be the minimum is <= z.hi."""
     nxlo = np.maximum(xlo, zlo)
     nylo = np.maximum(ylo, zlo)
@@ -298,7 +345,14 @@ def bwd_min(zlo, zhi, xlo, xhi, ylo, yhi):
     return nxlo, nxhi, nylo, nyhi
 
 
-def bwd_max(zlo, zhi, xlo, xhi, ylo, yhi):
+def bwd_max(
+    zlo: np.ndarray,
+    zhi: np.ndarray,
+    xlo: np.ndarray,
+    xhi: np.ndarray,
+    ylo: np.ndarray,
+    yhi: np.ndarray,
+) -> Quad:
     """z = max(x, y): both <= z.hi; the operand that must be the maximum is >= z.lo."""
     nxhi = np.minimum(xhi, zhi)
     nyhi = np.minimum(yhi, zhi)
@@ -307,33 +361,33 @@ def bwd_max(zlo, zhi, xlo, xhi, ylo, yhi):
     return nxlo, nxhi, nylo, nyhi
 
 
-def bwd_sinh(zlo, zhi, xlo, xhi):
+def bwd_sinh(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = sinh(x): x = asinh(z)."""
     return _meet(xlo, xhi, *elementary.asinh(zlo, zhi))
 
 
-def bwd_asinh(zlo, zhi, xlo, xhi):
+def bwd_asinh(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = asinh(x): x = sinh(z)."""
     return _meet(xlo, xhi, *elementary.sinh(zlo, zhi))
 
 
-def bwd_tanh(zlo, zhi, xlo, xhi):
+def bwd_tanh(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = tanh(x) ∈ (-1, 1): x = atanh(z)."""
     return _meet(xlo, xhi, *elementary.atanh(zlo, zhi))
 
 
-def bwd_atanh(zlo, zhi, xlo, xhi):
+def bwd_atanh(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = atanh(x): x = tanh(z) ∈ [-1, 1]."""
     return _meet(xlo, xhi, *elementary.tanh(zlo, zhi))
 
 
-def bwd_cosh(zlo, zhi, xlo, xhi):
+def bwd_cosh(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = cosh(x) >= 1: x ∈ ±acosh(z)."""
     rlo, rhi = elementary.acosh(zlo, zhi)
     return _hull_of_meets(xlo, xhi, rlo, rhi, -rhi, -rlo)
 
 
-def bwd_acosh(zlo, zhi, xlo, xhi):
+def bwd_acosh(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = acosh(x) >= 0: x = cosh(z ∩ [0, inf)) >= 1."""
     dead = zhi < 0.0
     clo, chi = elementary.cosh(np.maximum(zlo, 0.0), zhi)
@@ -362,7 +416,7 @@ def _branch_inverse(fn, zlo, zhi, rlo, rhi, at_lo, at_hi, increasing=True):
     return lo, hi
 
 
-def bwd_atan(zlo, zhi, xlo, xhi):
+def bwd_atan(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = atan(x) ∈ (-π/2, π/2): x = tan(z)."""
     lo, hi = _branch_inverse(np.tan, zlo, zhi, -_HALF_PI, _HALF_PI, -_INF, _INF)
     dead = (zhi < -_HALF_PI_UP) | (zlo > _HALF_PI_UP)
@@ -370,7 +424,7 @@ def bwd_atan(zlo, zhi, xlo, xhi):
     return np.where(dead, _INF, lo), np.where(dead, -_INF, hi)
 
 
-def bwd_asin(zlo, zhi, xlo, xhi):
+def bwd_asin(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = asin(x) ∈ [-π/2, π/2]: x = sin(z) ∈ [-1, 1]."""
     lo, hi = _branch_inverse(np.sin, zlo, zhi, -_HALF_PI, _HALF_PI, -1.0, 1.0)
     dead = (zhi < -_HALF_PI_UP) | (zlo > _HALF_PI_UP)
@@ -378,7 +432,7 @@ def bwd_asin(zlo, zhi, xlo, xhi):
     return np.where(dead, _INF, lo), np.where(dead, -_INF, hi)
 
 
-def bwd_acos(zlo, zhi, xlo, xhi):
+def bwd_acos(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = acos(x) ∈ [0, π]: x = cos(z) ∈ [-1, 1] (decreasing)."""
     lo, hi = _branch_inverse(np.cos, zlo, zhi, 0.0, _PI, -1.0, 1.0, increasing=False)
     dead = (zhi < 0.0) | (zlo > _PI_HI)
@@ -386,7 +440,7 @@ def bwd_acos(zlo, zhi, xlo, xhi):
     return np.where(dead, _INF, lo), np.where(dead, -_INF, hi)
 
 
-def bwd_tan(zlo, zhi, xlo, xhi):
+def bwd_tan(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = tan(x): x ∈ atan(z) + kπ when ``[x]`` lies between the poles around ``kπ``.
 
     ``k`` is taken from the midpoint; the branch test and ``kπ`` use outward-rounded bounds
@@ -435,17 +489,24 @@ def _sine_branches(zlo, zhi, xlo, xhi, parity: int):
     return np.where(inside, lo, xlo), np.where(inside, hi, xhi)
 
 
-def bwd_sin(zlo, zhi, xlo, xhi):
+def bwd_sin(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = sin(x): x ∈ mπ + (-1)^m asin(z) on the branch around mπ (two branches at most)."""
     return _sine_branches(zlo, zhi, xlo, xhi, 0)
 
 
-def bwd_cos(zlo, zhi, xlo, xhi):
+def bwd_cos(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = cos(x): x ∈ (m+1/2)π - (-1)^m asin(z) on the branch around (m+1/2)π (two at most)."""
     return _sine_branches(zlo, zhi, xlo, xhi, 1)
 
 
-def bwd_rpow(zlo, zhi, xlo, xhi, ylo, yhi):
+def bwd_rpow(
+    zlo: np.ndarray,
+    zhi: np.ndarray,
+    xlo: np.ndarray,
+    xhi: np.ndarray,
+    ylo: np.ndarray,
+    yhi: np.ndarray,
+) -> Quad:
     """z = x^y (x > 0, or x = 0 < y): x >= 0, and x = z^(1/y) when 0 ∉ [y]; y unchanged."""
     xlo = np.maximum(xlo, 0.0)
     zlo = np.maximum(zlo, 0.0)
@@ -461,7 +522,7 @@ def bwd_rpow(zlo, zhi, xlo, xhi, ylo, yhi):
     return np.where(dead, _INF, nlo), np.where(dead, -_INF, nhi), ylo, yhi
 
 
-def bwd_sign(zlo, zhi, xlo, xhi):
+def bwd_sign(zlo: np.ndarray, zhi: np.ndarray, xlo: np.ndarray, xhi: np.ndarray) -> Pair:
     """z = sign(x) ∈ {-1, 0, 1}: x keeps the signs whose value lies in ``[z]``."""
     neg = (zlo <= -1.0) & (zhi >= -1.0)
     zero = (zlo <= 0.0) & (zhi >= 0.0)

@@ -58,51 +58,51 @@ class Interval:
         return Interval(min(self.lo, other.lo), max(self.hi, other.hi))
 
     # arithmetic
-    def __add__(self, o):
+    def __add__(self, o: Interval | float) -> Interval:
         return self._wrap(arith.add(*self._b(), *self._coerce(o)._b()))
 
     __radd__ = __add__
 
-    def __sub__(self, o):
+    def __sub__(self, o: Interval | float) -> Interval:
         return self._wrap(arith.sub(*self._b(), *self._coerce(o)._b()))
 
-    def __rsub__(self, o):
+    def __rsub__(self, o: Interval | float) -> Interval:
         return self._coerce(o) - self
 
-    def __mul__(self, o):
+    def __mul__(self, o: Interval | float) -> Interval:
         return self._wrap(arith.mul(*self._b(), *self._coerce(o)._b()))
 
     __rmul__ = __mul__
 
-    def __truediv__(self, o):
+    def __truediv__(self, o: Interval | float) -> Interval:
         return self._wrap(arith.div(*self._b(), *self._coerce(o)._b()))
 
-    def __rtruediv__(self, o):
+    def __rtruediv__(self, o: Interval | float) -> Interval:
         return self._coerce(o) / self
 
-    def __neg__(self):
+    def __neg__(self) -> Interval:
         return Interval(-self.hi, -self.lo)
 
-    def __pow__(self, n: int):
+    def __pow__(self, n: int) -> Interval:
         lo, hi = self._b()
         return self._wrap(arith.pow_int(lo, hi, int(n)))
 
-    def sqr(self):
+    def sqr(self) -> Interval:
         return self._wrap(arith.sqr(*self._b()))
 
-    def sqrt(self):
+    def sqrt(self) -> Interval:
         return self._wrap(arith.sqrt(*self._b()))
 
-    def exp(self):
+    def exp(self) -> Interval:
         return self._wrap(elementary.exp(*self._b()))
 
-    def log(self):
+    def log(self) -> Interval:
         return self._wrap(elementary.log(*self._b()))
 
-    def sin(self):
+    def sin(self) -> Interval:
         return self._wrap(elementary.sin(*self._b()))
 
-    def cos(self):
+    def cos(self) -> Interval:
         return self._wrap(elementary.cos(*self._b()))
 
     def __repr__(self) -> str:
