@@ -18,7 +18,7 @@ from certsolve.jobs.kinds import IkCall, IsotropicCall, KindUnavailable, TrackCa
 from certsolve.jobs.quick import Busy, Gone, QuickFailure, TooCostly
 
 from ..deps import Quick
-from ..errors import APIError, validation_details
+from ..errors import APIError, problem
 from ..schemas import errors
 
 router = APIRouter(
@@ -64,22 +64,17 @@ def _answer(quick: Any, name: str, req: Any, request: Request) -> Response:
 
 
 def _input_error(exc: InputError, req: Any) -> APIError:
-    """The library refused the input: a 422 at the field it named (``exc.field``: ``pose``
-    is ``params.pose``).  Without one, at the field the message starts with (``wires[2].k:
-    ...`` is ``robot.wires.2.k``)."""
-    msg = str(exc)
+    """The library refused the input: a 422 at the field it named (``exc.field``, a path
+    among the call's arguments: ``pose`` is ``params.pose``, ``robot.wires.2.k`` is
+    itself), else at the body."""
     path = [int(p) if p.isdigit() else p for p in exc.field.split(".")] if exc.field else []
-    head = str(path[0]) if path else msg.split(":", 1)[0].split("[", 1)[0].split(".", 1)[0]
-    if head in type(req.params).model_fields:
-        loc: tuple = ("body", "params")
-    elif head in type(req.robot).model_fields:
-        loc = ("body", "robot")
+    if not path:
+        loc: tuple = ("body",)
+    elif path[0] == "robot" or path[0] not in type(req.params).model_fields:
+        loc = ("body", *path)
     else:
-        loc = ("body",)
-    if path and len(loc) > 1:
-        loc, msg = (*loc, *path), exc.message
-    detail = validation_details([{"loc": loc, "msg": msg, "type": "value_error"}])
-    return APIError(422, str(exc), detail)
+        loc = ("body", "params", *path)
+    return APIError(422, str(exc), [problem(exc.message if path else str(exc), loc)])
 
 
 @router.post("/v1/ik")

@@ -353,6 +353,7 @@ def run_job(
     try:
         req = request_adapter(True).validate_json(job.request or "")
         kind = KINDS[req.kind]
+        kind.load()  # KindUnavailable when this build lacks its library function
         if not kind.has_max_boxes:
             monitor.max_boxes = limits.get("max_boxes")
         ctx = RunContext(
@@ -366,7 +367,7 @@ def run_job(
         )
         old_limit = set_memory_limit(memory_mb)
         try:
-            raw = kind.run(req, ctx)
+            raw = kind.run(req.params, kind.input_of(req), ctx)
         finally:
             restore_memory_limit(old_limit)
             old_limit = None
