@@ -372,3 +372,16 @@ def test_each_quick_call_passes_only_options_its_function_takes(name, monkeypatc
     req = call.model.model_validate({"robot": PLANAR, "params": QUICK_SAMPLES[name]})
     assert call.run(req.params, req.robot) == {"fake": True}
     assert len(calls) == 1
+
+
+def test_the_worker_trusts_the_stored_request(service, monkeypatch):
+    """The request is checked against the robot once, when the service takes it; the
+    worker parses the stored request without checking it again."""
+    from certsolve.jobs.kinds import fk
+
+    seen = []
+    check = fk.FkParams.check_robot
+    monkeypatch.setattr(fk.FkParams, "check_robot", lambda *a: seen.append(1) or check(*a))
+    request = {"kind": "fk", "robot": PLANAR, "params": {"u": [0, 0, 0, 0], "eps": 1e-3}}
+    row = run_one(service, request)
+    assert row.status == "done" and seen == [1]

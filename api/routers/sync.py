@@ -2,22 +2,24 @@
 
 Each runs in a quick-call process of the service (:mod:`certsolve.jobs.quick`), never in
 the HTTP process; while it runs, the route checks that the client is still there, and a
-client that went away has its computation stopped.
+client that went away has its computation stopped.  The body is checked against its
+robot off the event loop (:func:`..deps.checked_body`).
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any
 
 import anyio.from_thread
-from fastapi import APIRouter, Request
+from fastapi import APIRouter, Depends, Request
 from fastapi.responses import Response
 
 from certsolve.inputs import InputError
 from certsolve.jobs.kinds import IkCall, IsotropicCall, KindUnavailable, TrackCall
+from certsolve.jobs.kinds.base import deferred
 from certsolve.jobs.quick import Busy, Gone, QuickFailure, TooCostly
 
-from ..deps import Quick
+from ..deps import Quick, checked_body
 from ..errors import APIError, problem
 from ..schemas import errors
 
@@ -77,19 +79,24 @@ def _input_error(exc: InputError, req: Any) -> APIError:
     return APIError(422, str(exc), [problem(exc.message if path else str(exc), loc)])
 
 
+IkBody = Annotated[IkCall, Depends(checked_body(deferred(IkCall)))]
+IsotropicBody = Annotated[IsotropicCall, Depends(checked_body(deferred(IsotropicCall)))]
+TrackBody = Annotated[TrackCall, Depends(checked_body(deferred(TrackCall)))]
+
+
 @router.post("/v1/ik")
-def ik(req: IkCall, quick: Quick, request: Request) -> Any:
+def ik(req: IkBody, quick: Quick, request: Request) -> Any:
     """Inverse kinematics at one pose (synchronous)."""
     return _answer(quick, "ik", req, request)
 
 
 @router.post("/v1/isotropic")
-def isotropic(req: IsotropicCall, quick: Quick, request: Request) -> Any:
+def isotropic(req: IsotropicBody, quick: Quick, request: Request) -> Any:
     """Isotropic force at one pose (synchronous)."""
     return _answer(quick, "isotropic", req, request)
 
 
 @router.post("/v1/fk/track")
-def fk_track(req: TrackCall, quick: Quick, request: Request) -> Any:
+def fk_track(req: TrackBody, quick: Quick, request: Request) -> Any:
     """Forward kinematics near a known pose (synchronous tracking step)."""
     return _answer(quick, "fk/track", req, request)

@@ -31,9 +31,10 @@ import copy
 import logging
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Annotated, Any
+from typing import Annotated, Any, ClassVar, Self, TypeVar
 
-from pydantic import Field, ValidationInfo, model_validator
+from pydantic import Field, ValidationError, ValidationInfo, model_validator
+from pydantic_core import InitErrorDetails
 
 from ...inputs import MAX_COORD, MAX_FORCE, Coord, StrictModel, check_count
 from ...robot.inputs import Wrench, as_pose, check_controls
@@ -64,7 +65,9 @@ __all__ = [
     "check_pose",
     "check_wire_lengths",
     "check_wires",
+    "deferred",
     "load_function",
+    "trusted",
     "orientation_arg",
     "require_elastic",
     "robot_model",
@@ -136,6 +139,10 @@ class Request(Model):
     """A job or quick call; when it has a ``robot``, its ``params`` are checked against it.
 
     The one validator of parameters against the robot (``params.u: expected 4 values ...``).
+    A request validated before (the worker reading the stored request the service
+    validated) is read with the context ``{"trusted": True}``: its fields are parsed, the
+    checks against the robot are not run again.  A :func:`deferred` model parses without
+    them; its caller runs them with :meth:`checked` (the HTTP service, off its event loop).
     Its JSON Schema is one variant per dof the kind takes, each with the robot schema of
     that dof and the params shapes for it (:meth:`Params.dof_shapes`).
     """
@@ -176,10 +183,14 @@ class Request(Model):
         target.update({"title": base.get("title", cls.__name__), "oneOf": variants})
         return ref
 
+    #: run the checks against the robot while validating (False: :func:`deferred`)
+    checks_robot: ClassVar[bool] = True
+
     @model_validator(mode="after")
     def _fits_robot(self, info: ValidationInfo):
-        memo = info.context.get("memo") if isinstance(info.context, dict) else None
-        self.check(memo)
+        if type(self).checks_robot and not trusted(info):
+            memo = info.context.get("memo") if isinstance(info.context, dict) else None
+            self.check(memo)
         return self
 
     def check(self, memo: dict | None = None) -> None:
@@ -193,6 +204,41 @@ class Request(Model):
             except ValueError as exc:
                 msg = str(exc)
                 raise ValueError(msg if msg.startswith("robot.") else f"params.{msg}") from None
+
+    def checked(self, memo: dict | None = None) -> Self:
+        """This request, once :meth:`check` passed, as an instance of the checked model
+        (a :func:`deferred` one's parent: what pickles, for the quick-call processes);
+        a refusal is pydantic's ``ValidationError``, as if validating had raised it."""
+        try:
+            self.check(memo)
+        except ValueError as exc:
+            line = InitErrorDetails(type="value_error", loc=(), input=None, ctx={"error": exc})
+            raise ValidationError.from_exception_data(type(self).__name__, [line]) from None
+        if type(self).checks_robot:
+            return self
+        model: type[Self] = type(self).__mro__[1]  # deferred(model): its one base
+        values = {name: getattr(self, name) for name in type(self).model_fields}
+        return model.model_construct(self.model_fields_set, **values)
+
+
+R = TypeVar("R", bound=Request)
+
+
+def deferred(model: type[R]) -> type[R]:
+    """``model`` without the checks against the robot while validating: a subclass of the
+    same name and JSON Schema whose instances are checked by :meth:`Request.checked`."""
+    namespace = {
+        "__module__": model.__module__,
+        "__qualname__": model.__qualname__,
+        "__doc__": model.__doc__,
+        "checks_robot": False,
+    }
+    return type(model.__name__, (model,), namespace)
+
+
+def trusted(info: ValidationInfo) -> bool:
+    """The validation context says the data was validated before (``{"trusted": True}``)."""
+    return isinstance(info.context, dict) and bool(info.context.get("trusted"))
 
 
 class JobLimits(Model):

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import Field, field_validator
+from pydantic import Field, ValidationInfo, field_validator
 
 from ...solver.options import SolveOptions
-from .base import Job, Kind, Params, RunContext
+from .base import Job, Kind, Params, RunContext, trusted
 
 __all__ = ["KIND", "MAX_SYSTEM_CHARS", "MAX_VARIABLES", "SolveJob", "SolveParams", "run_solve"]
 
@@ -71,8 +71,8 @@ class SolveJob(Job):
 
     @field_validator("system")
     @classmethod
-    def _system(cls, v: str) -> str:
-        return check_system(v)
+    def _system(cls, v: str, info: ValidationInfo) -> str:
+        return v if trusted(info) else check_system(v)
 
 
 def solve() -> Any:
