@@ -122,7 +122,7 @@ class _Parser(argparse.ArgumentParser):
 
     _words: list[str] = []  # what parse_known_args was given (for the error)
 
-    def parse_known_args(self, args=None, namespace=None):  # type: ignore[override]
+    def parse_known_args(self, args=None, namespace=None):
         self._words = list(sys.argv[1:] if args is None else args)
         return super().parse_known_args(args, namespace)
 
@@ -178,7 +178,7 @@ class _Subcommands:
         return self._action.add_parser(name, **kw)
 
 
-def build_parser(commands: Iterable[str] | None = None) -> argparse.ArgumentParser:
+def build_parser(commands: Iterable[str] | None = None) -> _Parser:
     """The argument parser with the full options of ``commands`` (every command if None);
     the other commands are listed with their help only (their modules are not imported)."""
     parser = _Parser(
@@ -212,13 +212,13 @@ def _chosen(argv: Sequence[str]) -> list[str]:
     return []
 
 
-def _parse(parser: argparse.ArgumentParser, argv: list[str]) -> argparse.Namespace:
+def _parse(parser: _Parser, argv: list[str]) -> argparse.Namespace:
     """``parser.parse_args(argv)``; what argparse refuses raises :class:`CliError`, an
     unknown option with the closest option of the command it was given to."""
     args, extra = parser.parse_known_args(argv)
     if extra:
         sub = _subparser(parser, args.command)
-        raise (sub if isinstance(sub, _Parser) else parser).unknown(extra)  # type: ignore[union-attr]
+        raise (sub if isinstance(sub, _Parser) else parser).unknown(extra)
     return args
 
 

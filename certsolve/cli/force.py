@@ -149,7 +149,7 @@ def _orientation_ranges(robot: Robot, text: str | None):
     items = [t for t in text.replace(" ", "").split(",") if t != ""]
     if len(items) != n:
         raise CliError(f"--orientation: expected {n} angle(s), got {len(items)}")
-    out = []
+    out: list[float | tuple[float, float]] = []
     for it in items:
         parts = it.split(":")
         try:

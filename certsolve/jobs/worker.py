@@ -173,10 +173,10 @@ def progress_dict(p: Any, elapsed: float) -> dict:
         else:
             v = p.get(name) if isinstance(p, dict) else getattr(p, name, None)
         if isinstance(v, bool) or not isinstance(v, (int, float)):
-            try:
-                v = v.item()  # numpy scalars
-            except AttributeError:
+            item = getattr(v, "item", None)  # numpy scalars
+            if item is None:
                 continue
+            v = item()
         if isinstance(v, (int, float)) and v == v and abs(v) < 1e300:
             out[name] = v
     out.setdefault("elapsed", elapsed)
