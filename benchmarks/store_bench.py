@@ -53,7 +53,10 @@ def samples(max_items: int) -> dict[str, tuple[str, str]]:
     for name, job in jobs.items():
         req = adapter.validate_python(job)
         limit = 2.0 if name == "stopped solve" else 60.0
-        raw = KINDS[req.kind].run(req, RunContext(time_limit=limit, max_boxes=10**8))
+        kind = KINDS[req.kind]
+        raw = kind.run(
+            req.params, kind.input_of(req), RunContext(time_limit=limit, max_boxes=10**8)
+        )
         out[name] = (req.model_dump_json(), dumps(stored_result(raw, max_items)))
     return out
 

@@ -1,6 +1,8 @@
 """Job kinds, limits and the worker's job runner, in-process (no worker processes)."""
 
+import inspect
 import json
+import sys
 from pathlib import Path
 
 import pytest
@@ -9,13 +11,14 @@ from pydantic import ValidationError
 from certsolve.jobs import JobService, LimitError, ServiceSettings
 from certsolve.jobs.errors import describe_validation_error, validation_details
 from certsolve.jobs.jsonutil import dumps, plain, truncate_lists
-from certsolve.jobs.kinds import KINDS, library_function, request_adapter
+from certsolve.jobs.kinds import KINDS, QUICK_CALLS, RunContext, public_kinds, request_adapter
 from certsolve.jobs.worker import JobMonitor, progress_dict, run_job
 from certsolve.solver import Progress
 
 ROOT = Path(__file__).resolve().parents[1]
 CIRCLE = (ROOT / "examples/systems/circle-line.mbx").read_text()
 PLANAR = json.loads((ROOT / "examples/robots/planar.json").read_text())
+DESIGN = json.loads((ROOT / "examples/design/planar-spec.json").read_text())
 
 
 @pytest.fixture
@@ -112,7 +115,7 @@ def test_run_job_failures(service):
     row = run_one(service, {"kind": "sleep", "params": {"seconds": 5}, "limits": {"max_boxes": 3}})
     assert row.status == "done" and row.progress["stopped_by"] == "max_boxes"
     try:
-        library_function("fk", "certsolve.kinematics", "forward_kinematics")
+        KINDS["fk"].load()
     except Exception:
         row = run_one(service, {"kind": "fk", "robot": PLANAR, "params": {"u": [0, 0, 0, 0]}})
         assert row.status == "failed" and row.error == "kind fk is not available in this build"
@@ -269,3 +272,116 @@ def test_progress_dict_reads_the_driver_extra():
     p.extra.update({"inside": 2, "inside_share": 0.25})
     d = progress_dict(p, 0.0)
     assert d["boxes"] == 9 and d["inside"] == 2 and d["inside_share"] == 0.25
+
+
+# -- each operation calls its library function with options it takes ------------------------------
+# one valid request per kind and quick call (a kind missing here fails the first test)
+SAMPLES = {
+    "solve": {"kind": "solve", "system": CIRCLE},
+    "fk": {"kind": "fk", "robot": PLANAR, "params": {"u": [0, 0, 0, 0], "tau_max": 20}},
+    "ik": {"kind": "ik", "robot": PLANAR, "params": {"pose": [90, 60, 0], "method": "alg2"}},
+    "ik-sweep": {
+        "kind": "ik-sweep",
+        "robot": PLANAR,
+        "params": {"pose": [90, 60, 0], "start": -1, "stop": 1, "count": 3},
+    },
+    "isotropic-map": {
+        "kind": "isotropic-map",
+        "robot": PLANAR,
+        "params": {"grid": [80, 100, 50, 70], "nx": 2, "ny": 2, "orientation": 0},
+    },
+    "workspace": {
+        "kind": "workspace",
+        "robot": PLANAR,
+        "params": {"min_force": 1, "box": [[80, 100], [50, 70]], "eps": 5, "external": [0, 1, 0]},
+    },
+    "design": {
+        "kind": "design",
+        "robot": PLANAR,
+        "params": {k: v for k, v in DESIGN.items() if k != "robot"},
+    },
+}
+QUICK_SAMPLES = {
+    "ik": {"pose": [90, 60, 0]},
+    "isotropic": {"pose": [90, 60, 0], "algorithm": "krut", "external": [0, 1, 0]},
+    "fk/track": {"u": [0, 0, 0, 0], "near_pose": [90, 60, 0], "half_width": 0.2},
+}
+# functions with **options, and where those go
+FORWARDED = {"solve": "certsolve.solver.branch_and_prune:Solver.default"}
+
+
+def _named(fn) -> set[str]:
+    return {
+        n
+        for n, p in inspect.signature(fn).parameters.items()
+        if p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)
+    }
+
+
+def _forwarded(name: str) -> set[str]:
+    if name not in FORWARDED:
+        return set()
+    module, attr = FORWARDED[name].split(":")
+    obj = sys.modules[module] if module in sys.modules else __import__(module, fromlist=["_"])
+    for part in attr.split("."):
+        obj = getattr(obj, part)
+    return _named(obj)
+
+
+def _replace_function(monkeypatch, real, accepted: set[str]) -> list:
+    """Replace ``real`` where it is defined by a recorder that binds each call to its
+    signature (an option it does not take is a TypeError) and to ``accepted``."""
+    calls: list = []
+    signature = inspect.signature(real)
+
+    def fake(*args, **kwargs):
+        signature.bind(*args, **kwargs)
+        unknown = set(kwargs) - accepted
+        assert not unknown, f"{real.__name__} does not take {sorted(unknown)}"
+        calls.append(kwargs)
+        return {"fake": True}
+
+    monkeypatch.setattr(sys.modules[real.__module__], real.__name__, fake)
+    return calls
+
+
+def test_every_public_kind_has_a_sample():
+    assert set(SAMPLES) == set(public_kinds())
+    assert set(QUICK_SAMPLES) == set(QUICK_CALLS) - {"sleep"}
+
+
+@pytest.mark.parametrize("name", sorted(SAMPLES))
+def test_each_operation_passes_only_options_its_function_takes(name, monkeypatch):
+    """The recipe of a kind: ``run(params, input, ctx)`` calls ``function()`` (the same
+    function, imported where it is defined) once, with options of its signature only."""
+    kind = KINDS[name]
+    real = kind.load()
+    calls = _replace_function(monkeypatch, real, _named(real) | _forwarded(name))
+    req = request_adapter().validate_python(SAMPLES[name])
+    assert type(req) is kind.model and type(req.params) is kind.params
+    ctx = RunContext(time_limit=1.0, max_boxes=10, cancel=None, executor=None)
+    assert kind.run(req.params, kind.input_of(req), ctx) == {"fake": True}
+    assert len(calls) == 1
+
+
+@pytest.mark.parametrize("name", sorted(QUICK_SAMPLES))
+def test_each_quick_call_passes_only_options_its_function_takes(name, monkeypatch):
+    call = QUICK_CALLS[name]
+    real = call.load()
+    calls = _replace_function(monkeypatch, real, _named(real))
+    req = call.model.model_validate({"robot": PLANAR, "params": QUICK_SAMPLES[name]})
+    assert call.run(req.params, req.robot) == {"fake": True}
+    assert len(calls) == 1
+
+
+def test_the_worker_trusts_the_stored_request(service, monkeypatch):
+    """The request is checked against the robot once, when the service takes it; the
+    worker parses the stored request without checking it again."""
+    from certsolve.jobs.kinds import fk
+
+    seen = []
+    check = fk.FkParams.check_robot
+    monkeypatch.setattr(fk.FkParams, "check_robot", lambda *a: seen.append(1) or check(*a))
+    request = {"kind": "fk", "robot": PLANAR, "params": {"u": [0, 0, 0, 0], "eps": 1e-3}}
+    row = run_one(service, request)
+    assert row.status == "done" and seen == [1]

@@ -202,8 +202,10 @@ def test_http_places_a_library_error_at_the_field_it_names():
     assert [(d["field"], d["msg"]) for d in err.detail] == [
         ("params.near_pose.1", "must be a finite number")
     ]
-    err = _input_error(InputError("", "wires[2].k: must be positive"), req)  # a robot's field
-    assert [d["field"] for d in err.detail] == ["robot.wires.2.k"]
+    err = _input_error(InputError("robot.wires.2.k", "required for FK"), req)  # the robot's
+    assert [(d["field"], d["msg"]) for d in err.detail] == [("robot.wires.2.k", "required for FK")]
+    err = _input_error(InputError("", "wires[2].k: must be positive"), req)  # no field: no guess
+    assert [d["field"] for d in err.detail] == ["body"] and err.status == 422
 
 
 def test_quick_calls_answer_input_errors(tmp_path):

@@ -11,7 +11,7 @@ settings (the hidden test kind), so :func:`router` builds the router for a reque
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Body, Path, Query, Request
+from fastapi import APIRouter, Depends, Path, Query, Request
 from fastapi.responses import JSONResponse, Response
 
 from certsolve.jobs.jsonutil import dumps
@@ -25,7 +25,7 @@ from certsolve.jobs.service import (
 from certsolve.jobs.status import JobStatus
 from certsolve.jobs.store import JobRow, QueueFull
 
-from ..deps import Caller, Service, Settings
+from ..deps import Caller, Service, Settings, checked_body
 from ..errors import APIError, validation_details
 from ..schemas import (
     CROSS_FIELD_RULES,
@@ -91,8 +91,10 @@ def _missing(exc: NoSuchJob, name: str = "job_id") -> APIError:
 
 # -- the routes -----------------------------------------------------------------------------------
 def router(job_request: Any) -> APIRouter:
-    """The jobs router for the request type ``job_request`` (a union of kinds' models)."""
+    """The jobs router for the request type ``job_request`` (a union of kinds' models,
+    deferred: :func:`..deps.checked_body` checks them against their robots)."""
     r = APIRouter(tags=["jobs"])
+    job_body = checked_body(job_request, "job")
 
     @r.post(
         "/v1/jobs",
@@ -103,7 +105,7 @@ def router(job_request: Any) -> APIRouter:
         + CROSS_FIELD_RULES,
     )
     def submit_job(
-        job: Annotated[job_request, Body()],
+        job: Annotated[Any, Depends(job_body)],
         request: Request,
         response: Response,
         service: Service,

@@ -6,7 +6,7 @@ from typing import Any
 
 from fastapi import APIRouter
 
-from certsolve.jobs.kinds import KINDS, KindUnavailable, library_function, public_kinds
+from certsolve.jobs.kinds import KINDS, KindUnavailable, public_kinds
 
 from ..deps import Quick, Service, Settings
 from ..errors import APIError
@@ -34,7 +34,7 @@ def list_kinds(settings: Settings) -> dict[str, Any]:
     for name in public_kinds(settings.enable_test_kinds):
         k = KINDS[name]
         try:
-            library_function(name, *k.library)
+            k.load()
             available = True
         except KindUnavailable:
             available = False

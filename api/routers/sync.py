@@ -2,23 +2,25 @@
 
 Each runs in a quick-call process of the service (:mod:`certsolve.jobs.quick`), never in
 the HTTP process; while it runs, the route checks that the client is still there, and a
-client that went away has its computation stopped.
+client that went away has its computation stopped.  The body is checked against its
+robot off the event loop (:func:`..deps.checked_body`).
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any
 
 import anyio.from_thread
-from fastapi import APIRouter, Request
+from fastapi import APIRouter, Depends, Request
 from fastapi.responses import Response
 
 from certsolve.inputs import InputError
 from certsolve.jobs.kinds import IkCall, IsotropicCall, KindUnavailable, TrackCall
+from certsolve.jobs.kinds.base import deferred
 from certsolve.jobs.quick import Busy, Gone, QuickFailure, TooCostly
 
-from ..deps import Quick
-from ..errors import APIError, validation_details
+from ..deps import Quick, checked_body
+from ..errors import APIError, problem
 from ..schemas import errors
 
 router = APIRouter(
@@ -64,37 +66,37 @@ def _answer(quick: Any, name: str, req: Any, request: Request) -> Response:
 
 
 def _input_error(exc: InputError, req: Any) -> APIError:
-    """The library refused the input: a 422 at the field it named (``exc.field``: ``pose``
-    is ``params.pose``).  Without one, at the field the message starts with (``wires[2].k:
-    ...`` is ``robot.wires.2.k``)."""
-    msg = str(exc)
+    """The library refused the input: a 422 at the field it named (``exc.field``, a path
+    among the call's arguments: ``pose`` is ``params.pose``, ``robot.wires.2.k`` is
+    itself), else at the body."""
     path = [int(p) if p.isdigit() else p for p in exc.field.split(".")] if exc.field else []
-    head = str(path[0]) if path else msg.split(":", 1)[0].split("[", 1)[0].split(".", 1)[0]
-    if head in type(req.params).model_fields:
-        loc: tuple = ("body", "params")
-    elif head in type(req.robot).model_fields:
-        loc = ("body", "robot")
+    if not path:
+        loc: tuple = ("body",)
+    elif path[0] == "robot" or path[0] not in type(req.params).model_fields:
+        loc = ("body", *path)
     else:
-        loc = ("body",)
-    if path and len(loc) > 1:
-        loc, msg = (*loc, *path), exc.message
-    detail = validation_details([{"loc": loc, "msg": msg, "type": "value_error"}])
-    return APIError(422, str(exc), detail)
+        loc = ("body", "params", *path)
+    return APIError(422, str(exc), [problem(exc.message if path else str(exc), loc)])
+
+
+IkBody = Annotated[IkCall, Depends(checked_body(deferred(IkCall)))]
+IsotropicBody = Annotated[IsotropicCall, Depends(checked_body(deferred(IsotropicCall)))]
+TrackBody = Annotated[TrackCall, Depends(checked_body(deferred(TrackCall)))]
 
 
 @router.post("/v1/ik")
-def ik(req: IkCall, quick: Quick, request: Request) -> Any:
+def ik(req: IkBody, quick: Quick, request: Request) -> Any:
     """Inverse kinematics at one pose (synchronous)."""
     return _answer(quick, "ik", req, request)
 
 
 @router.post("/v1/isotropic")
-def isotropic(req: IsotropicCall, quick: Quick, request: Request) -> Any:
+def isotropic(req: IsotropicBody, quick: Quick, request: Request) -> Any:
     """Isotropic force at one pose (synchronous)."""
     return _answer(quick, "isotropic", req, request)
 
 
 @router.post("/v1/fk/track")
-def fk_track(req: TrackCall, quick: Quick, request: Request) -> Any:
+def fk_track(req: TrackBody, quick: Quick, request: Request) -> Any:
     """Forward kinematics near a known pose (synchronous tracking step)."""
     return _answer(quick, "fk/track", req, request)

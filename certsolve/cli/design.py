@@ -98,9 +98,9 @@ _SPEC_FIELDS = ("parameters", "workspace", "min_force", "orientation")
 
 def run(args: argparse.Namespace) -> int:
     from ..extras import require
-    from ..force.design import design
     from ..force.design_spec import load_design_spec
-    from ..jobs.kinds.design import DesignParams
+    from ..jobs.kinds.base import RunContext
+    from ..jobs.kinds.design import DesignParams, run_design
     from ..robot import RobotFileError, load_robot_spec
 
     if args.plot:  # before any work: --plot needs matplotlib
@@ -127,14 +127,14 @@ def run(args: argparse.Namespace) -> int:
     saving = checkpointing(args, "design")
     try:
         with saving as (checkpoint, cancel):  # Ctrl-C sets cancel: the search stops and saves
-            res = design(
-                params.spec(spec.robot),
-                progress=progress,
-                cancel=cancel,
-                timeout=params.timeout,
+            ctx = RunContext(
+                time_limit=params.timeout,
                 max_boxes=params.max_boxes,
+                progress=progress,
                 checkpoint=checkpoint,
+                cancel=cancel,
             )
+            res = run_design(params, spec.robot, ctx)  # the design job's operation
             saving.status = str(res.status)
     finally:
         stop()

@@ -91,8 +91,9 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..jobs.kinds.fk import FkParams, TrackParams
-    from ..kinematics.fk import forward_kinematics, with_tau_max
+    from ..jobs.kinds.base import RunContext
+    from ..jobs.kinds.fk import FkParams, TrackParams, run_fk
+    from ..kinematics.fk import with_tau_max
     from ..robot.geometry import Pose
     from ..robot.model import Robot
     from ..robot.schema import load_robot_spec
@@ -102,7 +103,6 @@ def run(args: argparse.Namespace) -> int:
     params = validated(FkParams, args, {"u": u}, robot=spec)  # as the fk job checks them
     if args.seeded_only and not args.seed_planar:
         raise CliError("--seeded-only needs --seed-planar")
-    robot = with_tau_max(Robot.from_spec(spec), params.tau_max)
     if args.near is not None:
         from ..kinematics.tracking import Tracker
 
@@ -130,6 +130,7 @@ def run(args: argparse.Namespace) -> int:
         track = validated(
             TrackParams, args, {"u": u, "near_pose": near}, robot=spec, option={"near_pose": "near"}
         )
+        robot = with_tau_max(Robot.from_spec(spec), params.tau_max)
         pose = Pose.from_params(robot.dof, track.near_pose)
         res = Tracker(robot, params.formulation, stability=True).step(
             track.u, pose, track.half_width
@@ -147,23 +148,16 @@ def run(args: argparse.Namespace) -> int:
     saving = checkpointing(args, "fk")
     try:
         with saving as (checkpoint, cancel):
-            res = forward_kinematics(
-                robot,
-                params.u,
-                formulation=params.formulation,
-                eps=params.eps,
-                timeout=deadline.solver_timeout(),
+            ctx = RunContext(
+                time_limit=deadline.solver_timeout(),
                 max_boxes=params.max_boxes,
-                max_solutions=params.max_solutions,
-                seed_planar=params.seed_planar,
-                seeded_only=params.seeded_only,
-                stable_only=params.stable_only,
                 progress=deadline.progress(show),
-                executor=executor,
-                verify=args.verify,
-                cancel=cancel,
                 checkpoint=checkpoint,
+                executor=executor,
+                cancel=cancel,
+                verify=args.verify,
             )
+            res = run_fk(params, spec, ctx)  # the fk job's operation
             saving.status = str(res.status)
     finally:
         stop()

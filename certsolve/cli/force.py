@@ -18,7 +18,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..jobs.jsonutil import plain
-from ..robot import Pose, Robot
+from ..robot import Robot
 from .common import (
     CliError,
     add_checkpoint_options,
@@ -181,7 +181,7 @@ def _check_plot(args: argparse.Namespace) -> None:
 
 
 def run_isotropic(args: argparse.Namespace) -> int:
-    from ..force import isotropic_force, isotropic_map
+    from ..force import isotropic_map
 
     _check_plot(args)
     robot = Robot.load(args.robot)
@@ -190,19 +190,12 @@ def run_isotropic(args: argparse.Namespace) -> int:
         for opt in ("z", "orientation", "vmax"):
             if getattr(args, opt) is not None:
                 raise CliError(f"--{opt} goes with --grid (with --at, put angles in the pose)")
-        from ..jobs.kinds.isotropic_map import PoseParams
+        from ..jobs.kinds.isotropic_map import PoseParams, call_isotropic
 
         values = {"pose": parse_floats(args.at, "--at"), "external": external}
         params = validated(PoseParams, args, values, robot=robot.spec, option={"pose": "at"})
-        pose = Pose.from_params(robot.dof, params.pose)
         try:
-            res = isotropic_force(
-                robot,
-                pose,
-                algorithm=params.algorithm,
-                external=params.external,
-                ellipse=args.ellipse,
-            )
+            res = call_isotropic(params, robot.spec, ellipse=args.ellipse)
         except ValueError as exc:
             raise CliError(f"--algorithm {args.algorithm}: {exc}") from None
         if args.plot:
@@ -306,9 +299,8 @@ def format_map(res: Mapping, plot: str | None = None) -> str:
 
 # -- workspace -------------------------------------------------------------------------------
 def run_workspace(args: argparse.Namespace) -> int:
-    from ..force import certified_workspace
-    from ..jobs.kinds.base import orientation_arg
-    from ..jobs.kinds.workspace import WorkspaceParams
+    from ..jobs.kinds.base import RunContext
+    from ..jobs.kinds.workspace import WorkspaceParams, run_workspace
 
     _check_plot(args)
     robot = Robot.load(args.robot)
@@ -327,21 +319,15 @@ def run_workspace(args: argparse.Namespace) -> int:
     saving = checkpointing(args, "workspace")
     try:
         with saving as (checkpoint, cancel):
-            ws = certified_workspace(
-                robot,
-                params.min_force,
-                [list(b) for b in params.box],
-                params.eps,
-                progress=progress,
-                timeout=params.timeout,
-                orientation=orientation_arg(params.orientation),
-                eps_angle=params.eps_angle,
-                external=params.external,
+            ctx = RunContext(
+                time_limit=params.timeout,
                 max_boxes=params.max_boxes,
+                progress=progress,
+                checkpoint=checkpoint,
                 executor=executor,
                 cancel=cancel,
-                checkpoint=checkpoint,
             )
+            ws = run_workspace(params, robot.spec, ctx)  # the workspace job's operation
             saving.status = str(ws.status)
     finally:
         stop()

@@ -11,7 +11,7 @@ import argparse
 import numpy as np
 
 from ..kinematics.ik import METHODS, IKResult, inverse_kinematics
-from ..kinematics.ik_sweep import IKSweepResult, ik_sweep
+from ..kinematics.ik_sweep import IKSweepResult
 from ..robot import Pose, Robot, load_robot_spec
 from .common import CliError, parse_floats, print_json, print_result, validated
 
@@ -247,7 +247,8 @@ def format_result(res: IKResult, robot: Robot) -> str:
 def run_sweep(args: argparse.Namespace, spec) -> int:
     """``--sweep``: the options are the ik-sweep job's params, checked by its model."""
     from ..extras import require
-    from ..jobs.kinds.ik_sweep import IkSweepParams
+    from ..jobs.kinds.base import RunContext
+    from ..jobs.kinds.ik_sweep import IkSweepParams, run_ik_sweep
 
     if args.plot:  # before any work: --plot needs matplotlib
         require("plot", "--plot")
@@ -263,18 +264,9 @@ def run_sweep(args: argparse.Namespace, spec) -> int:
     }
     option = {"u_start": "u_last", **{k: f"sweep_{k}" for k in SWEEP_PARTS}}
     params = validated(IkSweepParams, args, values, robot=spec, option=option)
-    robot = Robot.from_spec(spec)
-    result = ik_sweep(
-        robot,
-        Pose.from_params(robot.dof, params.pose),
-        joint=params.joint,
-        start=params.start,
-        stop=params.stop,
-        count=params.count,
-        u_start=params.u_start,
-        timeout=params.timeout,
-    )
+    result = run_ik_sweep(params, spec, RunContext(time_limit=params.timeout))
     if args.plot:
+        robot = Robot.from_spec(spec)
         from ..kinematics.plots import plot_sweep
 
         plot_sweep(result, args.plot, tau_limits=(robot.tau_min, robot.tau_max))

@@ -67,34 +67,26 @@ def register(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..expr.minibex import load_minibex
-    from ..jobs.kinds.solve import SolveParams
-    from ..solver import Solver
+    from ..jobs.kinds.base import RunContext
+    from ..jobs.kinds.solve import SolveParams, run_solve
 
     params = validated(SolveParams, args)  # the solve job's own checks (eps, timeout, ...)
     executor = executor_from_args(args)
     deadline = Deadline(params.timeout, args.started)
     system = load_minibex(args.file)
-    solver = Solver.default(
-        system,
-        eps=params.eps,
-        max_undecided=params.max_undecided,
-        max_pending=params.max_pending,
-        cid_vars=params.solver_cid_vars(),
-    )
     show, stop = progress_reporter(not args.json)
     saving = checkpointing(args, "solve")
     try:
         with saving as (checkpoint, cancel):
-            result = solver.solve(
-                timeout=deadline.solver_timeout(),
+            ctx = RunContext(
+                time_limit=deadline.solver_timeout(),
                 max_boxes=params.max_boxes,
-                max_solutions=params.max_solutions,
-                executor=executor,
-                verify=params.verify,
                 progress=deadline.progress(show),
-                cancel=cancel,
                 checkpoint=checkpoint,
+                executor=executor,
+                cancel=cancel,
             )
+            result = run_solve(params, system, ctx)  # the solve job's operation
             saving.status = str(result.status)
     finally:
         stop()

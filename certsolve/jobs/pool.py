@@ -163,16 +163,17 @@ class WorkerPool:
         s = self.settings
         for job in self.store.running():
             proc = live.get(job.worker_pid)
+            lease = job.lease or ""  # a running job has one ("" matches no row, as None)
             if job.cancel_requested_at is not None and now - job.cancel_requested_at > (
                 s.cancel_grace
             ):
                 if self.store.force_finish(
-                    job.id, job.lease, JobStatus.CANCELLED, "cancelled (the worker was stopped)"
+                    job.id, lease, JobStatus.CANCELLED, "cancelled (the worker was stopped)"
                 ):
                     self._kill(proc)
             elif (why := overdue(job, now, s)) is not None:
                 if self.store.force_finish(
-                    job.id, job.lease, JobStatus.FAILED, f"{why}; the worker was stopped"
+                    job.id, lease, JobStatus.FAILED, f"{why}; the worker was stopped"
                 ):
                     self._kill(proc)
             elif proc is None and (job.heartbeat_at or 0) < now - 5:

@@ -102,14 +102,17 @@ def _serve(conn, memory_mb: int, parent_pid: int) -> None:
     die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the service's business
     set_memory_limit(memory_mb)
+    from ..robot.schema import RobotFileError
     from .jsonutil import dumps, plain
-    from .kinds import QUICK_CALLS, KindUnavailable, library_function
+    from .kinds import QUICK_CALLS, KindUnavailable
 
+    available = {}
     for call in QUICK_CALLS.values():  # load the library now, not during the first call
         try:
-            library_function(call.name, *call.library)
+            call.load()
+            available[call.name] = True
         except KindUnavailable:  # reported when the call is made
-            pass
+            available[call.name] = False
     conn.send(("ready", None))
     while True:
         try:
@@ -118,7 +121,10 @@ def _serve(conn, memory_mb: int, parent_pid: int) -> None:
             return
         exit_after = False
         try:
-            text = dumps(plain(QUICK_CALLS[name].run(req)))
+            call = QUICK_CALLS[name]
+            if not available[name]:
+                call.load()  # raises KindUnavailable
+            text = dumps(plain(call.run(req.params, getattr(req, "robot", None))))
             if len(text) > MAX_RESULT_BYTES:
                 reply: tuple[str, Any] = ("costly", f"a result of {len(text)} bytes")
             else:
@@ -129,6 +135,8 @@ def _serve(conn, memory_mb: int, parent_pid: int) -> None:
             reply, exit_after = ("memory", None), True
         except InputError as exc:  # the input's fault, at a field the library names
             reply = ("invalid", (exc.field, exc.message))
+        except RobotFileError as exc:  # the robot's fault (robot.wires.2.k, if known)
+            reply = ("invalid", (exc.field, exc.reason) if exc.field else ("", str(exc)))
         except (ValueError, ArithmeticError) as exc:  # the input's fault
             reply = ("invalid", ("", str(exc) or type(exc).__name__))
         except Exception as exc:

@@ -123,7 +123,7 @@ _ONE_OF: list[Any] = [
 class BatchRequest(BaseModel):
     """Either ``jobs`` (full job requests) or one ``kind`` + input with a ``params`` list."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"oneOf": _ONE_OF})  # type: ignore[dict-item]
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"oneOf": _ONE_OF})
     jobs: list[dict[str, Any]] | None = Field(
         default=None, min_length=1, description="job requests, each as for POST /v1/jobs"
     )

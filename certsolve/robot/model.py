@@ -152,7 +152,11 @@ class Robot:
         for i, w in enumerate(self.spec.wires):
             for f in ("k", "K", "V", "L0", "u"):
                 if getattr(w, f) is None:
-                    raise RobotFileError(f"wires[{i}].{f}: required for {what}")
+                    raise RobotFileError(
+                        f"wires[{i}].{f}: required for {what}",
+                        field=f"robot.wires.{i}.{f}",
+                        reason=f"required for {what}",
+                    )
 
     def attachment_groups(self, tol: float = 1e-12) -> tuple[np.ndarray, np.ndarray]:
         """Distinct platform attachment points and, per wire, the index of its point.

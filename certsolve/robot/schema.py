@@ -195,7 +195,16 @@ class RobotSpec(_Strict):
 
 
 class RobotFileError(ValueError):
-    """A robot description that cannot be used; the message names the offending field."""
+    """A robot description that cannot be used; the message names the offending field.
+
+    Where the caller knows it, ``field`` is that field's dotted path among the call's
+    arguments (``robot.wires.2.k``) and ``reason`` what is wrong with it (``required for
+    ...``), as :class:`~certsolve.inputs.InputError` says them; else both are ``""``."""
+
+    def __init__(self, message: str, *, field: str = "", reason: str = ""):
+        super().__init__(message)
+        self.field = field
+        self.reason = reason
 
 
 def _loc(loc: tuple) -> str:

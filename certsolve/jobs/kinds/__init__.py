@@ -22,8 +22,12 @@ design              ``certsolve.force.design.design``               ``robot``
 The quick calls (``QUICK_CALLS``: ``ik``, ``isotropic``, ``fk/track``) live in the module
 of their kind, with their cost estimate (:class:`.base.QuickCall`).
 
-The library modules are imported lazily inside the runners: a build without one of them
-still serves the others, and such jobs fail with "kind X is not available in this build".
+Each kind is an operation (:class:`.base.Kind`): its params model, the cheap check
+against the robot (:meth:`.base.Params.check_robot`) and ``run(params, input, ctx)``,
+which every front end calls (the worker, the quick calls, ``certsolve batch``, the
+command line).  ``run`` imports its library module inside the function (the command
+line's start-up stays cheap); a build without one of them still serves the others, and
+such jobs fail with "kind X is not available in this build".
 The hidden kind ``sleep`` (test settings only) sleeps, reports progress and can crash.
 
 Names are imported on first use (:mod:`certsolve.lazy`): the command line imports one
@@ -46,11 +50,10 @@ if TYPE_CHECKING:
         QuickCall,
         Request,
         RunContext,
-        library_function,
     )
     from .design import DesignJob, DesignParameter, DesignParams
     from .fk import FkJob, FkParams, TrackCall, TrackParams, call_track
-    from .ik import IkCall, IkJob, IkParams, call_ik
+    from .ik import IkCall, IkJob, IkParams, run_ik
     from .ik_sweep import IkSweepJob, IkSweepParams
     from .isotropic_map import (
         MAX_GRID_POINTS,
@@ -80,7 +83,6 @@ _WHERE = {
     "QuickCall": ".base",
     "Request": ".base",
     "RunContext": ".base",
-    "library_function": ".base",
     "DesignJob": ".design",
     "DesignParameter": ".design",
     "DesignParams": ".design",
@@ -94,7 +96,7 @@ _WHERE = {
     "IkCall": ".ik",
     "IkJob": ".ik",
     "IkParams": ".ik",
-    "call_ik": ".ik",
+    "run_ik": ".ik",
     "MAX_GRID_POINTS": ".isotropic_map",
     "MAX_GRID_SIDE": ".isotropic_map",
     "IsotropicCall": ".isotropic_map",
@@ -151,11 +153,10 @@ __all__ = [
     "TrackParams",
     "WorkspaceJob",
     "WorkspaceParams",
-    "call_ik",
     "call_isotropic",
     "call_track",
     "job_request_type",
-    "library_function",
+    "run_ik",
     "public_kinds",
     "request_adapter",
 ]

@@ -1,5 +1,12 @@
 """What every job kind is made of: strict request models, the one check of parameters
-against the robot, the run context, and the lookup of the library function.
+against the robot, the run context, and the operation (:class:`Kind`) every front end calls.
+
+An operation is a params model, a cheap ``check`` (:meth:`Params.check_robot`: the
+preconditions that need the robot, no heavy building) and ``run(params, input, ctx)``,
+which imports its library function with a normal import and calls it with exactly the
+options it takes (``tests/test_jobs_kinds.py`` binds every call to the function's
+signature: an option the function lacks is a test failure, never a silent drop).  The
+worker, the quick calls, ``certsolve batch`` and the command line all call ``run``.
 
 Requests are pydantic models with ``extra="forbid"`` and no NaN / Infinity; every bound
 the validation enforces on a single value (finite, range, length) is written as a
@@ -21,14 +28,13 @@ validation context ``{"memo": {}}`` (a batch of jobs on one robot checks it once
 from __future__ import annotations
 
 import copy
-import importlib
-import inspect
 import logging
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Annotated, Any
+from typing import Annotated, Any, ClassVar, Self, TypeVar
 
-from pydantic import Field, ValidationInfo, model_validator
+from pydantic import Field, ValidationError, ValidationInfo, model_validator
+from pydantic_core import InitErrorDetails
 
 from ...inputs import MAX_COORD, MAX_FORCE, Coord, StrictModel, check_count
 from ...robot.inputs import Wrench, as_pose, check_controls
@@ -53,14 +59,15 @@ __all__ = [
     "Required",
     "RunContext",
     "Wrench",
-    "call_supported",
     "angles_schema",
     "check_angles",
     "check_count",
     "check_pose",
     "check_wire_lengths",
     "check_wires",
-    "library_function",
+    "deferred",
+    "load_function",
+    "trusted",
     "orientation_arg",
     "require_elastic",
     "robot_model",
@@ -80,7 +87,7 @@ Orientation = Annotated[
 
 
 class KindUnavailable(Exception):
-    """The library function behind a kind is missing from this build."""
+    """The library function behind a kind is missing from this build (its import fails)."""
 
 
 class Model(StrictModel):
@@ -132,6 +139,10 @@ class Request(Model):
     """A job or quick call; when it has a ``robot``, its ``params`` are checked against it.
 
     The one validator of parameters against the robot (``params.u: expected 4 values ...``).
+    A request validated before (the worker reading the stored request the service
+    validated) is read with the context ``{"trusted": True}``: its fields are parsed, the
+    checks against the robot are not run again.  A :func:`deferred` model parses without
+    them; its caller runs them with :meth:`checked` (the HTTP service, off its event loop).
     Its JSON Schema is one variant per dof the kind takes, each with the robot schema of
     that dof and the params shapes for it (:meth:`Params.dof_shapes`).
     """
@@ -172,18 +183,62 @@ class Request(Model):
         target.update({"title": base.get("title", cls.__name__), "oneOf": variants})
         return ref
 
+    #: run the checks against the robot while validating (False: :func:`deferred`)
+    checks_robot: ClassVar[bool] = True
+
     @model_validator(mode="after")
     def _fits_robot(self, info: ValidationInfo):
+        if type(self).checks_robot and not trusted(info):
+            memo = info.context.get("memo") if isinstance(info.context, dict) else None
+            self.check(memo)
+        return self
+
+    def check(self, memo: dict | None = None) -> None:
+        """The checks against the robot (:meth:`Params.check_robot`); ``ValueError``
+        naming ``params.<field>`` or ``robot.<field>``."""
         robot = getattr(self, "robot", None)
         params = getattr(self, "params", None)
         if isinstance(robot, RobotSpec) and isinstance(params, Params):
-            memo = info.context.get("memo") if isinstance(info.context, dict) else None
             try:
                 params.check_robot(robot, memo)
             except ValueError as exc:
                 msg = str(exc)
                 raise ValueError(msg if msg.startswith("robot.") else f"params.{msg}") from None
-        return self
+
+    def checked(self, memo: dict | None = None) -> Self:
+        """This request, once :meth:`check` passed, as an instance of the checked model
+        (a :func:`deferred` one's parent: what pickles, for the quick-call processes);
+        a refusal is pydantic's ``ValidationError``, as if validating had raised it."""
+        try:
+            self.check(memo)
+        except ValueError as exc:
+            line = InitErrorDetails(type="value_error", loc=(), input=None, ctx={"error": exc})
+            raise ValidationError.from_exception_data(type(self).__name__, [line]) from None
+        if type(self).checks_robot:
+            return self
+        model: type[Self] = type(self).__mro__[1]  # deferred(model): its one base
+        values = {name: getattr(self, name) for name in type(self).model_fields}
+        return model.model_construct(self.model_fields_set, **values)
+
+
+R = TypeVar("R", bound=Request)
+
+
+def deferred(model: type[R]) -> type[R]:
+    """``model`` without the checks against the robot while validating: a subclass of the
+    same name and JSON Schema whose instances are checked by :meth:`Request.checked`."""
+    namespace = {
+        "__module__": model.__module__,
+        "__qualname__": model.__qualname__,
+        "__doc__": model.__doc__,
+        "checks_robot": False,
+    }
+    return type(model.__name__, (model,), namespace)
+
+
+def trusted(info: ValidationInfo) -> bool:
+    """The validation context says the data was validated before (``{"trusted": True}``)."""
+    return isinstance(info.context, dict) and bool(info.context.get("trusted"))
 
 
 class JobLimits(Model):
@@ -282,52 +337,29 @@ def angles_schema(dof: int, *, ranges: bool) -> dict | None:
 # -- running --------------------------------------------------------------------------------------
 @dataclass(kw_only=True)
 class RunContext:
-    """What a runner gets besides its request: limits, the progress callback and the
-    search's checkpoint (runners of searches on the driver pass it to the library call).
+    """What an operation's ``run`` gets besides its params and input: the limits, the
+    progress callback, the search's checkpoint, and what only the command line sets (an
+    executor, a cancel event).
 
     ``progress(p)`` takes the library's progress object (``boxes``, ``pending``,
     ``solutions``, ``undecided``, ``elapsed``) and returns False when the job must stop
-    (cancelled, or over its box limit); runners pass it to the library calls.
+    (cancelled, or over its box limit).  ``time_limit`` / ``max_boxes``: None is no limit.
     """
 
-    time_limit: float
-    max_boxes: int
-    progress: Callable[[Any], bool] = field(default=lambda p: True)
+    time_limit: float | None = None
+    max_boxes: int | None = None
+    progress: Callable[[Any], bool | None] | None = field(default=lambda p: True)
     #: where the search saves itself and resumes from (a
     #: :class:`~certsolve.solver.checkpoint.Checkpoint`; None: not saved)
     checkpoint: Any = None
-
-
-def library_function(kind: str, module: str, name: str) -> Callable:
-    """Import ``module.name`` or raise :class:`KindUnavailable`."""
-    try:
-        mod = importlib.import_module(module)
-        return getattr(mod, name)
-    except Exception as exc:  # ImportError, AttributeError, or a module that does not load
-        if not isinstance(exc, (ImportError, AttributeError)):
-            log.warning("importing %s failed: %s: %s", module, type(exc).__name__, exc)
-        raise KindUnavailable(f"kind {kind} is not available in this build") from None
-
-
-# passed when the library takes them, else enforced by the worker (progress callback, kill)
-_ADVISORY = frozenset({"timeout", "max_boxes", "progress", "checkpoint"})
-
-
-def call_supported(fn: Callable, *args: Any, **options: Any) -> Any:
-    """``fn(*args, **options)`` without the options its signature lacks (when unset)."""
-    try:
-        accepted = inspect.signature(fn).parameters
-    except (TypeError, ValueError):  # pragma: no cover - builtins
-        return fn(*args, **options)
-    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in accepted.values()):
-        return fn(*args, **options)
-    kwargs = {}
-    for name, value in options.items():
-        if name in accepted:
-            kwargs[name] = value
-        elif value is not None and name not in _ADVISORY:
-            raise ValueError(f"params.{name} is not supported by this build")
-    return fn(*args, **kwargs)
+    #: the search's executor (:func:`~certsolve.solver.executors.resolve_executor`'s
+    #: spec; None: this process, as a job's worker runs)
+    executor: Any = None
+    #: a cancel event the search polls (the command line's Ctrl-C); None: none
+    cancel: Any = None
+    #: re-prove the solutions in mpmath, for a search whose params have no ``verify``
+    #: (the command line's ``fk --verify``)
+    verify: bool = False
 
 
 def orientation_arg(value: Any) -> Any:
@@ -346,16 +378,20 @@ def robot_model(spec: RobotSpec):
 # -- the registry entry ---------------------------------------------------------------------------
 @dataclass(frozen=True, kw_only=True)
 class Kind:
-    """A job kind: its request model, params model, runner and library function.
+    """A job kind, as an operation: its request model, params model, ``run`` and the
+    library function ``run`` calls.
 
-    ``run(request, context)`` returns the library's result object (the worker bounds and
-    stores it, :mod:`..partial`)."""
+    ``run(params, input, ctx)`` calls the library (``input``: the request's robot spec,
+    its system text, or None) and returns the library's result object (the worker bounds
+    and stores it, :mod:`..partial`).  ``function()`` imports that library function (for
+    ``GET /v1/kinds`` and the quick-call processes, which load it before the first call,
+    and for the test that binds ``run``'s call to its signature)."""
 
     name: str
     model: type[Job]
     params: type[Params]
-    run: Callable[[Any, RunContext], Any]
-    library: tuple[str, str]
+    run: Callable[[Any, Any, RunContext], Any]
+    function: Callable[[], Callable]
     summary: str
     hidden: bool = False
 
@@ -372,19 +408,42 @@ class Kind:
     def has_max_boxes(self) -> bool:
         return "max_boxes" in self.params.model_fields
 
+    def input_of(self, request: Any) -> Any:
+        """What ``run`` takes as its input from a validated request."""
+        return getattr(request, self.input, None)
+
+    def load(self) -> Callable:
+        """The library function, or :class:`KindUnavailable` when this build lacks it."""
+        return load_function(self.name, self.function)
+
+
+def load_function(name: str, function: Callable[[], Callable]) -> Callable:
+    """``function()`` (an import), or :class:`KindUnavailable` naming ``name``."""
+    try:
+        return function()
+    except Exception as exc:  # ImportError, or a module that does not load
+        if not isinstance(exc, ImportError):
+            log.warning("loading %s failed: %s: %s", name, type(exc).__name__, exc)
+        raise KindUnavailable(f"kind {name} is not available in this build") from None
+
 
 @dataclass(frozen=True, kw_only=True)
 class QuickCall:
-    """A quick synchronous call (``POST /v1/<name>``): its request model, the function
-    answering it (request -> plain result), and ``cost(request)``, an estimate of its
+    """A quick synchronous call (``POST /v1/<name>``): its request model, the operation
+    answering it (``run(params, robot)`` -> the library's result; ``function()`` imports
+    its library function), and ``cost(request)``, an estimate of its
     seconds on one core from the request's size alone (wires, dof, method), by which
     :mod:`..quick` puts it in the light or the heavy lane, or refuses it (submit ``job``
     instead)."""
 
     name: str
     model: type[Request]
-    run: Callable[[Any], Any]
+    run: Callable[[Any, Any], Any]
+    function: Callable[[], Callable]  # loaded when a quick-call process starts
     cost: Callable[[Any], float]
-    library: tuple[str, str]  # module, function (loaded when a quick-call process starts)
     job: str  # the job that computes the same (for the refusal message)
     cost_field: str = "robot.wires"  # what the cost grows with (where a refusal points)
+
+    def load(self) -> Callable:
+        """The library function, or :class:`KindUnavailable`."""
+        return load_function(self.name, self.function)

@@ -31,7 +31,6 @@ from .base import (
     angles_schema,
     check_angles,
     check_count,
-    library_function,
     wrench_dim,
 )
 
@@ -117,11 +116,24 @@ class DesignJob(Job):
     params: DesignParams
 
 
-def run_design(job: DesignJob, ctx: RunContext) -> Any:
-    design = library_function("design", "certsolve.force.design", "design")
+def design() -> Any:
+    """The library function of kind ``design``."""
+    from ...force.design import design
+
+    return design
+
+
+def run_design(p: DesignParams, robot: RobotSpec | str | dict, ctx: RunContext) -> Any:
+    """The certified design of the spec ``p`` on ``robot`` (a robot spec, or what a spec
+    file's ``robot`` holds: a path or a robot object): :func:`~certsolve.force.design.
+    design`."""
+    from ...force.design import design
+
+    data = robot.model_dump(exclude_none=True) if isinstance(robot, RobotSpec) else robot
     return design(
-        job.params.spec(job.robot.model_dump(exclude_none=True)),
+        p.spec(data),
         progress=ctx.progress,
+        cancel=ctx.cancel,
         timeout=ctx.time_limit,
         max_boxes=ctx.max_boxes,
         checkpoint=ctx.checkpoint,
@@ -133,6 +145,6 @@ KIND = Kind(
     model=DesignJob,
     params=DesignParams,
     run=run_design,
-    library=("certsolve.force.design", "design"),
+    function=design,
     summary="certified design: parameter boxes proven to give min_force over a workspace",
 )

@@ -19,14 +19,12 @@ from .base import (
     POSE_LENGTH,
     Job,
     Kind,
-    KindUnavailable,
     Params,
     QuickCall,
     Request,
     RunContext,
     check_pose,
     check_wires,
-    library_function,
     require_elastic,
     robot_model,
 )
@@ -100,8 +98,8 @@ def _fk_geometry_problem(robot: RobotSpec, formulation: str) -> str | None:
     except ValueError as exc:
         return str(exc)
     try:
-        build = library_function("fk", "certsolve.kinematics.fk_systems", "build_formulation")
-    except KindUnavailable:
+        from ...kinematics.fk_systems import build_formulation as build
+    except ImportError:
         return None  # the job will say the kind is missing
     model = robot_model(robot)
     try:
@@ -123,11 +121,19 @@ class FkJob(Job):
     params: FkParams
 
 
-def run_fk(job: FkJob, ctx: RunContext) -> Any:
-    fk = library_function("fk", "certsolve.kinematics", "forward_kinematics")
-    p = job.params
+def forward_kinematics() -> Any:
+    """The library function of kind ``fk``."""
+    from ...kinematics.fk import forward_kinematics
+
+    return forward_kinematics
+
+
+def run_fk(p: FkParams, robot: RobotSpec, ctx: RunContext) -> Any:
+    """Every pose for ``p.u``: :func:`~certsolve.kinematics.forward_kinematics`."""
+    from ...kinematics.fk import forward_kinematics as fk
+
     result = fk(
-        robot_model(job.robot),
+        robot_model(robot),
         list(p.u),
         eps=p.eps,
         timeout=ctx.time_limit,
@@ -139,6 +145,9 @@ def run_fk(job: FkJob, ctx: RunContext) -> Any:
         seeded_only=p.seeded_only,
         stable_only=p.stable_only,
         progress=ctx.progress,
+        executor=ctx.executor,
+        cancel=ctx.cancel,
+        verify=ctx.verify,
         checkpoint=None if p.seed_planar else ctx.checkpoint,  # one search only
     )
     return result
@@ -149,7 +158,7 @@ KIND = Kind(
     model=FkJob,
     params=FkParams,
     run=run_fk,
-    library=("certsolve.kinematics", "forward_kinematics"),
+    function=forward_kinematics,
     summary="forward kinematics: every pose for the actuator values u",
 )
 
@@ -177,14 +186,21 @@ class TrackCall(Request):
     params: TrackParams
 
 
-def call_track(req: TrackCall) -> Any:
-    fn = library_function("fk/track", "certsolve.kinematics", "track")
+def track() -> Any:
+    """The library function of the quick call ``fk/track``."""
+    from ...kinematics.tracking import track
+
+    return track
+
+
+def call_track(p: TrackParams, spec: RobotSpec) -> Any:
+    """One tracking step near ``p.near_pose``: :func:`~certsolve.kinematics.track`."""
+    from ...kinematics.tracking import track
     from ...robot.geometry import Pose
 
-    robot = robot_model(req.robot)
-    p = req.params
+    robot = robot_model(spec)
     near = Pose.from_params(robot.dof, p.near_pose)
-    return fn(robot, list(p.u), near, half_width=p.half_width)
+    return track(robot, list(p.u), near, half_width=p.half_width)
 
 
 def track_cost(req: TrackCall) -> float:
@@ -197,7 +213,7 @@ QUICK = QuickCall(
     name="fk/track",
     model=TrackCall,
     run=call_track,
+    function=track,
     cost=track_cost,
-    library=("certsolve.kinematics", "track"),
     job='a job of kind "fk"',
 )

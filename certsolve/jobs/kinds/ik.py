@@ -18,12 +18,11 @@ from .base import (
     RunContext,
     check_pose,
     check_wire_lengths,
-    library_function,
     require_elastic,
     robot_model,
 )
 
-__all__ = ["KIND", "QUICK", "IkCall", "IkJob", "IkParams", "call_ik", "ik_cost", "run_ik"]
+__all__ = ["KIND", "QUICK", "IkCall", "IkJob", "IkParams", "ik_cost", "run_ik"]
 
 
 class IkParams(IkOptions, Params):  # the library's options as job params
@@ -54,13 +53,22 @@ class IkJob(Job):
     params: IkParams
 
 
-def run_ik(job: IkJob, ctx: RunContext) -> Any:
-    ik = library_function("ik", "certsolve.kinematics", "inverse_kinematics")
+def inverse_kinematics() -> Any:
+    """The library function of kind ``ik`` (and of ``POST /v1/ik``)."""
+    from ...kinematics.ik import inverse_kinematics
+
+    return inverse_kinematics
+
+
+def run_ik(p: IkParams, spec: RobotSpec, ctx: RunContext | None = None) -> Any:
+    """Actuator values and tensions at ``p.pose``:
+    :func:`~certsolve.kinematics.inverse_kinematics` (no limits: ``ctx`` is unused)."""
+    from ...kinematics.ik import inverse_kinematics
     from ...robot.geometry import Pose
 
-    robot = robot_model(job.robot)
-    pose = Pose.from_params(robot.dof, job.params.pose)
-    return ik(robot, pose, method=job.params.method)
+    robot = robot_model(spec)
+    pose = Pose.from_params(robot.dof, p.pose)
+    return inverse_kinematics(robot, pose, method=p.method)
 
 
 KIND = Kind(
@@ -68,7 +76,7 @@ KIND = Kind(
     model=IkJob,
     params=IkParams,
     run=run_ik,
-    library=("certsolve.kinematics", "inverse_kinematics"),
+    function=inverse_kinematics,
     summary="inverse kinematics: actuator values and tensions at a pose",
 )
 
@@ -80,11 +88,6 @@ class IkCall(Request):
     params: IkParams
 
 
-def call_ik(req: IkCall) -> Any:
-    job = IkJob(kind="ik", robot=req.robot, params=req.params)
-    return run_ik(job, RunContext(time_limit=0, max_boxes=0))
-
-
 def ik_cost(req: IkCall) -> float:
     """Seconds, roughly: Algorithm 1 searches until its time limit (10 s); the others take
     milliseconds."""
@@ -94,9 +97,9 @@ def ik_cost(req: IkCall) -> float:
 QUICK = QuickCall(
     name="ik",
     model=IkCall,
-    run=call_ik,
+    run=run_ik,
+    function=inverse_kinematics,
     cost=ik_cost,
-    library=("certsolve.kinematics", "inverse_kinematics"),
     job='a job of kind "ik"',
     cost_field="params.method",
 )

@@ -24,7 +24,6 @@ from .base import (
     check_count,
     check_pose,
     check_wire_lengths,
-    library_function,
     require_elastic,
     robot_model,
     wrench_dim,
@@ -87,13 +86,20 @@ class IkSweepJob(Job):
     params: IkSweepParams
 
 
-def run_ik_sweep(job: IkSweepJob, ctx: RunContext) -> Any:
-    sweep = library_function("ik-sweep", "certsolve.kinematics.ik_sweep", "ik_sweep")
+def ik_sweep() -> Any:
+    """The library function of kind ``ik-sweep``."""
+    from ...kinematics.ik_sweep import ik_sweep
+
+    return ik_sweep
+
+
+def run_ik_sweep(p: IkSweepParams, spec: RobotSpec, ctx: RunContext) -> Any:
+    """The sweep of ``u_joint``: :func:`~certsolve.kinematics.ik_sweep.ik_sweep`."""
+    from ...kinematics.ik_sweep import ik_sweep
     from ...robot.geometry import Pose
 
-    p = job.params
-    robot = robot_model(job.robot)
-    return sweep(
+    robot = robot_model(spec)
+    return ik_sweep(
         robot,
         Pose.from_params(robot.dof, p.pose),
         joint=p.joint,
@@ -112,6 +118,6 @@ KIND = Kind(
     model=IkSweepJob,
     params=IkSweepParams,
     run=run_ik_sweep,
-    library=("certsolve.kinematics.ik_sweep", "ik_sweep"),
+    function=ik_sweep,
     summary="IK sweep: the controls as one control sweeps a range, each point certified",
 )

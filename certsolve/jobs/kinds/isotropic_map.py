@@ -23,12 +23,10 @@ from .base import (
     RunContext,
     Wrench,
     angles_schema,
-    call_supported,
     check_angles,
     check_count,
     check_pose,
     check_wire_lengths,
-    library_function,
     orientation_arg,
     robot_model,
     wrench_dim,
@@ -94,17 +92,25 @@ class IsotropicMapJob(Job):
     params: IsotropicMapParams
 
 
-def run_isotropic_map(job: IsotropicMapJob, ctx: RunContext) -> Any:
-    imap = library_function("isotropic-map", "certsolve.force", "isotropic_map")
+def isotropic_map() -> Any:
+    """The library function of kind ``isotropic-map``."""
+    from ...force.maps import isotropic_map
+
+    return isotropic_map
+
+
+def run_isotropic_map(p: IsotropicMapParams, spec: RobotSpec, ctx: RunContext) -> Any:
+    """The force over the ``nx`` x ``ny`` grid: :func:`~certsolve.force.isotropic_map`
+    (no limits: the worker stops it through its time limit)."""
     import numpy as np
 
-    p = job.params
+    from ...force.maps import isotropic_map
+
     xmin, xmax, ymin, ymax = p.grid
     xs = np.linspace(xmin, xmax, p.nx)
     ys = np.linspace(ymin, ymax, p.ny)
-    robot = robot_model(job.robot)
     rotation = orientation_arg(p.orientation)
-    return call_supported(imap, robot, xs, ys, z=p.z, rotation=rotation, external=p.external)
+    return isotropic_map(robot_model(spec), xs, ys, z=p.z, rotation=rotation, external=p.external)
 
 
 KIND = Kind(
@@ -112,7 +118,7 @@ KIND = Kind(
     model=IsotropicMapJob,
     params=IsotropicMapParams,
     run=run_isotropic_map,
-    library=("certsolve.force", "isotropic_map"),
+    function=isotropic_map,
     summary="isotropic force over a grid of positions",
 )
 
@@ -136,14 +142,22 @@ class IsotropicCall(Request):
     params: PoseParams
 
 
-def call_isotropic(req: IsotropicCall) -> Any:
-    fn = library_function("isotropic", "certsolve.force", "isotropic_force")
+def isotropic_force() -> Any:
+    """The library function of the quick call ``isotropic``."""
+    from ...force.isotropic import isotropic_force
+
+    return isotropic_force
+
+
+def call_isotropic(p: PoseParams, spec: RobotSpec, *, ellipse: bool = False) -> Any:
+    """The isotropic force at ``p.pose``: :func:`~certsolve.force.isotropic_force`
+    (``ellipse``: also its force ellipse, for ``certsolve isotropic --at --ellipse``)."""
+    from ...force.isotropic import isotropic_force
     from ...robot.geometry import Pose
 
-    robot = robot_model(req.robot)
-    p = req.params
+    robot = robot_model(spec)
     pose = Pose.from_params(robot.dof, p.pose)
-    return call_supported(fn, robot, pose, algorithm=p.algorithm, external=p.external)
+    return isotropic_force(robot, pose, algorithm=p.algorithm, external=p.external, ellipse=ellipse)
 
 
 def isotropic_cost(req: IsotropicCall) -> float:
@@ -170,7 +184,7 @@ QUICK = QuickCall(
     name="isotropic",
     model=IsotropicCall,
     run=call_isotropic,
+    function=isotropic_force,
     cost=isotropic_cost,
-    library=("certsolve.force", "isotropic_force"),
     job='a job of kind "isotropic-map" (a grid of one point) for the force value',
 )

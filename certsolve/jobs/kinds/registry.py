@@ -9,7 +9,7 @@ from typing import Annotated, Any, Union
 from pydantic import Field, TypeAdapter
 
 from . import design, fk, ik, ik_sweep, isotropic_map, sleep, solve, workspace
-from .base import Kind, QuickCall
+from .base import Kind, QuickCall, deferred
 
 __all__ = ["KINDS", "QUICK_CALLS", "job_request_type", "public_kinds", "request_adapter"]
 
@@ -26,9 +26,14 @@ def public_kinds(include_hidden: bool = False) -> list[str]:
     return [k.name for k in KINDS.values() if include_hidden or not k.hidden]
 
 
-def job_request_type(include_hidden: bool = False) -> Any:
-    """The request type: a union of the kinds' models, discriminated by ``kind``."""
-    models = tuple(KINDS[name].model for name in public_kinds(include_hidden))
+def job_request_type(include_hidden: bool = False, *, check: bool = True) -> Any:
+    """The request type: a union of the kinds' models, discriminated by ``kind``.
+    ``check=False``: the :func:`.base.deferred` models (checked later by
+    :meth:`.base.Request.checked`)."""
+    models = tuple(
+        KINDS[name].model if check else deferred(KINDS[name].model)
+        for name in public_kinds(include_hidden)
+    )
     return Annotated[Union[models], Field(discriminator="kind")]  # noqa: UP007
 
 

@@ -42,8 +42,7 @@ class _SleepProgress:
     elapsed: float
 
 
-def run_sleep(job: SleepJob, ctx: RunContext) -> Any:
-    p = job.params
+def run_sleep(p: SleepParams, _input: None, ctx: RunContext) -> Any:
     ballast = bytearray(p.allocate_mb * 2**20) if p.allocate_mb else None
     if p.fail:
         raise ValueError(p.fail)
@@ -57,14 +56,14 @@ def run_sleep(job: SleepJob, ctx: RunContext) -> Any:
         if not p.cooperative:  # like a library call that never checks its limits
             time.sleep(min(0.02, max(0.0, p.seconds - elapsed)))
             continue
-        if elapsed >= ctx.time_limit:
+        if ctx.time_limit is not None and elapsed >= ctx.time_limit:
             stopped = "timeout"
             break
         ticks += 1
         if p.grow_mb:
             grown.append(bytearray(p.grow_mb * 2**20))
         progress = _SleepProgress(boxes=ticks, pending=0, solutions=0, undecided=0, elapsed=elapsed)
-        if ctx.progress(progress) is False:
+        if ctx.progress is not None and ctx.progress(progress) is False:
             stopped = "cancelled"
             break
         time.sleep(min(0.02, max(0.0, p.seconds - elapsed)))
@@ -77,7 +76,7 @@ KIND = Kind(
     model=SleepJob,
     params=SleepParams,
     run=run_sleep,
-    library=("time", "sleep"),
+    function=lambda: time.sleep,
     summary="test kind: sleep, report progress, optionally crash",
     hidden=True,
 )
@@ -95,8 +94,7 @@ class SleepCall(Request):
     params: SleepCallParams = Field(default_factory=SleepCallParams)
 
 
-def call_sleep(req: SleepCall) -> Any:
-    p = req.params
+def call_sleep(p: SleepCallParams, _input: None) -> Any:
     ballast = bytearray(p.allocate_mb * 2**20) if p.allocate_mb else None
     if p.fail:
         raise ValueError(p.fail)
@@ -109,8 +107,8 @@ QUICK = QuickCall(
     name="sleep",
     model=SleepCall,
     run=call_sleep,
+    function=lambda: time.sleep,
     cost=lambda req: req.params.estimate,
-    library=("time", "sleep"),
     job="a sleep job",
     cost_field="params.seconds",
 )

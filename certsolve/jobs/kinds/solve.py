@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import Field, field_validator
+from pydantic import Field, ValidationInfo, field_validator
 
 from ...solver.options import SolveOptions
-from .base import Job, Kind, Params, RunContext, library_function
+from .base import Job, Kind, Params, RunContext, trusted
 
 __all__ = ["KIND", "MAX_SYSTEM_CHARS", "MAX_VARIABLES", "SolveJob", "SolveParams", "run_solve"]
 
@@ -71,22 +71,30 @@ class SolveJob(Job):
 
     @field_validator("system")
     @classmethod
-    def _system(cls, v: str) -> str:
-        return check_system(v)
+    def _system(cls, v: str, info: ValidationInfo) -> str:
+        return v if trusted(info) else check_system(v)
 
 
-def run_solve(job: SolveJob, ctx: RunContext) -> Any:
-    solve = library_function("solve", "certsolve.solver", "solve")
+def solve() -> Any:
+    """The library function of kind ``solve``."""
+    from ...solver.branch_and_prune import solve
+
+    return solve
+
+
+def run_solve(p: SolveParams, system: Any, ctx: RunContext) -> Any:
+    """Every solution of ``system`` (Minibex text, or a parsed
+    :class:`~certsolve.expr.System`): :func:`~certsolve.solver.solve`."""
     from ...expr.minibex import parse_minibex
+    from ...solver.branch_and_prune import solve
 
-    p = job.params
-    system = parse_minibex(job.system)
     result = solve(
-        system,
+        parse_minibex(system) if isinstance(system, str) else system,
         eps=p.eps,
         timeout=ctx.time_limit,
         max_boxes=ctx.max_boxes,
-        workers=1,
+        executor=ctx.executor,
+        cancel=ctx.cancel,
         verify=p.verify,
         progress=ctx.progress,
         max_solutions=p.max_solutions,
@@ -103,6 +111,6 @@ KIND = Kind(
     model=SolveJob,
     params=SolveParams,
     run=run_solve,
-    library=("certsolve.solver", "solve"),
+    function=solve,
     summary="all solutions of a Minibex system, certified",
 )

@@ -18,10 +18,8 @@ from .base import (
     RunContext,
     Wrench,
     angles_schema,
-    call_supported,
     check_angles,
     check_count,
-    library_function,
     orientation_arg,
     robot_model,
 )
@@ -70,12 +68,19 @@ class WorkspaceJob(Job):
     params: WorkspaceParams
 
 
-def run_workspace(job: WorkspaceJob, ctx: RunContext) -> Any:
-    ws = library_function("workspace", "certsolve.force", "certified_workspace")
-    p = job.params
-    result = call_supported(
-        ws,
-        robot_model(job.robot),
+def certified_workspace() -> Any:
+    """The library function of kind ``workspace``."""
+    from ...force.certified import certified_workspace
+
+    return certified_workspace
+
+
+def run_workspace(p: WorkspaceParams, spec: RobotSpec, ctx: RunContext) -> Any:
+    """The certified paving: :func:`~certsolve.force.certified_workspace`."""
+    from ...force.certified import certified_workspace
+
+    result = certified_workspace(
+        robot_model(spec),
         p.min_force,
         [list(b) for b in p.box],
         p.eps,
@@ -85,6 +90,8 @@ def run_workspace(job: WorkspaceJob, ctx: RunContext) -> Any:
         orientation=orientation_arg(p.orientation),
         eps_angle=p.eps_angle,
         external=p.external,
+        executor=ctx.executor,
+        cancel=ctx.cancel,
         checkpoint=ctx.checkpoint,
     )
     return result
@@ -95,6 +102,6 @@ KIND = Kind(
     model=WorkspaceJob,
     params=WorkspaceParams,
     run=run_workspace,
-    library=("certsolve.force", "certified_workspace"),
+    function=certified_workspace,
     summary="certified workspace where the isotropic force is at least min_force",
 )
