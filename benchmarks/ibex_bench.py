@@ -28,7 +28,8 @@ undecided boxes (certsolve's undecided, ibexsolve's unknown), the boxes processe
 Runs are stored as they finish in ``--results DIR`` (one JSON file per solver, time limit
 and eps), so an interrupted run resumes where it stopped, the two solvers can run in two
 processes, and ``--markdown`` alone re-renders the table from what is stored
-(``--solvers none``).  The table is ``docs/ibex-benchs.md``; its summary counts the files
+(``--solvers none``; notes after the file's ``<!-- notes ... -->`` line are kept).  The table
+is ``docs/ibex-benchs.md``; its summary counts the files
 that parse, the files each solver completes, and the median of certsolve's time over
 ibexsolve's on the files both complete.
 
@@ -134,7 +135,9 @@ SOLVERS = ("certsolve", "ibexsolve")
 IBEX_STATUS = {0: "complete", 1: "complete", 2: "complete", 3: "timeout", 4: "max_boxes",
                5: "cancelled"}  # fmt: skip
 DUPLICATE_GAP = 1e-6
-WALL_STOP = "stopped at the wall limit"
+WALL_STOP = "stopped at the wall-time limit"
+#: what follows this line in the Markdown file is written by hand, and kept when regenerated
+NOTES = "<!-- notes: kept when the table is regenerated -->"
 
 
 @dataclass(kw_only=True)
@@ -423,6 +426,19 @@ def markdown(rows: list[Row], args: argparse.Namespace, command: str) -> str:
             + (": not on " + ", ".join(f"`{p}`" for p in differ) if differ else "")
             + "."
         )
+    neither = [p for p in summ["certsolve"].keys() & summ["ibexsolve"].keys()
+               if p not in done["certsolve"] | done["ibexsolve"]
+               and summ["certsolve"][p].status not in ("refused", "error")]  # fmt: skip
+    if neither:
+        found = {s: sum(summ[s][p].solutions for p in neither) for s in SOLVERS}
+        ahead = sum(
+            summ["certsolve"][p].solutions >= summ["ibexsolve"][p].solutions for p in neither
+        )
+        lines.append(
+            f"* On the {len(neither)} files neither completes, solutions found by the limit: "
+            f"certsolve {found['certsolve']}, ibexsolve {found['ibexsolve']}; certsolve found "
+            f"at least as many on {ahead} of them."
+        )
     lines += ["", "## Per file", "",
               "| file | n | m | certsolve | sols | undec | boxes | s | ibexsolve | sols | unknown "
               "| cells | s | ratio |",
@@ -482,11 +498,17 @@ def main() -> None:
         for s in SOLVERS:
             if only.search(rel) and stores[s].get(rel):
                 row.runs[s] = [Run(**r) for r in stores[s][rel]]
+    argv = sys.argv[1:]
+    if "--solvers" in argv:  # the table is of both solvers, whichever this call ran
+        k = argv.index("--solvers")
+        argv = argv[:k] + argv[k + 2 :]
     command = "python benchmarks/ibex_bench.py " + " ".join(
-        a if " " not in a else repr(a) for a in sys.argv[1:]
+        a if " " not in a and "|" not in a else repr(a) for a in argv
     )
     if args.markdown:
-        args.markdown.write_text(markdown(rows, args, command))
+        old = args.markdown.read_text() if args.markdown.exists() else ""
+        notes = old[old.index(NOTES) :] if NOTES in old else ""
+        args.markdown.write_text(markdown(rows, args, command) + ("\n" + notes if notes else ""))
     if args.csv:
         with args.csv.open("w", newline="") as f:
             w = csv.writer(f)
