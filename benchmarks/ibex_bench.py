@@ -368,7 +368,7 @@ def _cell(run: Run | None) -> list[str]:
     if run.status in ("refused", "error"):
         return [f"{run.status}: {run.message}"[:90].replace("|", "\\|"), "", "", "", ""]
     sols = str(run.solutions)
-    if run.raw_solutions != run.solutions:
+    if run.raw_solutions > run.solutions:  # de-duplicated
         sols += f" ({run.raw_solutions})"
     known = [
         str(k) if k >= 0 and run.message != WALL_STOP else "?" for k in (run.undecided, run.boxes)
@@ -396,7 +396,7 @@ def markdown(rows: list[Row], args: argparse.Namespace, command: str) -> str:
         "",
         f"    {command}",
         "",
-        f"Run {date} on the project's shared 2-core machine (other work running beside it),",
+        f"Written {date} from runs on the project's shared 2-core machine (other work beside),",
         f"wall-time limit {args.timeout:g} s per run for both solvers, `--eps` / `--eps-min`",
         f"{args.eps:g}; the time is the median wall time of the runs (their number in parentheses",
         "when more than one) of the whole subprocess, start-up included.  ibexsolve is 2.9.1",

@@ -91,3 +91,30 @@ def test_traced_solutions_reads_the_boxes_ibexsolve_prints():
     assert boxes[0].tolist() == [[4, 4], [-3.13232e-14, 2.50391e-14], [10, 10]]
     assert boxes[1, 1].tolist() == [-4.87294, -4.87294]
     assert bench.traced_solutions("running...\n").shape[0] == 0
+
+
+def test_the_table_summarises_parses_completions_ratios_and_disagreements():
+    Run, Row, Parsed = bench.Run, bench.Row, bench.Parsed
+    args = bench.argparse.Namespace(timeout=5.0, eps=1e-8, runs=3)
+    rows = [
+        Row(path="a.bch", parsed=Parsed(n=2, m=2), runs={
+            "certsolve": [Run(status="complete", wall=w, solutions=2) for w in (1.0, 3.0, 2.0)],
+            "ibexsolve": [Run(status="complete", wall=1.0, solutions=2)]}),
+        Row(path="b.bch", parsed=Parsed(n=2, m=2), runs={
+            "certsolve": [Run(status="complete", wall=4.0, solutions=1)],
+            "ibexsolve": [Run(status="complete", wall=1.0, solutions=2, raw_solutions=3)]}),
+        Row(path="c.bch", parsed=Parsed(n=3, m=2), runs={
+            "certsolve": [Run(status="refused", wall=0.5, message="the system is not square")],
+            "ibexsolve": [Run(status="timeout", wall=6.0, solutions=4, undecided=-1, boxes=-1,
+                              message=bench.WALL_STOP)]}),
+        Row(path="d.bch", parsed=Parsed(error="line 1, column 1: unexpected 'x'")),
+    ]  # fmt: skip
+    page = bench.markdown(rows, args, "python benchmarks/ibex_bench.py DIR")
+    assert "**3 of 4 files parse**: 2 square systems, and 1 with" in page
+    assert "**certsolve** completes 2 of the 3 files it ran" in page
+    assert "median **3.0x** (min 2.00x, max 4x)" in page  # a: 2 s (1, 3, 2) over 1; b: 4 over 1
+    assert "agree on 1 of them: not on `b.bch`" in page
+    assert "| `a.bch` | 2 | 2 | complete | 2 | 0 | 0 | 2.00 (3) |" in page
+    assert "| complete | 2 (3) |" in page  # b: ibexsolve's raw count beside the distinct one
+    assert "refused: the system is not square" in page and "| timeout | 4 | ? | ? |" in page
+    assert "parse error: line 1, column 1: unexpected 'x'" in page
