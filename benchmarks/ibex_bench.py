@@ -1,18 +1,44 @@
-"""IBEX's satisfaction benchmarks through ``certsolve solve``, as a user runs them.
+"""IBEX's solver benchmarks through ``certsolve solve`` and ``ibexsolve``, side by side.
 
-    python benchmarks/ibex_bench.py DIR [--timeout 30] [--runs 3] [--eps 1e-8] [--csv OUT]
-                                        [--cid-vars auto] [--workers N]
+    python benchmarks/ibex_bench.py DIR [--timeout 30] [--runs 3] [--eps 1e-8]
+        [--solvers certsolve,ibexsolve] [--ibexsolve PATH] [--workers N] [--cid-vars auto]
+        [--only REGEX] [--results DIR] [--markdown docs/ibex-benchs.md] [--csv OUT]
 
-For every ``.bch`` / ``.mbx`` file in ``DIR``: parse it (a parse error is reported, with its
-line and column), then run the whole ``certsolve solve FILE --timeout T --json`` subprocess
-``--runs`` times with the CLI's default settings (start-up included) and print the status,
-number of certified solutions, undecided boxes (total, and hulls listed), boxes processed and
-the median wall time.  Box counts are deterministic; times are medians on a possibly shared
-machine.
+Every ``.bch`` / ``.mbx`` file under ``DIR`` (recursively) is first read by the Minibex parser
+in this process: it parses (its variables ``n`` and equations ``m`` are noted; ``m != n`` is
+refused by certsolve's solver, not the parser), or it is refused with the line, column and
+construct named.  Then each solver runs it ``--runs`` times as a user
+runs it, one subprocess per run, start-up included:
 
-The files are IBEX's (ibex-team/ibex-lib, LGPL), not part of this repository.  The set used
-for issue 11 -- 30 files with 3 to 22 variables, polynomial and transcendental -- can be
-fetched from GitHub (``raw.githubusercontent.com/ibex-team/ibex-lib/<commit>/<path>``):
+* ``certsolve solve FILE --json --timeout T --eps EPS`` (the CLI's defaults otherwise);
+* ``ibexsolve --timeout=T --eps-min=EPS --trace -o TMP.cov FILE`` (IBEX 2.9.1; its default
+  ``--eps-min`` is 1e-3, so the comparison is made at certsolve's 1e-8).  Its ``--timeout``
+  counts CPU time, so it is also stopped at ``T + 1`` s of wall time, as certsolve's is wall
+  time.  Its solutions are read from the COV file it writes (or, when stopped, from what
+  ``--trace`` printed) and, for a square system, **de-duplicated**: ibexsolve can report one
+  solution twice, in adjacent boxes, so solution boxes that overlap or lie within 1e-6 of
+  each other (in every variable) are counted once.
+
+Reported per file and solver: the status (``complete``: nothing pending; ``timeout``;
+``refused``: the solver did not run it, with its message), the certified solutions, the
+undecided boxes (certsolve's undecided, ibexsolve's unknown), the boxes processed
+(ibexsolve's cells) and the median wall time of the runs.  Counts come from the last run
+(certsolve's are deterministic; ibexsolve's are with its fixed random seed).
+
+Runs are stored as they finish in ``--results DIR`` (one JSON file per solver, time limit
+and eps), so an interrupted run resumes where it stopped, the two solvers can run in two
+processes, and ``--markdown`` alone re-renders the table from what is stored
+(``--solvers none``; notes after the file's ``<!-- notes ... -->`` line are kept).  The table
+is ``docs/ibex-benchs.md``; its summary counts the files
+that parse, the files each solver completes, and the median of certsolve's time over
+ibexsolve's on the files both complete.
+
+The files are IBEX's (ibex-team/ibex-lib, LGPL), not part of this repository.  The whole
+directory of issue 30 is ``benchs/solver`` of IBEX 2.9 (264 files in ``polynom/`` with
+``yamamura/``, ``non-polynom/`` and ``others/``).  The set of issue 11 runs the same way
+(``--solvers certsolve``, or both) on a directory of these 30 files with 3 to 22 variables,
+polynomial and transcendental, fetched from GitHub
+(``raw.githubusercontent.com/ibex-team/ibex-lib/<commit>/<path>``):
 
 ``benchs/benchs-satisfaction/benchs-coprin/``::
 
@@ -85,93 +111,415 @@ from __future__ import annotations
 
 import argparse
 import csv
+import datetime
 import json
+import os
+import re
 import statistics
+import struct
 import subprocess
 import sys
+import tempfile
 import time
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from certsolve.expr.minibex import MinibexError, load_minibex
+import numpy as np
+
+from certsolve.expr.minibex import MinibexError, load_model
+
+HERE = Path(__file__).resolve().parent
+IBEXSOLVE = HERE.parent.parent / "shared" / "tools" / "ibexsolve"
+SOLVERS = ("certsolve", "ibexsolve")
+#: ibexsolve's search status (the last integer of its COV file) -> ours
+IBEX_STATUS = {0: "complete", 1: "complete", 2: "complete", 3: "timeout", 4: "max_boxes",
+               5: "cancelled"}  # fmt: skip
+DUPLICATE_GAP = 1e-6
+WALL_STOP = "stopped at the wall-time limit"
+#: what follows this line in the Markdown file is written by hand, and kept when regenerated
+NOTES = "<!-- notes: kept when the table is regenerated -->"
 
 
-def run_once(
-    path: Path, timeout: float, eps: float, cid_vars: str = "auto", workers: str | None = None
-) -> tuple[float, dict | None, str]:
-    cmd = [sys.executable, "-m", "certsolve", "solve", str(path), "--json",
-           "--timeout", str(timeout), "--eps", str(eps), "--cid-vars", cid_vars]  # fmt: skip
-    if workers is not None:
-        cmd += ["--workers", workers]
+@dataclass(kw_only=True)
+class Run:
+    """One run of one solver on one file.
+
+    ``status``: ``complete`` (nothing pending), a limit (``timeout``...), ``refused`` (the
+    solver did not take the file; ``message`` says why) or ``error`` (it failed).
+    ``solutions``: certified solutions (ibexsolve's de-duplicated; ``raw_solutions`` before);
+    ``undecided``: boxes neither proven nor refuted; ``boxes``: boxes processed (-1: not
+    known, for an ibexsolve stopped at the wall limit).
+    """
+
+    status: str
+    wall: float
+    solutions: int = 0
+    raw_solutions: int = 0
+    undecided: int = 0
+    boxes: int = 0
+    message: str = ""
+    runs: int = 1  # in a summary: the number of runs whose median ``wall`` is
+
+
+@dataclass(kw_only=True)
+class Parsed:
+    """What the Minibex parser made of a file: ``n`` variables and ``m`` equations, or the
+    refusal (``error``, with its line and column)."""
+
+    n: int = 0
+    m: int = 0
+    error: str = ""
+
+
+@dataclass(kw_only=True)
+class Row:
+    path: str
+    parsed: Parsed
+    runs: dict[str, list[Run]] = field(default_factory=dict)
+
+
+def parse_file(path: Path) -> Parsed:
+    try:
+        model = load_model(path)
+    except MinibexError as exc:
+        return Parsed(error=str(exc))
+    return Parsed(n=len(model.variables), m=len(model.equations))
+
+
+# -- certsolve --------------------------------------------------------------------------------
+def run_certsolve(path: Path, args: argparse.Namespace, square: bool = True) -> Run:
+    cmd = [sys.executable, "-m", "certsolve", "solve", str(path), "--json", "--timeout",
+           str(args.timeout), "--eps", str(args.eps), "--cid-vars", args.cid_vars]  # fmt: skip
+    if args.workers is not None:
+        cmd += ["--workers", args.workers]
     t0 = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout * 3 + 60)
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout * 3 + 60)
+    except subprocess.TimeoutExpired:
+        return Run(status="error", wall=time.perf_counter() - t0, message="killed: no answer")
     wall = time.perf_counter() - t0
     if proc.returncode != 0:
-        return wall, None, proc.stderr.strip().splitlines()[-1] if proc.stderr else "failed"
-    return wall, json.loads(proc.stdout), ""
+        lines = proc.stderr.strip().splitlines()
+        message = lines[-1] if lines else f"exit {proc.returncode}"
+        status = "refused" if message.startswith("error:") else "error"
+        return Run(status=status, wall=wall, message=message.removeprefix("error: "))
+    out = json.loads(proc.stdout)
+    return Run(status=out["status"], wall=wall, solutions=len(out["solutions"]),
+               raw_solutions=len(out["solutions"]), undecided=out["undecided_total"],
+               boxes=out["stats"]["boxes"])  # fmt: skip
+
+
+# -- ibexsolve --------------------------------------------------------------------------------
+def read_cov(data: bytes) -> tuple[np.ndarray, int, bool]:
+    """The solution boxes (shape (k, n, 2)), the search status of ibexsolve's COV file and
+    whether the system is square (as many equations as variables).
+
+    The layout is ``ibexsolve --format``'s (CovSolverData, format version 1 1 1 1 1 2).  With
+    no equation (inequalities only) the solutions are the inner boxes, as ibexsolve counts.
+    """
+    pos = 20  # the signature "IBEX COVERING FILE \0"
+
+    def ints(k: int) -> tuple[int, ...]:
+        nonlocal pos
+        out = struct.unpack_from(f"<{k}I", data, pos)
+        pos += 4 * k
+        return out
+
+    def reals(k: int) -> np.ndarray:
+        nonlocal pos
+        out = np.frombuffer(data, dtype="<f8", count=k, offset=pos)
+        pos += 8 * k
+        return out
+
+    (level,) = ints(1)
+    ints(2 * (level + 1))  # format identifier and version
+    (n,) = ints(1)
+    (total,) = ints(1)
+    boxes = reals(2 * n * total).reshape(total, n, 2)
+    (inner,) = ints(1)
+    inner_index = list(ints(inner))
+    ints(1)  # boundary type
+    (boundary,) = ints(1)
+    ints(boundary)
+    m, _inequalities, _btype = ints(3)
+    index: list[int] = []
+    if m > 0:
+        (count,) = ints(1)
+        for _ in range(count):
+            index.append(ints(1)[0])
+            if m < n:
+                ints(n - m)
+            reals(2 * n)
+    (nbb,) = ints(1)
+    for _ in range(nbb):
+        ints(1)
+        if 0 < m < n:
+            ints(n - m)
+    for _ in range(n):
+        pos = data.index(b"\0", pos) + 1
+    (status,) = ints(1)
+    return boxes[index if m > 0 else inner_index], status, m == n
+
+
+def distinct(boxes: np.ndarray, gap: float = DUPLICATE_GAP) -> int:
+    """The number of groups of boxes, two boxes being in one group when they overlap or lie
+    within ``gap`` of each other in every variable (linked transitively)."""
+    k = len(boxes)
+    group = np.arange(k)
+    lo, hi = boxes[:, :, 0], boxes[:, :, 1]
+    for i in range(k):  # one row of the k x k relation per turn, vectorized over j
+        near = np.all((lo[i] - hi <= gap) & (lo - hi[i] <= gap), axis=1)
+        roots = np.unique(group[near])
+        group[np.isin(group, roots)] = roots.min()
+    return len(np.unique(group))
+
+
+def _ibex_figure(text: str, label: str) -> int:
+    m = re.search(rf"number of {label}:\s*(\d+)", text)
+    return int(m.group(1)) if m else 0
+
+
+_TRACED = re.compile(r"^\s*\[solution\] \((.*)\)\s*$", re.M)
+
+
+def traced_solutions(text: str) -> np.ndarray:
+    """The solution boxes ``--trace`` printed (6 significant digits), shape (k, n, 2)."""
+    boxes = [[[float(b) for b in comp.strip(" []").split(",")] for comp in m.split(";")]
+             for m in _TRACED.findall(text)]  # fmt: skip
+    return np.array(boxes, dtype=float).reshape(len(boxes), -1, 2) if boxes else np.zeros((0, 0, 2))
+
+
+def run_ibexsolve(path: Path, args: argparse.Namespace, square: bool = True) -> Run:
+    """One ``ibexsolve`` run under the same *wall* limit as certsolve's ``--timeout``.
+
+    ibexsolve's own ``--timeout`` counts CPU time, which on a loaded machine is several times
+    less than the wall time (5 s of CPU took 25 s of wall here).  So it is also stopped at
+    ``timeout + 1`` s of wall time; it writes no COV file then, and its solutions are those
+    it printed with ``--trace`` as it found them (6 significant digits: enough to tell
+    solutions 1e-6 apart on the files here), its cells unknown.  Solutions are de-duplicated
+    only for a ``square`` system (elsewhere they pave a manifold: every box counts).
+    """
+    with tempfile.TemporaryDirectory() as tmp:
+        cov = Path(tmp) / "out.cov"
+        cmd = ["stdbuf", "-oL", str(args.ibexsolve), f"--timeout={args.timeout:g}",
+               f"--eps-min={args.eps:g}", "--trace", "-o", str(cov), str(path)]  # fmt: skip
+        t0 = time.perf_counter()
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                text=True, cwd=tmp)  # fmt: skip
+        try:
+            out, _ = proc.communicate(timeout=args.timeout + 1)
+            killed = False
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            out, _ = proc.communicate()
+            killed = True
+        wall = time.perf_counter() - t0
+        text = re.sub(r"\x1b\[[0-9;]*m", "", out)
+        if killed:
+            sols = traced_solutions(text)
+            count = distinct(sols) if square else len(sols)
+            return Run(status="timeout", wall=wall, solutions=count,
+                       raw_solutions=len(sols), undecided=-1, boxes=-1,
+                       message=WALL_STOP)  # fmt: skip
+        if proc.returncode != 0 or not cov.exists():
+            errors = [ln.strip() for ln in text.splitlines() if "rror" in ln or "xception" in ln]
+            message = errors[-1] if errors else f"exit {proc.returncode}"
+            return Run(status="refused" if "rror" in message else "error", wall=wall,
+                       message=message)  # fmt: skip
+        try:
+            sols, status, square = read_cov(cov.read_bytes())
+        except (struct.error, ValueError) as exc:
+            return Run(status="error", wall=wall, message=f"unreadable COV file: {exc}")
+    return Run(status=IBEX_STATUS.get(status, f"status {status}"), wall=wall,
+               solutions=distinct(sols) if square else len(sols), raw_solutions=len(sols),
+               undecided=_ibex_figure(text, "unknown boxes"),
+               boxes=_ibex_figure(text, "cells"))  # fmt: skip
+
+
+RUNNERS = {"certsolve": run_certsolve, "ibexsolve": run_ibexsolve}
+
+
+# -- the store of runs ------------------------------------------------------------------------
+def store_path(args: argparse.Namespace, solver: str) -> Path:
+    return args.results / f"{solver}-t{args.timeout:g}-eps{args.eps:g}.json"
+
+
+def load_store(path: Path) -> dict[str, list[dict]]:
+    return json.loads(path.read_text()) if path.exists() else {}
+
+
+def save_store(path: Path, store: dict[str, list[dict]]) -> None:
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(store, indent=1, sort_keys=True))
+    os.replace(tmp, path)
+
+
+def summary_of(runs: list[Run]) -> Run:
+    """The last run's counts with the median wall time of all."""
+    last = runs[-1]
+    wall = statistics.median(r.wall for r in runs)
+    return Run(**{**asdict(last), "wall": wall, "runs": len(runs)})
+
+
+# -- the table ----------------------------------------------------------------------------------
+def _cell(run: Run | None) -> list[str]:
+    if run is None:
+        return ["", "", "", "", ""]
+    if run.status in ("refused", "error"):
+        return [f"{run.status}: {run.message}"[:90].replace("|", "\\|"), "", "", "", ""]
+    sols = str(run.solutions)
+    if run.raw_solutions > run.solutions:  # de-duplicated
+        sols += f" ({run.raw_solutions})"
+    known = [
+        str(k) if k >= 0 and run.message != WALL_STOP else "?" for k in (run.undecided, run.boxes)
+    ]
+    wall = f"{run.wall:.2f}" if run.runs == 1 else f"{run.wall:.2f} ({run.runs})"
+    return [run.status, sols, *known, wall]
+
+
+def markdown(rows: list[Row], args: argparse.Namespace, command: str) -> str:
+    date = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    summ = {s: {r.path: summary_of(r.runs[s]) for r in rows if r.runs.get(s)} for s in SOLVERS}
+    parsed = sum(not r.parsed.error for r in rows)
+    square = sum(not r.parsed.error and r.parsed.n == r.parsed.m for r in rows)
+    done = {s: {p for p, run in summ[s].items() if run.status == "complete"} for s in SOLVERS}
+    both = sorted(done["certsolve"] & done["ibexsolve"])
+    ratios = [summ["certsolve"][p].wall / summ["ibexsolve"][p].wall for p in both]
+    ran = {s: len(summ[s]) for s in SOLVERS}
+    differ = [p for p in both if summ["certsolve"][p].solutions != summ["ibexsolve"][p].solutions]
+    only = {s: sorted(done[s] - done[t]) for s, t in (SOLVERS, SOLVERS[::-1])}
+    lines = [
+        "# IBEX's solver benchmarks: certsolve beside ibexsolve",
+        "",
+        "Generated by `benchmarks/ibex_bench.py` (do not edit by hand); its docstring says what",
+        "each column means.  Regenerate with:",
+        "",
+        f"    {command}",
+        "",
+        f"Written {date} from runs on the project's shared 2-core machine (other work beside),",
+        f"wall-time limit {args.timeout:g} s per run for both solvers, `--eps` / `--eps-min`",
+        f"{args.eps:g}; the time is the median wall time of the runs (their number in parentheses",
+        "when more than one) of the whole subprocess, start-up included.  ibexsolve is 2.9.1",
+        "(filib, no LP); its own `--timeout` counts CPU time, so it is also stopped at the wall",
+        "limit, and its solutions are then those it printed (`--trace`; its unknown boxes and",
+        "cells are then not known: `?`).  Its solutions are de-duplicated (boxes that overlap or",
+        "lie within 1e-6 counted once; its raw count in parentheses when it differs).",
+        "",
+        "## Summary",
+        "",
+        f"* **{parsed} of {len(rows)} files parse**: {square} square systems, and "
+        f"{parsed - square} with more or fewer equations than variables, which the parser reads "
+        "and certsolve's solver refuses (`the system is not square: m equations for n "
+        "variables`).",
+    ]
+    if len(rows) > parsed:
+        lines.append("* Refused by the parser: " + "; ".join(
+            f"`{r.path}` ({r.parsed.error})" for r in rows if r.parsed.error) + ".")  # fmt: skip
+    for s in SOLVERS:
+        lines.append(f"* **{s}** completes {len(done[s])} of the {ran[s]} files it ran"
+                     f" ({len(only[s])} that the other does not).")  # fmt: skip
+    if ratios:
+        lines.append(
+            f"* On the {len(both)} files both complete: certsolve's time over ibexsolve's has "
+            f"median **{statistics.median(ratios):.1f}x** (min {min(ratios):.2f}x, max "
+            f"{max(ratios):.0f}x); the solution counts agree on {len(both) - len(differ)} of them"
+            + (": not on " + ", ".join(f"`{p}`" for p in differ) if differ else "")
+            + "."
+        )
+    neither = [p for p in summ["certsolve"].keys() & summ["ibexsolve"].keys()
+               if p not in done["certsolve"] | done["ibexsolve"]
+               and summ["certsolve"][p].status not in ("refused", "error")]  # fmt: skip
+    if neither:
+        found = {s: sum(summ[s][p].solutions for p in neither) for s in SOLVERS}
+        ahead = sum(
+            summ["certsolve"][p].solutions >= summ["ibexsolve"][p].solutions for p in neither
+        )
+        lines.append(
+            f"* On the {len(neither)} files neither completes, solutions found by the limit: "
+            f"certsolve {found['certsolve']}, ibexsolve {found['ibexsolve']}; certsolve found "
+            f"at least as many on {ahead} of them."
+        )
+    lines += ["", "## Per file", "",
+              "| file | n | m | certsolve | sols | undec | boxes | s | ibexsolve | sols | unknown "
+              "| cells | s | ratio |",
+              "|---|--:|--:|---|--:|--:|--:|--:|---|--:|--:|--:|--:|--:|"]  # fmt: skip
+    for r in rows:
+        c, i = summ["certsolve"].get(r.path), summ["ibexsolve"].get(r.path)
+        ratio = f"{c.wall / i.wall:.1f}" if r.path in both and c and i else ""
+        nm = ["", ""] if r.parsed.error else [str(r.parsed.n), str(r.parsed.m)]
+        error = Run(status="error", wall=0, message=f"parse error: {r.parsed.error}")
+        cert = _cell(c if c or not r.parsed.error else error)
+        lines.append("| " + " | ".join([f"`{r.path}`", *nm, *cert, *_cell(i), ratio]) + " |")
+    return "\n".join(lines) + "\n"
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description="Run certsolve on a directory of Minibex files.")
+    ap = argparse.ArgumentParser(description="certsolve beside ibexsolve on Minibex files.")
     ap.add_argument("dir", type=Path)
     ap.add_argument("--timeout", type=float, default=30.0, help="per run (default 30 s)")
     ap.add_argument("--runs", type=int, default=3, help="runs per file (median wall time)")
-    ap.add_argument("--eps", type=float, default=1e-8, help="the CLI's default, 1e-8")
+    ap.add_argument("--eps", type=float, default=1e-8, help="certsolve --eps, ibexsolve --eps-min")
+    ap.add_argument("--solvers", default="certsolve,ibexsolve", help="which to run, or 'none'")
+    ap.add_argument("--ibexsolve", type=Path, default=IBEXSOLVE, help="the ibexsolve binary")
+    ap.add_argument("--only", default="", help="run only files whose path matches this regex")
+    ap.add_argument("--results", type=Path, default=Path("ibex-bench-results"),
+                    help="directory of stored runs (resumed)")  # fmt: skip
+    ap.add_argument("--markdown", type=Path, default=None, help="write the table here")
     ap.add_argument("--csv", type=Path, default=None, help="also write the table as CSV")
-    ap.add_argument(
-        "--cid-vars", default="auto", help="certsolve solve --cid-vars (auto, 1, K or all)"
-    )
-    ap.add_argument(
-        "--workers", default=None, help="certsolve solve --workers (default: the CLI's, auto)"
-    )
+    ap.add_argument("--cid-vars", default="auto", help="certsolve solve --cid-vars")
+    ap.add_argument("--workers", default=None, help="certsolve solve --workers (default auto)")
     args = ap.parse_args()
-    files = sorted(p for p in args.dir.iterdir() if p.suffix in (".bch", ".mbx"))
-    header = ["file", "n", "status", "solutions", "undecided", "hulls", "boxes", "wall_s"]
-    print(f"{'file':32s} {'n':>3s} {'status':10s} {'sols':>5s} {'undec':>7s} {'hulls':>5s} "
-          f"{'boxes':>9s} {'wall s':>7s}")  # fmt: skip
+    solvers = [s for s in args.solvers.split(",") if s and s != "none"]
+    for s in solvers:
+        if s not in RUNNERS:
+            ap.error(f"--solvers: unknown solver {s!r} (certsolve, ibexsolve or none)")
+    args.results.mkdir(parents=True, exist_ok=True)
+    only = re.compile(args.only)
+    files = sorted(p for p in args.dir.rglob("*") if p.suffix in (".bch", ".mbx"))
+    stores = {s: load_store(store_path(args, s)) for s in SOLVERS}
     rows = []
-    parsed = complete = 0
     for path in files:
-        try:
-            system = load_minibex(path)
-        except MinibexError as exc:
-            print(f"{path.name:32s} parse error: {exc}")
-            rows.append([path.name, "", "parse error", "", "", "", "", ""])
-            continue
-        parsed += 1
-        walls, result, error = [], None, ""
-        for _ in range(args.runs):
-            wall, result, error = run_once(
-                path, args.timeout, args.eps, args.cid_vars, args.workers
-            )
-            walls.append(wall)
-            if result is None:
-                break
-        wall = statistics.median(walls)
-        if result is None:
-            print(f"{path.name:32s} {system.n:3d} error: {error}")
-            rows.append([path.name, system.n, "error", "", "", "", "", f"{wall:.2f}"])
-            continue
-        complete += result["status"] == "complete"
-        row = [
-            path.name,
-            system.n,
-            result["status"],
-            len(result["solutions"]),
-            result["undecided_total"],
-            len(result["undecided"]),
-            result["stats"]["boxes"],
-            f"{wall:.2f}",
-        ]
+        rel = path.relative_to(args.dir).as_posix()
+        row = Row(path=rel, parsed=parse_file(path))
         rows.append(row)
-        print(f"{row[0]:32s} {row[1]:3d} {row[2]:10s} {row[3]:5d} {row[4]:7d} {row[5]:5d} "
-              f"{row[6]:9d} {row[7]:>7s}", flush=True)  # fmt: skip
-    print(f"\n{parsed} of {len(files)} parse; {complete} of {len(files)} complete within "
-          f"{args.timeout:g} s (median of {args.runs} run(s) per file)")  # fmt: skip
+        for s in solvers:
+            if not only.search(rel):
+                continue
+            runs = [Run(**r) for r in stores[s].get(rel, [])]
+            while len(runs) < args.runs:
+                square = row.parsed.n == row.parsed.m or bool(row.parsed.error)
+                runs.append(RUNNERS[s](path, args, square))
+                stores[s][rel] = [asdict(r) for r in runs]
+                save_store(store_path(args, s), stores[s])
+                if runs[-1].status in ("refused", "error"):
+                    break
+            c = _cell(summary_of(runs))
+            print(f"{rel:44s} {s:9s} {' '.join(c)}", flush=True)
+        for s in SOLVERS:
+            if only.search(rel) and stores[s].get(rel):
+                row.runs[s] = [Run(**r) for r in stores[s][rel]]
+    argv = sys.argv[1:]
+    if "--solvers" in argv:  # the table is of both solvers, whichever this call ran
+        k = argv.index("--solvers")
+        argv = argv[:k] + argv[k + 2 :]
+    command = "python benchmarks/ibex_bench.py " + " ".join(
+        a if " " not in a and "|" not in a else repr(a) for a in argv
+    )
+    if args.markdown:
+        old = args.markdown.read_text() if args.markdown.exists() else ""
+        notes = old[old.index(NOTES) :] if NOTES in old else ""
+        args.markdown.write_text(markdown(rows, args, command) + ("\n" + notes if notes else ""))
     if args.csv:
         with args.csv.open("w", newline="") as f:
             w = csv.writer(f)
-            w.writerow(header)
-            w.writerows(rows)
+            w.writerow(["file", "n", "m", "solver", "status", "solutions", "raw_solutions",
+                        "undecided", "boxes", "wall_s", "message"])  # fmt: skip
+            for r in rows:
+                for s, runs in r.runs.items():
+                    u = summary_of(runs)
+                    w.writerow([r.path, r.parsed.n, r.parsed.m, s, u.status, u.solutions,
+                                u.raw_solutions, u.undecided, u.boxes, f"{u.wall:.3f}",
+                                u.message])  # fmt: skip
 
 
 if __name__ == "__main__":

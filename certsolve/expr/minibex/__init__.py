@@ -27,6 +27,11 @@ Decimal literals and exact rational arithmetic on them are kept exact, and a con
 no binary float equals (``0.1``, ``1/3``) becomes its tightest enclosing interval, so the parsed
 system contains the written one.  Every error is a :class:`MinibexError` naming the line and
 column; :class:`Limits` bounds nesting and size (:data:`LIMITS`, shared by the CLI and HTTP).
+
+:func:`read_minibex` / :func:`load_model` read any text IBEX reads into a :class:`Model`, with
+as many equations as written (over- and under-determined systems, inequalities only);
+:meth:`Model.system` is the square :class:`System` the solver takes, and
+:func:`parse_minibex` / :func:`load_minibex` go through it.
 """
 
 from __future__ import annotations
@@ -35,13 +40,16 @@ from pathlib import Path
 
 from ..system import System
 from .lexer import LIMITS, Limits, MinibexError, Token
-from .parser import parse
+from .parser import Model, parse
 from .values import enclosure
 
 __all__ = [
     "MinibexError",
     "Limits",
     "LIMITS",
+    "Model",
+    "read_minibex",
+    "load_model",
     "parse_minibex",
     "load_minibex",
     "load_system",
@@ -49,22 +57,32 @@ __all__ = [
 ]
 
 
-def parse_minibex(text: str, name: str = "", limits: Limits = LIMITS) -> System:
-    """Parse Minibex text into a :class:`System` (raises :class:`MinibexError` only)."""
-    system = parse(text, limits)
-    system.name = name
-    return system
+def read_minibex(text: str, limits: Limits = LIMITS) -> Model:
+    """Read Minibex text into a :class:`Model`, square or not (raises :class:`MinibexError`
+    only).  :meth:`Model.system` is the square :class:`System` the solver takes."""
+    return parse(text, limits)
 
 
-def load_minibex(path, limits: Limits = LIMITS) -> System:
-    """Parse a Minibex file (named after its stem)."""
+def load_model(path, limits: Limits = LIMITS) -> Model:
+    """Read a Minibex file into a :class:`Model`, square or not."""
     p = Path(path)
     data = p.read_bytes()
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise MinibexError(f"{p.name} is not UTF-8 text (byte {exc.start})", 1, 1) from None
-    return parse_minibex(text, name=p.stem, limits=limits)
+    return parse(text, limits)
+
+
+def parse_minibex(text: str, name: str = "", limits: Limits = LIMITS) -> System:
+    """Parse Minibex text into a square :class:`System` (raises :class:`MinibexError` only:
+    a system with more or fewer equations than variables is refused, naming both counts)."""
+    return parse(text, limits).system(name)
+
+
+def load_minibex(path, limits: Limits = LIMITS) -> System:
+    """Parse a Minibex file into a square :class:`System` (named after its stem)."""
+    return load_model(path, limits).system(Path(path).stem)
 
 
 def load_system(source, name: str = "", limits: Limits = LIMITS) -> System:

@@ -25,7 +25,7 @@ from . import values as V
 from .lexer import LIMITS, Limits, MinibexError, Token, tokenize
 from .values import Infinity, Tensor, fail
 
-__all__ = ["parse"]
+__all__ = ["Model", "parse"]
 
 _SECTIONS = {"constants", "variables", "constraints", "end", "function", "minimize"}
 _RESERVED = _SECTIONS | {"return", "for", "in", "oo"}
@@ -34,6 +34,29 @@ _LITERAL = re.compile(r"(\d*)\.?(\d*)(?:[eE]([+-]?\d+))?$")
 _MAX_DIGITS = 400
 _MAX_FLOAT = Fraction(float(np.finfo(np.float64).max))
 _PI = N.const(float(np.pi), float(np.nextafter(np.pi, np.inf)))
+
+
+@dataclass(kw_only=True)
+class Model:
+    """A Minibex text as read: the scalar ``variables`` in order, their ``domain`` (shape
+    ``(n, 2)``), the ``equations`` ``f_i(x) = 0`` and the extra ``constraints``.
+
+    The number of equations ``m`` may differ from ``n`` (IBEX reads over- and under-determined
+    systems); :meth:`system` is the square :class:`System` the solver takes.
+    """
+
+    variables: list[str]
+    domain: np.ndarray
+    equations: list[Expr]
+    constraints: list[Constraint]
+    end: Token  # the end of the text: where errors about the whole system point
+
+    def system(self, name: str = "") -> System:
+        """The :class:`System`; a non-square one is refused, with ``m`` and ``n`` named."""
+        n, m = len(self.variables), len(self.equations)
+        if m != n:
+            fail(f"the system is not square: {m} equations for {n} variables", self.end)
+        return System(self.variables, self.domain, self.equations, self.constraints, name=name)
 
 
 @dataclass
@@ -128,7 +151,7 @@ class _Parser:
             self.next()
 
     # -- sections ---------------------------------------------------------------------------------
-    def parse(self) -> System:
+    def parse(self) -> Model:
         self.skip_semicolons()
         if self.at_kw("constants"):
             self.next()
@@ -149,11 +172,9 @@ class _Parser:
         self.constraints_block()
         if self.tok.kind != "EOF":
             fail(f"unexpected {self.found()} after 'end'", self.tok)
-        n, m = len(self.names), len(self.equations)
-        if m != n:
-            fail(f"the system is not square: {m} equations for {n} variables", self.tok)
-        return System(self.names, np.array(self.domain, dtype=float).reshape(n, 2),
-                      self.equations, self.constraints)  # fmt: skip
+        domain = np.array(self.domain, dtype=float).reshape(len(self.names), 2)
+        return Model(variables=self.names, domain=domain, equations=self.equations,
+                     constraints=self.constraints, end=self.tok)  # fmt: skip
 
     def declarations(self, decl) -> None:
         self.skip_semicolons()
@@ -573,8 +594,8 @@ class _Parser:
         fail(f"unknown name {name!r}", t)
 
 
-def parse(text: str, limits: Limits = LIMITS) -> System:
-    """Parse Minibex text into a :class:`~certsolve.expr.system.System`.
+def parse(text: str, limits: Limits = LIMITS) -> Model:
+    """Read Minibex text into a :class:`Model` (square or not).
 
     Raises :class:`~.lexer.MinibexError` (and nothing else) for any text.
     """
