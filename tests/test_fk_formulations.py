@@ -120,3 +120,26 @@ def test_adding_a_formulation_recipe(monkeypatch):
     ):
         assert np.allclose(a.platform_points, b.platform_points, atol=1e-6)
         assert a.stability.stability == b.stability.stability
+
+
+def test_the_fk_job_builds_the_robot_with_its_tension_limit_once(monkeypatch):
+    """``run_fk`` gives ``forward_kinematics`` the robot built with ``tau_max`` (one model,
+    one FK solver: the system is built once per job) and finds what the library finds."""
+    import json
+
+    from certsolve.jobs.kinds.base import RunContext
+    from certsolve.jobs.kinds.fk import FkJob, run_fk
+    from certsolve.kinematics import forward_kinematics
+
+    u = [0.8, 1.8, -2.5, -3.6]
+    builds = []  # every FK system written, from the job's validation to its result
+    real = fk_points._platform_system
+    monkeypatch.setattr(fk_points, "_platform_system", lambda *a: builds.append(a) or real(*a))
+    robot = json.loads((ROBOTS / "planar.json").read_text())
+    job = FkJob.model_validate({"kind": "fk", "robot": robot, "params": {"u": u, "tau_max": 60.0}})
+    res = run_fk(job, RunContext(time_limit=120.0, max_boxes=10**6))
+    assert len(builds) == 1
+    assert float(builds[0][0].tau_max.max()) == 60.0
+    lib = forward_kinematics(Robot.load(ROBOTS / "planar.json"), u, tau_max=60.0)
+    assert res.status == lib.status == "complete"
+    assert res.stats.boxes == lib.stats.boxes and len(res.solutions) == 2

@@ -119,14 +119,20 @@ def snap_rows(L: np.ndarray, robot: Robot) -> np.ndarray:
 def choose_points(points: np.ndarray, k: int) -> list[int]:
     """The ``k`` points spanning the largest simplex (best conditioned affine frame).
 
-    The squared volumes (Gram determinants of the edges) are compared exactly: a
-    symmetric platform has equal simplices, and a float determinant would pick among them
-    by rounding noise."""
+    The squared volumes (Gram determinants of the edges ``E``; ``det(E)²``, the same
+    number, when there are as many edges as dimensions) are compared exactly: a symmetric
+    platform has equal simplices, and a float determinant would pick among them by rounding
+    noise."""
     best, best_vol = None, Fraction(-1)
     for combo in itertools.combinations(range(points.shape[0]), k):
         P = points[list(combo)]
         E = exact(P[1:] - P[0]) if k > 1 else []
-        vol = exact_det(_matmul(E, [list(c) for c in zip(*E)])) if E else Fraction(0)
+        if not E:
+            vol = Fraction(0)
+        elif len(E) == len(E[0]):
+            vol = exact_det(E) ** 2
+        else:
+            vol = exact_det(_matmul(E, [list(c) for c in zip(*E)]))
         if vol > best_vol:  # exact: of equal simplices (a symmetric platform) the first
             best, best_vol = list(combo), vol
     if best is None or best_vol <= 1e-12:
