@@ -177,6 +177,9 @@ class FKSolver:
         #: search for stable equilibria only: boxes proven to hold none are dropped, after
         #: HC4 and the partial Newton, before the full Newton step
         self.stable_only = stable_only
+        # the parts' compiled programs (Newton's columns, the sub-systems', the energy's
+        # Hessian for stable_only) are made now, once, and shared by every search's copy
+        self.search(np.zeros(robot.m))
 
     @property
     def formulation(self) -> str:
