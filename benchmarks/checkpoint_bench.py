@@ -95,8 +95,7 @@ def main() -> None:
     snapshot_costs("katsura-6", k6, args.boxes, args.runs)
     robot = with_tau_max(Robot.load(ROOT / "examples/robots/marionet-t.json"), 10.0)
     fk = FKSolver(robot)
-    fk._prepare(np.zeros(7))
-    snapshot_costs("T-16 FK", fk.solver, args.boxes, args.runs)
+    snapshot_costs("T-16 FK", fk.search(np.zeros(7)).solver, args.boxes, args.runs)
     overhead(args.runs)
 
 

@@ -38,8 +38,7 @@ def t16_60():
     robot = with_tau_max(Robot.load("examples/robots/marionet-t.json"), 60.0)
     fk = FKSolver(robot)
     u = np.full(7, 2.0)
-    fk._prepare(u)  # u as the system's parameters
-    return fk.solver.on_domain(fk.search_box(u))
+    return fk.search(u).solver  # u as the parameters, on its search box
 
 
 def katsura7():

@@ -49,9 +49,9 @@ def _t16():
 
     robot = with_tau_max(Robot.load(str(ROOT / "examples" / "robots" / "marionet-t.json")), 60.0)
     fk = FKSolver(robot)
-    fk._prepare(np.full(robot.m, 2.0))
-    dom = np.asarray(fk.csys.system.domain, dtype=float)
-    return fk.csys, dom, find(fk.solver.contractor, IntervalNewton).groups
+    solver = fk.search(np.full(robot.m, 2.0)).solver  # u = 2 as the system's parameters
+    dom = np.asarray(solver.csys.system.domain, dtype=float)
+    return solver.csys, dom, find(solver.contractor, IntervalNewton).groups
 
 
 SYSTEMS = {"katsura-6": lambda: _minibex("katsura-6"), "eco-7": lambda: _minibex("eco-7")}

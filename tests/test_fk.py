@@ -315,16 +315,24 @@ def test_cli_fk_json_and_errors():
 
 
 def test_solve_searches_the_box_for_u_and_leaves_the_system_alone():
-    """The search domain depends on ``u`` (eq. 7); it is passed to the search, and the
-    compiled system's own domain (shared by every solve) stays as built."""
+    """The search domain depends on ``u`` (eq. 7); it is passed to the search, and so are
+    the parameter values: the compiled system's own domain and parameters (shared by every
+    solve) stay as built."""
     robot = with_tau_max(load("planar"), 60.0)
     u = np.array([0.8, 1.8, -2.5, -3.6])
     fk = FKSolver(robot)
     built = fk.csys.system.domain.copy()
+    params = dict(fk.csys.system.parameters), fk.csys.param_lo.copy(), fk.csys.param_hi.copy()
     box = fk.search_box(u)
     assert not np.array_equal(box, built)  # otherwise this test proves nothing
+    search = fk.search(u)
+    assert search.solver.csys.param_lo.tolist() == u.tolist()
+    assert np.array_equal(search.solver.domain, box)
     res = fk.solve(u)
     assert np.array_equal(fk.csys.system.domain, built)
+    assert fk.csys.system.parameters == params[0]
+    assert np.array_equal(fk.csys.param_lo, params[1])
+    assert np.array_equal(fk.csys.param_hi, params[2])
     assert res.status == "complete" and len(res.solutions) == 2
     for s in res.solutions:
         lo, hi = np.array(s.box).T

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from certsolve.kinematics import fk_systems
+from certsolve.kinematics import fk_geometry, fk_systems
 from certsolve.robot import Robot
 
 REF = Path(__file__).resolve().parent / "reference"
@@ -69,19 +69,19 @@ def test_inexact_affine_coefficients_are_rounded_to_nearest():
     everywhere), and the fit still reproduces the point."""
     Q = np.array([[0.0, 0.0], [3.0, 0.0], [0.0, 3.0]])
     X = np.array([[1.0, 1.0], [0.1, 2.0]])
-    coef = fk_systems._affine_coordinates(Q, X)
+    coef = fk_geometry.affine_coordinates(Q, X)
     assert coef[0].tolist() == [float(Fraction(1, 3)), float(Fraction(1, 3)), float(Fraction(1, 3))]
     exact = [Fraction(1) - Fraction(0.1) / 3 - Fraction(2.0) / 3, Fraction(0.1) / 3, Fraction(2, 3)]
     assert coef[1].tolist() == [float(q) for q in exact]
     np.testing.assert_allclose(coef @ Q, X, rtol=0, atol=1e-15)
     with pytest.raises(ValueError, match="affine combination"):
-        fk_systems._affine_coordinates(Q[:2], X)
+        fk_geometry.affine_coordinates(Q[:2], X)
 
 
 def test_equal_simplices_choose_the_first():
     """Every three corners of a rectangle span the same triangle: the first is chosen
     (the volumes are compared exactly, not as rounded determinants)."""
     corners = np.array([[-10.0, -5.0, 0.0], [10.0, -5.0, 0.0], [10.0, 5.0, 0.0], [-10.0, 5.0, 0.0]])
-    assert fk_systems._choose_points(corners, 3) == [0, 1, 2]
-    assert fk_systems._choose_points(corners[::-1], 3) == [0, 1, 2]
-    assert fk_systems._choose_points(np.vstack([corners, [[0.0, 0.0, 30.0]]]), 4) == [0, 1, 2, 4]
+    assert fk_geometry.choose_points(corners, 3) == [0, 1, 2]
+    assert fk_geometry.choose_points(corners[::-1], 3) == [0, 1, 2]
+    assert fk_geometry.choose_points(np.vstack([corners, [[0.0, 0.0, 30.0]]]), 4) == [0, 1, 2, 4]

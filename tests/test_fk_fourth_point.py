@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from test_fk import ik_u, load, local_boxes, matching
 
+import certsolve.kinematics.fk_points as fk_points
 import certsolve.kinematics.fk_systems as fk_systems
 from certsolve.expr.compiled import CompiledSystem
 from certsolve.kinematics import FKSolver
@@ -23,7 +24,7 @@ FORMULATIONS = ["auto", "general-19"]
 
 def _fourth_point_rows(form):
     """Indices of the fourth-point constraints among the system's constraints."""
-    n_extra = len(fk_systems._fourth_point_constraints(form.Q, *([[0.0] * 3] * 3)))
+    n_extra = len(fk_points.fourth_point_constraints(form.Q, *([[0.0] * 3] * 3)))
     cons = form.system.constraints
     # they are appended right after the two signed-volume constraints
     first = next(i for i, c in enumerate(cons) if c.redundant and c.lo == c.hi) + 2
@@ -59,7 +60,7 @@ def test_search_finds_the_same_poses_without_them(name, monkeypatch):
     found = []
     for on in (True, False):
         if not on:
-            monkeypatch.setattr(fk_systems, "_fourth_point_constraints", lambda *a: [])
+            monkeypatch.setattr(fk_points, "fourth_point_constraints", lambda *a: [])
         fk = FKSolver(robot, name)
         res = fk.solve(u, boxes=local_boxes(fk, robot, pose, 1.0, u), timeout=120)
         assert res.status == "complete"
@@ -68,20 +69,23 @@ def test_search_finds_the_same_poses_without_them(name, monkeypatch):
     assert found[0].shape == found[1].shape and np.allclose(found[0], found[1], atol=1e-7)
 
 
-def test_e4_is_auxiliary_and_splitting_it_finds_the_same_poses():
+def test_e4_is_auxiliary_and_splitting_it_finds_the_same_poses(monkeypatch):
     robot = load("marionet")
     fk = FKSolver(robot, "auto")
     names = fk.form.system.variables
     e4 = [names.index(v) for v in ("ex4", "ey4", "ez4")]
-    assert fk.form.info["determined"] == e4
-    assert not fk.solver.bisect_mask[e4].any() and fk.solver.bisect_mask[:9].all()
+    assert list(fk.form.determined) == e4
+    mask = fk.form.bisect_mask()
+    assert not mask[e4].any() and mask[:9].all()
     pose = Pose.from_params(6, (108, 60, 104, 5, 3, -4))
     u = ik_u(robot, pose)
     found = []
     for split_e4 in (False, True):
         fk = FKSolver(robot, "auto")
-        if split_e4:
-            fk.solver.bisect_mask[e4] = True
+        if split_e4:  # the mask only (the bisector still treats E_4 as determined)
+            split = fk.form.bisect_mask()
+            split[e4] = True
+            monkeypatch.setattr(fk.form, "bisect_mask", lambda split=split: split)
         res = fk.solve(u, boxes=local_boxes(fk, robot, pose, 2.0, u), timeout=120)
         assert res.status == "complete" and not res.undecided
         assert len(matching(res, robot, pose)) == 1

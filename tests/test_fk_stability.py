@@ -17,6 +17,7 @@ import pytest
 
 from certsolve.kinematics import inverse_kinematics
 from certsolve.kinematics.fk import FKSolver, forward_kinematics, with_tau_max
+from certsolve.kinematics.fk_pose import PoseFormulation
 from certsolve.kinematics.fk_systems import build_formulation
 from certsolve.kinematics.stability import (
     EnergyHessian,
@@ -129,7 +130,7 @@ def test_general19_pose_of_the_robot_is_stable():
 def _pose_box(form, position, R, u, half: float):
     """A box of ``form``'s variables around the pose (points and lengths ± ``half``)."""
     robot = form.robot
-    if form.kind == "pose":
+    if isinstance(form, PoseFormulation):
         yaw = np.arctan2(R[1, 0], R[0, 0])
         pitch = -np.arcsin(R[2, 0])
         roll = np.arctan2(R[2, 1], R[2, 2])

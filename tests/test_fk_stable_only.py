@@ -75,8 +75,8 @@ def test_contractor_drops_boxes_around_unstable_poses_only():
     u = _u(robot, [90.0, 60.0, 0.0])
     fk = FKSolver(with_tau_max(robot, 60.0))
     res = fk.solve(u)
-    rho = [j for j, v in enumerate(fk.form.system.variables) if v.startswith("rho")]
-    prune = StableOnly(fk.hessian, fk.csys, fk.robot, rho)
+    csys = fk.search(u).solver.csys  # the compiled system with u as its parameters
+    prune = StableOnly(fk.hessian, csys, fk.robot, fk.form.rho_columns())
     by = {s.stability.stability: s for s in res.solutions}
     assert set(by) == {Stability.STABLE, Stability.UNSTABLE}
     for kind, dropped in ((Stability.STABLE, False), (Stability.UNSTABLE, True)):
@@ -90,8 +90,9 @@ def test_contractor_drops_boxes_around_unstable_poses_only():
 
 def test_fingerprint_tells_stable_only_apart():
     robot = Robot.load(ROBOTS / "planar.json")
-    a = FKSolver(robot).solver.fingerprint()
-    b = FKSolver(robot, stable_only=True).solver.fingerprint()
+    u = np.zeros(robot.m)
+    a = FKSolver(robot).search(u).solver.fingerprint()
+    b = FKSolver(robot, stable_only=True).search(u).solver.fingerprint()
     assert a != b
 
 

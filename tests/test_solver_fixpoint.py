@@ -16,7 +16,7 @@ import pytest
 from certsolve.expr import System, var
 from certsolve.expr.minibex import load_minibex
 from certsolve.kinematics import FKSolver, with_tau_max
-from certsolve.kinematics.fk_solver import ALPHA_MAX, ALPHA_MAX_GENERAL
+from certsolve.kinematics.fk_points import ALPHA_MAX, ALPHA_MAX_GENERAL
 from certsolve.robot import Robot
 from certsolve.solver import Solver
 
@@ -61,9 +61,7 @@ def test_same_roots_with_and_without_the_mask(mask):
 def test_frame_bisector_splits_the_position_only_when_much_wider(name, tau, alpha):
     robot = with_tau_max(Robot.load(f"examples/robots/{name}.json"), tau)
     fk = FKSolver(robot)
-    fk.search_box(np.zeros(robot.m))
-    fk._prepare(np.zeros(robot.m))
-    assert fk.solver.bisector.alpha == pytest.approx(alpha)
+    assert fk.search(np.zeros(robot.m)).solver.bisector.alpha == pytest.approx(alpha)
 
 
 def test_variables_narrower_than_eps_do_not_count_as_progress():

@@ -13,6 +13,7 @@ Everything in it is plain data (arrays, lists), so it pickles to worker processe
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -80,6 +81,15 @@ class CompiledSystem:
         self.system.parameters = {
             n: (float(a), float(b)) for n, a, b in zip(self.param_names, lo, hi)
         }
+
+    def with_parameters(self, values) -> CompiledSystem:
+        """This system with other parameter values (:meth:`set_parameters`), as a new object:
+        the graph, the programs and the compiled column programs are shared, and neither this
+        compiled system nor its :class:`System` changes."""
+        out = copy.copy(self)
+        out.system = copy.copy(self.system)
+        out.set_parameters(values)
+        return out
 
     # -- interval evaluation --------------------------------------------------------------
     def eval_f(self, lo, hi):

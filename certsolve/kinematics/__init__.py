@@ -5,8 +5,10 @@
   interval search :mod:`.ik_search`: first certified solution), Algorithm 2
   (:mod:`.ik_alg2`: fixed wire, Newton, Krawczyk certificate, bounds in :mod:`.ik_enclose`);
   results in :mod:`.ik_result`, input checks in :mod:`.ik_inputs`
-* :mod:`.fk_systems` -- the forward-kinematics equation systems (10/13/16/19 equations,
-  pose parameters), built from a robot file
+* :mod:`.fk_systems` -- the table of forward-kinematics formulations (10/13/16/19
+  equations, the platform frame, pose parameters): what each owns in
+  :mod:`.fk_formulation`, the physics in :mod:`.fk_equations`, the coordinates in
+  :mod:`.fk_points` and :mod:`.fk_pose`, the platform's affine frame in :mod:`.fk_geometry`
 * :mod:`.fk`         -- all-solutions forward kinematics (:func:`forward_kinematics`)
 * :mod:`.seeding`    -- planar seeding of the almost-planar case
 * :mod:`.tracking`   -- real-time certified tracking near a known pose

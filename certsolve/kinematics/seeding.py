@@ -27,6 +27,7 @@ from ..robot.model import Robot
 from ..solver import Limits, SearchStatus, resolve_executor, run_search
 from ..solver.certify import box_difference
 from ..solver.search import SearchRun
+from .fk_points import PlatformFormulation
 from .fk_solver import FKResult, FKSolver
 
 __all__ = ["planar_counterpart", "seeded_forward_kinematics"]
@@ -104,12 +105,13 @@ def seeded_forward_kinematics(
     t_planar = time.perf_counter() - t0
 
     fk = FKSolver(robot, formulation, eps=eps, stable_only=stable_only)
-    if fk.form.kind not in ("points", "frame") or fk.form.n_points != 3:
+    form = fk.form
+    if not isinstance(form, PlatformFormulation) or form.n_points != 3:
         raise ValueError("planar seeding needs a 3-point formulation (almost-planar-13)")
-    u, dom, ok = fk._prepare(u)
-    if not ok:  # nothing to search: the plain solver says so
+    search = fk.search(u)
+    if not search.ok:  # nothing to search: the plain solver says so
         return fk.solve(u)
-    step = fk.solver.on_domain(dom)  # the search box for u (the system's stays as built)
+    u, dom, step = search.u, search.domain, search.solver  # the solver for u, on its box
     k, d = 3, 3
     z_plane = float(robot.A[0, 2])
     seeds_lo, seeds_hi = [], []
@@ -118,14 +120,14 @@ def seeded_forward_kinematics(
         R = np.eye(3)
         R[:2, :2] = rotation_2d(th)
         p = np.r_[sol.position, z_plane]
-        c = fk.form.coordinates_of(p + fk.form.Q @ R.T)
+        c = form.coordinates_of(p + form.Q @ R.T)
         lo, hi = dom[:, 0].copy(), dom[:, 1].copy()
         lo[: k * d] = np.maximum(lo[: k * d], c - radius)
         hi[: k * d] = np.minimum(hi[: k * d], c + radius)
         if np.all(lo <= hi):
             seeds_lo.append(lo)
             seeds_hi.append(hi)
-    n = fk.csys.n
+    n = step.csys.n
     rest = _subtract(dom[:, 0], dom[:, 1], seeds_lo, seeds_hi)
     rest_lo = np.array([a for a, _ in rest]).reshape(-1, n)
     rest_hi = np.array([b for _, b in rest]).reshape(-1, n)
@@ -162,7 +164,9 @@ def seeded_forward_kinematics(
         )
     else:  # not searched: pending
         run.state.stack.push(rest_lo, rest_hi)
-        status = SearchStatus.CANCELLED if run.status == SearchStatus.COMPLETE else run.status
+        status: SearchStatus = (
+            SearchStatus.CANCELLED if run.status == SearchStatus.COMPLETE else run.status
+        )
         if not len(run.state.stack):
             status = SearchStatus.COMPLETE
         run = SearchRun(status=status, state=run.state, stats=run.stats)
@@ -170,7 +174,7 @@ def seeded_forward_kinematics(
     if verify:
         from ..solver.verify import verify_solutions  # mpmath: imported when asked
 
-        verify_solutions(fk.csys, res.solutions)
+        verify_solutions(step.csys, res.solutions)
     sols = fk.decode_all(res.solutions, u)
     seeding = {
         "planar_solutions": len(res2.solutions),

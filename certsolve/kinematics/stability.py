@@ -63,11 +63,12 @@ from enum import StrEnum
 
 import numpy as np
 
-from ..expr import Expr, Graph, Program, const, cos, esum, param, sin, sqr, var
+from ..expr import Expr, Graph, Program, esum, param, sqr, var
 from ..interval import arith
 from ..interval.linalg import gamma, mr_from_bounds, mr_matmul
 from ..interval.rounding import down, up
-from .fk_systems import FKFormulation
+from .fk_equations import cross
+from .fk_formulation import FKFormulation
 
 __all__ = [
     "Stability",
@@ -115,89 +116,15 @@ def _finite_or_none(x: float) -> float | None:
 # -- the energy in the chart at a pose ---------------------------------------------------------
 
 
-def _cross(a, b):
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-
-
 def _turn(r: list[Expr], w: list[Expr]) -> list[Expr]:
     """``exp([ω]×) r - r`` to second order (3-D), or the same for the plane rotation by
     ``θ = w[0]``."""
     if len(r) == 3:
-        wr = _cross(w, r)
-        wwr = _cross(w, wr)
+        wr = cross(w, r)
+        wwr = cross(w, wr)
         return [wr[c] + 0.5 * wwr[c] for c in range(3)]
     th = w[0]
     return [-th * r[1] - 0.5 * sqr(th) * r[0], th * r[0] - 0.5 * sqr(th) * r[1]]
-
-
-def _levers(form: FKFormulation) -> tuple[list[Expr], list[list[Expr]]]:
-    """``G`` and ``r_i = B_i - G`` as expressions of the formulation's variables.
-
-    Point formulations: ``G = P_1 + Σ_{j>=2} lG_j E_j`` and ``B_i - G = Σ_{j>=2} (l_ij -
-    lG_j) E_j`` with the edge vectors ``E_j`` (variables of the frame formulation, ``P_j -
-    P_1`` of the paper's).  The pose formulation: ``G = p + R c`` and ``r_i = R (b_i - c)``
-    with ``R`` from the Z-Y-X angles.  The differences of coefficients are outward-rounded
-    interval constants: the enclosures cover the exact ``B_i - G``.
-    """
-    robot = form.robot
-    d = robot.dim
-    axes = "xyz"[:d]
-    if form.kind == "pose":
-        R = _rotation(d)
-        G = [var(a) + g for a, g in zip(axes, _apply(R, robot.com, robot.com), strict=True)]
-        return G, [_apply(R, *_difference(robot.B[i], robot.com)) for i in range(robot.m)]
-    k = form.n_points
-    P1 = [var(f"{a}1") for a in axes]
-    if form.kind == "frame":
-        E = [[var(f"e{a}{j + 1}") for a in axes] for j in range(1, k)]
-    else:
-        E = [[var(f"{a}{j + 1}") - P1[c] for c, a in enumerate(axes)] for j in range(1, k)]
-    assert form.L is not None and form.lG is not None
-
-    def rel(lo, hi) -> list[Expr]:
-        nz = [j for j in range(1, k) if lo[j] != 0.0 or hi[j] != 0.0]
-        if not nz:
-            return [const(0.0)] * d
-        return [esum(_coef(lo[j], hi[j]) * E[j - 1][c] for j in nz) for c in range(d)]
-
-    G = [P1[c] + g for c, g in enumerate(rel(form.lG, form.lG))]
-    return G, [rel(*_difference(form.L[i], form.lG)) for i in range(robot.m)]
-
-
-def _difference(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds of ``a - b``: one float where the difference is surely exact (``a == b``, or
-    one of them 0), else rounded outward."""
-    d = a - b
-    exact = (a == b) | (a == 0.0) | (b == 0.0)
-    return np.where(exact, d, down(d)), np.where(exact, d, up(d))
-
-
-def _coef(lo: float, hi: float) -> Expr:
-    return const(float(lo)) if lo == hi else const(float(lo), float(hi))
-
-
-def _rotation(d: int) -> list[list[Expr]]:
-    """``R`` of the pose formulation's angles (``yaw, pitch, roll``, Z-Y-X; or ``theta``)."""
-    if d == 2:
-        t = var("theta")
-        return [[cos(t), -sin(t)], [sin(t), cos(t)]]
-    cz, sz = cos(var("yaw")), sin(var("yaw"))
-    cy, sy = cos(var("pitch")), sin(var("pitch"))
-    cx, sx = cos(var("roll")), sin(var("roll"))
-    return [
-        [cz * cy, cz * sy * sx - sz * cx, cz * sy * cx + sz * sx],
-        [sz * cy, sz * sy * sx + cz * cx, sz * sy * cx - cz * sx],
-        [-sy, cy * sx, cy * cx],
-    ]
-
-
-def _apply(R: list[list[Expr]], lo: np.ndarray, hi: np.ndarray) -> list[Expr]:
-    """``R b`` for ``b`` in the box ``[lo, hi]`` (a point when ``lo == hi``)."""
-    d = len(R)
-    nz = [c for c in range(d) if lo[c] != 0.0 or hi[c] != 0.0]
-    if not nz:
-        return [const(0.0)] * d
-    return [esum(_coef(lo[c], hi[c]) * R[r][c] for c in nz) for r in range(d)]
 
 
 def _energy(form: FKFormulation, dp: list[Expr], dw: list[Expr]) -> Expr:
@@ -205,7 +132,7 @@ def _energy(form: FKFormulation, dp: list[Expr], dw: list[Expr]) -> Expr:
     its constant and gravity's linear term."""
     robot = form.robot
     d = robot.dim
-    G, r = _levers(form)
+    G, r = form.levers()
     terms: list[Expr] = []
     for i in range(robot.m):
         rho = var(f"rho{i + 1}")

@@ -33,8 +33,9 @@ from ..robot.geometry import Pose
 from ..robot.inputs import TrackOptions, as_pose, check_controls
 from ..robot.model import Robot
 from ..solver.newton import KrawczykPoint
+from .fk_geometry import papers_system
+from .fk_points import PointsFormulation
 from .fk_solver import FKPose, FKSolver
-from .fk_systems import choose_formulation
 from .stability import StabilityVerdict
 
 __all__ = ["Tracker", "TrackResult", "track"]
@@ -78,10 +79,12 @@ class Tracker:
         # ms), four times a step's own cost; :func:`track` and the CLI turn it on
         self.stability = stability
         if formulation == "auto":  # the paper's point system: cheapest per-box code
-            formulation = choose_formulation(robot)
+            formulation = papers_system(robot)
         self.fk = FKSolver(robot, formulation)
-        if self.fk.form.kind != "points":
+        if not isinstance(self.fk.form, PointsFormulation):
             raise ValueError("tracking uses one of the paper's point formulations")
+        #: the formulation (the paper's chosen points: ``Q``, ``L``, ``n_points``)
+        self.form: PointsFormulation = self.fk.form
         self.robot = robot
         self.csys = self.fk.csys
         self.max_iterations = max_iterations
@@ -92,7 +95,7 @@ class Tracker:
 
     def initial_point(self, pose: Pose | FKPose) -> np.ndarray:
         """The system's variables at a pose: chosen points and wire lengths."""
-        f = self.fk.form
+        f = self.form
         P = pose.position + f.Q @ pose.rotation.T
         x = P.ravel()
         if self._is_rho.any():
@@ -105,7 +108,7 @@ class Tracker:
         """Generated code for ``|A_i - B_i|`` as functions of the chosen points."""
         from ..expr import var
 
-        f, r = self.fk.form, self.robot
+        f, r = self.form, self.robot
         d, k = r.dim, f.n_points
         axes = "xyz"[:d]
         P = [[var(f"{a}{j + 1}") for a in axes] for j in range(k)]
@@ -246,9 +249,7 @@ def track(robot: Robot, u, near, half_width: float = 0.1, formulation: str = "au
     :class:`~certsolve.inputs.InputError` naming it.
     """
     pose = near if isinstance(near, FKPose) else as_pose(robot.dof, near, "near_pose")
-    opts = checked(
-        TrackOptions,
-        {"u": u, "near_pose": Pose.params(pose, robot.dof), "half_width": half_width},
-    )
+    values = Pose(pose.position, pose.rotation).params(robot.dof)
+    opts = checked(TrackOptions, {"u": u, "near_pose": values, "half_width": half_width})
     check_controls(robot.m, opts.u)
     return Tracker(robot, formulation, stability=True).step(opts.u, pose, opts.half_width)

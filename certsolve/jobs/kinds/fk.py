@@ -5,8 +5,9 @@
 At submission the robot must admit the FK equations: a rigid platform (dof 3 or 6), the
 elastic model on every wire, and attachment points from which the formulation's affine
 frame can be built (3 or 4 distinct, affinely independent points).  The judge is the
-library's own formulation builder (:func:`~certsolve.kinematics.fk_systems.build_formulation`,
-a few milliseconds), so what is accepted can be run.
+library's own geometric precondition of the formulation
+(:func:`~certsolve.kinematics.fk_systems.check_formulation`: the checks its builder makes,
+without building an expression), so what is accepted can be run.
 """
 
 from __future__ import annotations
@@ -98,17 +99,17 @@ def _fk_geometry_problem(robot: RobotSpec, formulation: str) -> str | None:
     except ValueError as exc:
         return str(exc)
     try:
-        from ...kinematics.fk_systems import build_formulation as build
+        from ...kinematics.fk_systems import check_formulation as check
     except ImportError:
         return None  # the job will say the kind is missing
     model = robot_model(robot)
     try:
-        build(model, formulation)
+        check(model, formulation)
     except ValueError as exc:
         if formulation in ("auto", "frame"):
             return f"robot.wires: {exc}"
         try:
-            build(model, "auto")
+            check(model, "auto")
         except ValueError as auto:
             return f"robot.wires: {auto}"
         return f"formulation: {exc}"
@@ -131,15 +132,15 @@ def forward_kinematics() -> Any:
 def run_fk(p: FkParams, robot: RobotSpec, ctx: RunContext) -> Any:
     """Every pose for ``p.u``: :func:`~certsolve.kinematics.forward_kinematics`."""
     from ...kinematics.fk import forward_kinematics as fk
+    from ...kinematics.fk_solver import with_tau_max
 
     result = fk(
-        robot_model(robot),
+        with_tau_max(robot, p.tau_max),  # the robot model, built once with its limit
         list(p.u),
         eps=p.eps,
         timeout=ctx.time_limit,
         max_boxes=ctx.max_boxes,
         max_solutions=p.max_solutions,
-        tau_max=p.tau_max,
         formulation=p.formulation,
         seed_planar=p.seed_planar,
         seeded_only=p.seeded_only,

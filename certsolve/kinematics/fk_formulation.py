@@ -1,0 +1,122 @@
+"""What every FK formulation owns: its system, its search box for ``u``, its decoding and its
+solver parts (the protocol :class:`FKFormulation`).
+
+A formulation is built once per robot (:mod:`.fk_systems` maps names to builders) and is
+read-only afterwards: :class:`.FKSolver` compiles ``system`` once and assembles a solver
+for each control vector ``u`` from the parts asked here, passing ``u`` as the values of
+the system's parameters ``u1..um`` (:meth:`FKFormulation.parameters_for`) and the search
+box of eq. (7) as the search's domain (:meth:`FKFormulation.search_domain`).
+
+The coordinate kinds are in :mod:`.fk_points` (the paper's points, the platform frame)
+and :mod:`.fk_pose` (position and Euler angles); the physics they share is
+:mod:`.fk_equations`.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ..expr import System
+from ..expr.node import Expr
+from ..robot.model import Robot
+from ..solver.bisectors import SmearSumRelative
+from .fk_equations import rho_domain
+
+__all__ = ["FKFormulation"]
+
+
+@dataclass(kw_only=True)
+class FKFormulation(ABC):
+    """A forward-kinematics system and everything the solver and the reader of its
+    solutions need to know about it.
+
+    ``name``: the name results report (``frame-T-16``, ``planar-10``, ``pose`` ...);
+    ``system``: the equations in the variables of this kind (the wire lengths ``ρ`` last),
+    the control entering as the parameters ``u1..um``, its domain the search box at
+    ``u = 0``; ``determined``: variables fixed by the others through equations, never
+    split.
+    """
+
+    #: the coordinate kind, as fingerprints and reports name it
+    kind: ClassVar[str]
+
+    name: str
+    robot: Robot
+    system: System
+    determined: tuple[int, ...] = ()
+
+    # -- the control u ------------------------------------------------------------------------
+    def parameters_for(self, u) -> dict[str, float]:
+        """The system's parameter values for control ``u``."""
+        u = np.asarray(u, dtype=float)
+        return {f"u{i + 1}": float(v) for i, v in enumerate(u)}
+
+    def search_domain(self, u) -> tuple[np.ndarray, bool]:
+        """The search box for control ``u`` and whether it is non-empty: the system's
+        domain with every ``ρ_i`` in the range the tension limits allow (eq. 7), intersected
+        with the distances from ``A_i`` to the robot's domain."""
+        robot = self.robot
+        lo, hi = rho_domain(robot, np.asarray(u, dtype=float), robot.domain)
+        dom = self.system.domain.copy()
+        if not any(v.startswith("rho") for v in self.system.variables):
+            return dom, bool(np.all(lo <= hi))
+        dom[-robot.m :, 0] = lo
+        dom[-robot.m :, 1] = np.maximum(hi, lo)  # an empty range: reported, not searched
+        return dom, bool(np.all(lo <= hi))
+
+    # -- reading a solution -------------------------------------------------------------------
+    @abstractmethod
+    def decode(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(position, rotation, platform_points)`` at a point ``x`` of the variables: the
+        platform frame's origin ``(d,)``, ``R`` ``(d, d)`` and every ``B_i`` ``(m, d)``."""
+
+    @abstractmethod
+    def levers(self) -> tuple[list[Expr], list[list[Expr]]]:
+        """``G`` and ``r_i = B_i - G`` as expressions of the variables (enclosures of the
+        exact ones: inexact coefficients are outward-rounded interval constants); the
+        energy's Hessian (:mod:`.stability`) is written on them."""
+
+    # -- solver parts ---------------------------------------------------------------------------
+    def bisect_mask(self) -> np.ndarray:
+        """The variables a bisection may split: not the wire lengths (fixed by the pose
+        through the length equations), nor the :attr:`determined` ones."""
+        mask = np.array([not v.startswith("rho") for v in self.system.variables])
+        mask[list(self.determined)] = False
+        return mask
+
+    def bisector(self, domain: np.ndarray) -> Any:
+        """The bisector for a search of ``domain`` (a new one per search).  Smear: the FK
+        systems' figures (docs/fk-cost.md) were measured with it."""
+        return SmearSumRelative()
+
+    def subsystems(self) -> list[tuple[list[int], list[int]]]:
+        """Square sub-systems ``(equations, variables)`` contracted by partial Newton."""
+        return []
+
+    def newton_groups(self) -> list[np.ndarray]:
+        """Variable groups for Hansen's mixed Jacobian: edge vectors, reference point, wire
+        lengths.
+
+        Group ``k``'s columns are enclosed with the later groups at the box midpoint, so the
+        pose columns see each wire's weight ``w_i = τ_i / ρ_i`` at the midpoint length: the
+        tension, whose range over a box (~1.6 N per mm of length at 60 N) is the widest
+        factor of the equilibrium equations, becomes a point in 12 of the 19 columns.
+        Measured against the order wire lengths first (their ``A_i - B_i`` factor a point
+        instead): general-19 at 60 N u~S(2) 164,109 -> 156,910 boxes, u~S(3) 201,974 ->
+        190,602, random-general-0 3.21M -> 2.83M, at 10 N 130,749 -> 128,672; T-16 u=2 at
+        60 N 284,674 -> 271,875, almost-planar-13 39,406 -> 38,882, T-16 at 10 N 1,577 ->
+        1,692.
+        """
+        names = self.system.variables
+        rho = np.array([v.startswith("rho") for v in names])
+        edge = np.array([v.startswith("e") for v in names])
+        groups = [edge, ~rho & ~edge, rho]
+        return [g for g in groups if g.any()]
+
+    def rho_columns(self) -> list[int]:
+        """The columns of the wire lengths, in wire order."""
+        return [j for j, v in enumerate(self.system.variables) if v.startswith("rho")]
