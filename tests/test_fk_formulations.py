@@ -137,7 +137,7 @@ def test_the_fk_job_builds_the_robot_with_its_tension_limit_once(monkeypatch):
     monkeypatch.setattr(fk_points, "_platform_system", lambda *a: builds.append(a) or real(*a))
     robot = json.loads((ROBOTS / "planar.json").read_text())
     job = FkJob.model_validate({"kind": "fk", "robot": robot, "params": {"u": u, "tau_max": 60.0}})
-    res = run_fk(job, RunContext(time_limit=120.0, max_boxes=10**6))
+    res = run_fk(job.params, job.robot, RunContext(time_limit=120.0, max_boxes=10**6))
     assert len(builds) == 1
     assert float(builds[0][0].tau_max.max()) == 60.0
     lib = forward_kinematics(Robot.load(ROBOTS / "planar.json"), u, tau_max=60.0)
