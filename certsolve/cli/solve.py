@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import argparse
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from typing import Any
 
 from ..solver.summary import MAX_LISTED
 from .common import (
@@ -62,6 +63,12 @@ def register(sub) -> None:
     add_checkpoint_options(p)
     p.add_argument("--verify", action="store_true", help="re-prove solutions with mpmath")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument(
+        "--stream",
+        action="store_true",
+        help='print JSON lines: {"solution": ...} for each certified solution as it is '
+        'proven, then {"result": ...}, the whole answer',
+    )
     p.set_defaults(func=run)
 
 
@@ -81,7 +88,9 @@ def run(args: argparse.Namespace) -> int:
         max_pending=params.max_pending,
         cid_vars=params.solver_cid_vars(),
     )
-    show, stop = progress_reporter(not args.json)
+    show, stop = progress_reporter(not (args.json or args.stream))
+    if args.stream:
+        show = _streamer(show)
     saving = checkpointing(args, "solve")
     try:
         with saving as (checkpoint, cancel):
@@ -100,8 +109,35 @@ def run(args: argparse.Namespace) -> int:
         stop()
     deadline.mark(result)
     name = system.name or args.file
-    print_report(args.json, result.to_dict(), lambda data: format_result(name, data))
+    if args.stream:
+        _json_line({"result": result.to_dict()})
+    else:
+        print_report(args.json, result.to_dict(), lambda data: format_result(name, data))
     return saving.exit_code
+
+
+def _json_line(obj: object) -> None:
+    """One line of strict JSON on stdout, flushed (a reader sees it at once)."""
+    import json
+    import sys
+
+    from ..jobs.jsonutil import plain
+
+    sys.stdout.write(json.dumps(plain(obj), separators=(",", ":"), allow_nan=False) + "\n")
+    sys.stdout.flush()
+
+
+def _streamer(inner: Callable[[Any], None] | None) -> Callable[[Any], None]:
+    """A progress callback printing each solution of ``p.found`` as a JSON line
+    (:attr:`certsolve.solver.search.Progress.found`), then calling ``inner``."""
+
+    def stream(p: Any) -> None:
+        for solution in p.found:
+            _json_line({"solution": solution.to_dict()})
+        if inner is not None:
+            inner(p)
+
+    return stream
 
 
 def format_result(name: str, result: Mapping) -> str:

@@ -418,6 +418,18 @@ class Solver:
         if acid is not None and state.acid is not None:
             state.acid = copy.copy(acid)
 
+    def listed(self, state: SearchState, start: int) -> tuple[list[Solution], int]:
+        """The solutions recorded from position ``start`` of the solution set on (for
+        :attr:`.search.Progress.found`: streamed as they are proven), and the end."""
+        sols = state.solutions
+        end = len(sols)
+        new = [
+            Solution(sols.E_lo[i], sols.E_hi[i], sols.U_lo[i], sols.U_hi[i])
+            for i in range(start, end)
+            if sols.kind[i] == "ok"
+        ]
+        return new, end
+
     def process(self, lo: np.ndarray, hi: np.ndarray, state: SearchState) -> None:
         """One round on the boxes ``lo, hi``: prune by known solutions, contract (the
         pipeline), then report the boxes narrower than ``eps`` and bisect the others."""
@@ -440,8 +452,13 @@ class Solver:
         )
         self.contractor.apply(batch)
         batch.drop_empty()
-        if batch.size == 0:
-            return
+        if batch.size:
+            self._split(batch, state)
+        batch.flush()  # what the parts sent back goes on top: the next round takes it
+
+    def _split(self, batch: Batch, state: SearchState) -> None:
+        """Report the rows narrower than ``eps`` as undecided, push the halves of the
+        others."""
         var = batch.choice()
         small = var < 0
         for i in np.flatnonzero(small):
