@@ -8,6 +8,7 @@ from typing import Any
 
 from ..solver.summary import MAX_LISTED
 from .common import (
+    CliError,
     Deadline,
     add_checkpoint_options,
     add_executor_options,
@@ -25,7 +26,10 @@ def register(sub) -> None:
     p = sub.add_parser(
         "solve",
         description="Find every solution of a square system in its domain, each certified "
-        "unique (Krawczyk); report undecided and pending boxes (as hulls with box counts).",
+        "unique (Krawczyk); report undecided and pending boxes (as hulls with box counts). "
+        "More equations than variables: solutions of a square subsystem, the others "
+        "satisfied within their enclosure; fewer: a paving of the solution set "
+        "(docs/minibex.md).",
     )
     p.add_argument("file", help="Minibex file (Variables / Constraints / end)")
     p.add_argument("--eps", type=float, default=1e-8, help="width below which boxes stop")
@@ -76,33 +80,45 @@ def run(args: argparse.Namespace) -> int:
     from ..expr.minibex import load_minibex
     from ..jobs.kinds.solve import SolveParams
     from ..solver import Solver
+    from ..solver.nonsquare import ManifoldPaver
 
     params = validated(SolveParams, args)  # the solve job's own checks (eps, timeout, ...)
     executor = executor_from_args(args)
     deadline = Deadline(params.timeout, args.started)
     system = load_minibex(args.file)
-    solver = Solver.default(
-        system,
-        eps=params.eps,
-        max_undecided=params.max_undecided,
-        max_pending=params.max_pending,
-        cid_vars=params.solver_cid_vars(),
-    )
+    if len(system.equations) < system.n:
+        if params.verify:
+            raise CliError("--verify: an under-determined system has no unique solutions")
+        solver: Any = ManifoldPaver(
+            system,
+            eps=params.eps,
+            max_undecided=params.max_undecided,
+            max_pending=params.max_pending,
+        )
+    else:
+        solver = Solver.default(
+            system,
+            eps=params.eps,
+            max_undecided=params.max_undecided,
+            max_pending=params.max_pending,
+            cid_vars=params.solver_cid_vars(),
+        )
     show, stop = progress_reporter(not (args.json or args.stream))
     if args.stream:
         show = _streamer(show)
     saving = checkpointing(args, "solve")
     try:
         with saving as (checkpoint, cancel):
+            more = {} if isinstance(solver, ManifoldPaver) else {
+                "executor": executor, "verify": params.verify, "checkpoint": checkpoint
+            }  # fmt: skip
             result = solver.solve(
                 timeout=deadline.solver_timeout(),
                 max_boxes=params.max_boxes,
                 max_solutions=params.max_solutions,
-                executor=executor,
-                verify=params.verify,
                 progress=deadline.progress(show),
                 cancel=cancel,
-                checkpoint=checkpoint,
+                **more,
             )
             saving.status = str(result.status)
     finally:
@@ -162,6 +178,8 @@ def format_result(name: str, result: Mapping) -> str:
     width = max(len(v) for v in names)
     for k, s in enumerate(result["solutions"], 1):
         tag = s["certificate"] + (" (verified)" if s.get("verified") else "")
+        if s.get("parameters"):
+            tag += f": every value of {', '.join(s['parameters'])} in the box"
         lines.append(f"solution {k} [{tag}]")
         for v, (lo, hi) in zip(names, s["box"], strict=True):
             lines.append(f"  {v:<{width}} = {0.5 * lo + 0.5 * hi: .15g}   [{lo!r}, {hi!r}]")

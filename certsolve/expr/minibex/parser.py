@@ -149,9 +149,7 @@ class _Parser:
         self.constraints_block()
         if self.tok.kind != "EOF":
             fail(f"unexpected {self.found()} after 'end'", self.tok)
-        n, m = len(self.names), len(self.equations)
-        if m != n:
-            fail(f"the system is not square: {m} equations for {n} variables", self.tok)
+        n = len(self.names)  # m != n equations: the solver's non-square searches
         return System(self.names, np.array(self.domain, dtype=float).reshape(n, 2),
                       self.equations, self.constraints)  # fmt: skip
 
