@@ -12,7 +12,7 @@ from certsolve.expr.compiled import CompiledSystem
 from certsolve.expr.minibex import load_minibex
 from certsolve.expr.node import var
 from certsolve.expr.system import System
-from certsolve.solver import Solver
+from certsolve.solver import Solver, solve
 from certsolve.solver.bisectors import LargestFirst
 from certsolve.solver.certify import Certifier
 from certsolve.solver.pipeline import FixPoint
@@ -75,3 +75,21 @@ def test_cli_stream_prints_solutions_then_the_result():
     assert sorted(s["solution"]["box"] for s in sols) == sorted(
         s["box"] for s in result["solutions"]
     )
+
+
+def test_a_stopped_search_stores_the_solutions_found_so_far():
+    """A job's partial result (``jobs.partial.stored_result``) holds what was streamed."""
+    from certsolve.jobs.partial import stored_result
+
+    streamed: list = []
+    result = solve(
+        load_minibex(SYSTEMS / "katsura-5.mbx"),
+        max_boxes=2000,
+        batch_size=64,
+        progress=lambda p: streamed.extend(p.found),
+    )
+    assert result.status == "max_boxes" and result.pending_total > 0
+    assert 0 < len(result.solutions) < 16
+    data = stored_result(result, max_items=1000)
+    assert data["status"] == "max_boxes"
+    assert sorted(s["box"] for s in data["solutions"]) == sorted(s.box for s in streamed)
