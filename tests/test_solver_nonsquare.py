@@ -103,3 +103,10 @@ def test_cli_solves_nonsquare_files(name, certificate):
     data = json.loads(out.getvalue())
     assert data["status"] == "complete" and data["solutions"]
     assert {s["certificate"] for s in data["solutions"]} == {certificate}
+
+
+def test_a_system_without_equations_is_refused_naming_the_field():
+    text = "Variables\n  x in [0, 1];\n  y in [0, 1];\nConstraints\n  x + y <= 1;\nend\n"
+    with pytest.raises(InputError) as err:
+        solve(parse_minibex(text))
+    assert err.value.field == "system" and "no equations" in str(err.value)

@@ -615,6 +615,8 @@ def solve(
         },
     )
     if len(system.equations) < system.n:  # under-determined: pave the solution set
+        if not system.equations:
+            raise InputError("system", "no equations (inequalities alone are not solved)")
         if verify:
             raise InputError("verify", "an under-determined system has no unique solutions")
         paving = {k: options[k] for k in _PAVER_OPTIONS if k in options}

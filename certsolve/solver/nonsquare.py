@@ -157,7 +157,9 @@ class ManifoldPaver:
         max_pending: int = MAX_LISTED,
     ):
         m, n = len(system.equations), system.n
-        if not 0 < m < n:
+        if m == 0:
+            raise ValueError(f"no equations for {n} variables (inequalities alone are not solved)")
+        if not m < n:
             raise ValueError(f"not under-determined: {m} equations for {n} variables")
         if not eps > 0:
             raise ValueError("eps must be positive")
