@@ -96,8 +96,9 @@ class System:
 
     @property
     def square(self) -> bool:
-        """As many equations as variables.  A compiled system must be square; the solver
-        also takes over- and under-determined ones (``certsolve.solver.nonsquare``)."""
+        """As many equations as variables.  :class:`CompiledSystem` expects a square
+        system (it does not check); the solver also takes over- and under-determined ones
+        (``certsolve.solver.nonsquare``)."""
         return len(self.equations) == len(self.variables)
 
     @classmethod
