@@ -104,6 +104,8 @@ def test_an_empty_box_stays_empty_through_a_fixpoint():
     fix = FixPoint(Sequence(Log("a", log, [1.0]), Halve(root=0.25)))
     batch = _batch([0, 1, 2], _sqrt2(), stack=stack)
     fix.apply(batch)
+    assert len(stack) == 0  # what goes back waits for the end of the round
+    batch.flush()
     lo, _ = stack.snapshot()
     # every live box halved: both go back for another round, the empty one is gone
     assert sorted(lo[:, 0].tolist()) == [0.0, 2.0] and batch.size == 0
@@ -124,6 +126,7 @@ def test_a_fixpoint_sends_back_only_boxes_that_shrank_as_much_as_a_bisection():
 
     batch = _batch([0, 1], csys, stack=stack)
     FixPoint(Shrink()).apply(batch)
+    batch.flush()
     assert len(stack) == 1 and stack.snapshot()[0][0, 0] == 0.0
     assert batch.size == 1 and batch.lo[0, 0] == 1.0 and batch.hi[0, 0] == 1.75
     with pytest.raises(ValueError):

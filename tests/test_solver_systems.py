@@ -237,11 +237,6 @@ BAD = {
         4,
         "unknown name 'z'",
     ),
-    "not square": (
-        "Variables\n  x, y in [-1, 1];\nConstraints\n  x + y = 0;\nend\n",
-        None,
-        "not square: 1 equations for 2 variables",
-    ),
     "bad character": (
         "Variables\n  x in [-1, 1];\nConstraints\n  x @ 2 = 0;\nend\n",
         4,

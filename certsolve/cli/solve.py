@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import argparse
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from typing import Any
 
 from ..solver.summary import MAX_LISTED
 from .common import (
@@ -24,7 +25,10 @@ def register(sub) -> None:
     p = sub.add_parser(
         "solve",
         description="Find every solution of a square system in its domain, each certified "
-        "unique (Krawczyk); report undecided and pending boxes (as hulls with box counts).",
+        "unique (Krawczyk); report undecided and pending boxes (as hulls with box counts). "
+        "More equations than variables: solutions of a square subsystem, the others "
+        "satisfied within their enclosure; fewer: a paving of the solution set "
+        "(docs/minibex.md).",
     )
     p.add_argument("file", help="Minibex file (Variables / Constraints / end)")
     p.add_argument("--eps", type=float, default=1e-8, help="width below which boxes stop")
@@ -62,6 +66,12 @@ def register(sub) -> None:
     add_checkpoint_options(p)
     p.add_argument("--verify", action="store_true", help="re-prove solutions with mpmath")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument(
+        "--stream",
+        action="store_true",
+        help='print JSON lines: {"solution": ...} for each certified solution as it is '
+        'proven, then {"result": ...}, the whole answer',
+    )
     p.set_defaults(func=run)
 
 
@@ -74,7 +84,9 @@ def run(args: argparse.Namespace) -> int:
     executor = executor_from_args(args)
     deadline = Deadline(params.timeout, args.started)
     system = load_minibex(args.file)
-    show, stop = progress_reporter(not args.json)
+    show, stop = progress_reporter(not (args.json or args.stream))
+    if args.stream:
+        show = _streamer(show)
     saving = checkpointing(args, "solve")
     try:
         with saving as (checkpoint, cancel):
@@ -92,8 +104,35 @@ def run(args: argparse.Namespace) -> int:
         stop()
     deadline.mark(result)
     name = system.name or args.file
-    print_report(args.json, result.to_dict(), lambda data: format_result(name, data))
+    if args.stream:
+        _json_line({"result": result.to_dict()})
+    else:
+        print_report(args.json, result.to_dict(), lambda data: format_result(name, data))
     return saving.exit_code
+
+
+def _json_line(obj: object) -> None:
+    """One line of strict JSON on stdout, flushed (a reader sees it at once)."""
+    import json
+    import sys
+
+    from ..jobs.jsonutil import plain
+
+    sys.stdout.write(json.dumps(plain(obj), separators=(",", ":"), allow_nan=False) + "\n")
+    sys.stdout.flush()
+
+
+def _streamer(inner: Callable[[Any], None] | None) -> Callable[[Any], None]:
+    """A progress callback printing each solution of ``p.found`` as a JSON line
+    (:attr:`certsolve.solver.search.Progress.found`), then calling ``inner``."""
+
+    def stream(p: Any) -> None:
+        for solution in p.found:
+            _json_line({"solution": solution.to_dict()})
+        if inner is not None:
+            inner(p)
+
+    return stream
 
 
 def format_result(name: str, result: Mapping) -> str:
@@ -118,6 +157,8 @@ def format_result(name: str, result: Mapping) -> str:
     width = max(len(v) for v in names)
     for k, s in enumerate(result["solutions"], 1):
         tag = s["certificate"] + (" (verified)" if s.get("verified") else "")
+        if s.get("parameters"):
+            tag += f": every value of {', '.join(s['parameters'])} in the box"
         lines.append(f"solution {k} [{tag}]")
         for v, (lo, hi) in zip(names, s["box"], strict=True):
             lines.append(f"  {v:<{width}} = {0.5 * lo + 0.5 * hi: .15g}   [{lo!r}, {hi!r}]")

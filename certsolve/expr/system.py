@@ -1,4 +1,5 @@
-"""A square system of equations over a box: the problem handed to the solver.
+"""A system of equations over a box: the problem handed to the solver (square, or not:
+``certsolve.solver.nonsquare``).
 
 ``System(variables, domain, equations, constraints)`` means: find every ``x`` in the box
 ``domain`` with ``f_i(x) = 0`` for all equations (``-inf`` / ``inf`` bounds are allowed: a
@@ -43,7 +44,8 @@ class Constraint:
 
 @dataclass
 class System:
-    """``len(equations) == len(variables)`` equations ``f_i(x) = 0`` in the box ``domain``.
+    """Equations ``f_i(x) = 0`` in the box ``domain``: as many as variables (:attr:`square`),
+    or more or fewer (the solver's over- and under-determined searches).
 
     ``parameters`` give the values of :func:`~certsolve.expr.node.param` leaves; a compiled
     system can be re-used with new values (:meth:`CompiledSystem.set_parameters`).
@@ -69,10 +71,6 @@ class System:
             if not (lo <= hi and lo < np.inf and hi > -np.inf):
                 raise ValueError(f"domain of {name} must be a non-empty interval, got [{lo}, {hi}]")
         self.domain = dom
-        if len(self.equations) != n:
-            raise ValueError(
-                f"the system must be square: {len(self.equations)} equations, {n} variables"
-            )
         known = set(self.variables)
         params = {}
         for name, v in dict(self.parameters).items():
@@ -95,6 +93,13 @@ class System:
     @property
     def n(self) -> int:
         return len(self.variables)
+
+    @property
+    def square(self) -> bool:
+        """As many equations as variables.  :class:`CompiledSystem` expects a square
+        system (it does not check); the solver also takes over- and under-determined ones
+        (``certsolve.solver.nonsquare``)."""
+        return len(self.equations) == len(self.variables)
 
     @classmethod
     def build(

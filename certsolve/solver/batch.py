@@ -13,8 +13,16 @@ through its contractor, a composition of parts (:mod:`.pipeline`).  The record h
   inside it, so it stays valid for a row however much later parts contract it;
 * the variable the bisector splits in each box (:meth:`choice`), chosen once per round;
 * what a part may do besides contracting: prove a solution (:meth:`prove`), send a box
-  back to the buffer for another round (:meth:`send_back`), and the search's learnt state
-  (``acid``, see :class:`.shaving.AdaptiveCount`).
+  back to the buffer for another round (:meth:`send_back`, :meth:`push_back`), and the
+  search's learnt state (``acid``, see :class:`.shaving.AdaptiveCount`).
+
+**Order.** What a part sends back waits on the batch and reaches the buffer when the round
+ends (:meth:`flush`), *after* the halves of the round's bisections: the buffer pops its last
+boxes first, so a box that contracted as much as a bisection (Newton converging on a
+solution) is in the next round, where pushed at once it sank under the round's halves and
+waited for their whole subtree -- a search stopped by its limit then had few or no proven
+solutions (Butcher8-a at 30 s: 0).  Every box is still processed exactly once per push,
+so a complete search explores the same boxes, in another order.
 
 **Protocol.** A contractor is an object with ``apply(batch)`` and ``describe()``:
 ``apply`` replaces ``batch.lo`` / ``batch.hi`` by boxes that still hold every solution of
@@ -104,7 +112,7 @@ class Batch:
     mask: np.ndarray | None = None  # variables the bisector may split (None: all)
     choose: Choose | None = None  # the bisector: (lo, hi, jlo, jhi) -> variable per box
     certifier: Certifier | None = None
-    stack: BoxStack | None = None  # the buffer: boxes sent back for another round
+    stack: BoxStack | None = None  # the buffer: boxes sent back reach it at :meth:`flush`
     prove: Prove | None = None  # record proven solutions (existence, unicity boxes)
     acid: Any = None  # the search's learnt state (:class:`.shaving.AdaptiveCount`), if any
     empty: np.ndarray = field(init=False)
@@ -123,6 +131,7 @@ class Batch:
     _jac: tuple[np.ndarray, np.ndarray] | None = field(default=None, init=False, repr=False)
     _jac_at: np.ndarray | None = field(default=None, init=False, repr=False)  # rows of _jac
     _var: np.ndarray | None = field(default=None, init=False, repr=False)
+    _back: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list, init=False)
 
     def __post_init__(self) -> None:
         self.empty = np.zeros(self.lo.shape[0], dtype=bool)
@@ -152,14 +161,34 @@ class Batch:
             self.keep(~self.empty)
 
     def send_back(self, rows: np.ndarray) -> None:
-        """Push the boxes of ``rows`` (a boolean mask) back to the buffer for another round
-        and take them out of this one."""
+        """Send the boxes of ``rows`` (a boolean mask) back to the buffer for another round
+        (at :meth:`flush`) and take them out of this one."""
         if not np.any(rows):
             return
+        self.push_back(self.lo[rows], self.hi[rows])
+        self.keep(~rows)
+
+    def push_back(self, lo: np.ndarray, hi: np.ndarray) -> None:
+        """Boxes ``(k, n)`` for the buffer, pushed at :meth:`flush` (module docstring)."""
         if self.stack is None:
             raise RuntimeError("this batch has no buffer to send boxes back to")
-        self.stack.push(self.lo[rows], self.hi[rows])
-        self.keep(~rows)
+        if lo.shape[0]:
+            self._back.append((lo, hi))
+
+    @property
+    def backlog(self) -> int:
+        """Boxes sent back in this round, not yet on the buffer."""
+        return sum(a.shape[0] for a, _ in self._back)
+
+    def flush(self) -> None:
+        """Push what the parts sent back onto the buffer (call once, when the round ends:
+        after the halves of its bisections, so these boxes come next)."""
+        if self._back:
+            assert self.stack is not None
+            lo = np.concatenate([a for a, _ in self._back])
+            hi = np.concatenate([b for _, b in self._back])
+            self._back = []
+            self.stack.push(lo, hi)
 
     def gain(self, lo0: np.ndarray, hi0: np.ndarray) -> np.ndarray:
         """:func:`progress_gain` of every row from ``lo0, hi0`` (same rows) to its box now."""

@@ -55,19 +55,20 @@ from ..expr.minibex import load_system
 from ..expr.node import to_string
 from ..expr.polynomial import reduce_degree as lower_degree
 from ..expr.system import System
-from ..inputs import checked
+from ..inputs import InputError, checked
 from .batch import Batch, Contractor, progress_gain
 from .bisectors import SmearCurvatureMix, domain_scale, split
 from .buffer import BoxStack
 from .certify import Certifier, SolutionSet
 from .checkpoint import Checkpoint
 from .executors import resolve_executor
+from .nonsquare import ManifoldPaver, overdetermined
 from .options import SolveOptions
 from .pipeline import default_pipeline, parts_of
-from .result import Solution, SolveResult, Stats, Undecided
-from .search import Limits, Progress, SearchRun, SearchStatus, Tally, run_search
+from .result import Certificate, Solution, SolveResult, Stats, Undecided
+from .search import Limits, Progress, SearchRun, Tally, run_search
 from .shaving import AdaptiveCount
-from .summary import MAX_LISTED, summarize
+from .summary import MAX_LISTED
 
 __all__ = ["SearchState", "Solver", "SolverLimits", "solve"]
 
@@ -223,8 +224,18 @@ class Solver:
             max_undecided=max_undecided,
             max_pending=max_pending,
         )
+        surplus = 0
         if isinstance(system, CompiledSystem):
             csys = system
+        elif len(system.equations) > system.n:  # over-determined: a square subsystem
+            square, surplus = overdetermined(system)
+            csys = CompiledSystem(square)
+        elif len(system.equations) < system.n:
+            raise ValueError(
+                f"{len(system.equations)} equations for {system.n} variables: an "
+                "under-determined system is paved by solver.nonsquare.ManifoldPaver "
+                "(solve() and certsolve solve choose it)"
+            )
         else:
             solved = lower_degree(system) if reduce_degree and not subsystems else system
             csys = CompiledSystem(solved)
@@ -240,7 +251,7 @@ class Solver:
         return cls(
             system,
             contractor,
-            certifier or Certifier(csys),
+            certifier or Certifier(csys, surplus=surplus),
             bisector or SmearCurvatureMix(),
             limits=limits,
         )
@@ -381,7 +392,8 @@ class Solver:
         return SearchState(self.buffer(self.n), sols, [], Stats(), mark=len(sols), acid=acid)
 
     def tally(self, state: SearchState) -> Tally:
-        return Tally(solutions=state.solutions.count("ok"), undecided=len(state.undecided))
+        sols = sum(state.solutions.count(kind) for kind in _PROVEN)
+        return Tally(solutions=sols, undecided=len(state.undecided))
 
     def known(self, state: SearchState) -> bytes:
         """The solution set and the learnt CID count, pickled (for tasks: unpickling is
@@ -418,6 +430,18 @@ class Solver:
         if acid is not None and state.acid is not None:
             state.acid = copy.copy(acid)
 
+    def listed(self, state: SearchState, start: int) -> tuple[list[Solution], int]:
+        """The solutions recorded from position ``start`` of the solution set on (for
+        :attr:`.search.Progress.found`: streamed as they are proven), and the end."""
+        sols = state.solutions
+        end = len(sols)
+        new = [
+            Solution(sols.E_lo[i], sols.E_hi[i], sols.U_lo[i], sols.U_hi[i], _PROVEN[sols.kind[i]])
+            for i in range(start, end)
+            if sols.kind[i] in _PROVEN
+        ]
+        return new, end
+
     def process(self, lo: np.ndarray, hi: np.ndarray, state: SearchState) -> None:
         """One round on the boxes ``lo, hi``: prune by known solutions, contract (the
         pipeline), then report the boxes narrower than ``eps`` and bisect the others."""
@@ -440,8 +464,13 @@ class Solver:
         )
         self.contractor.apply(batch)
         batch.drop_empty()
-        if batch.size == 0:
-            return
+        if batch.size:
+            self._split(batch, state)
+        batch.flush()  # what the parts sent back goes on top: the next round takes it
+
+    def _split(self, batch: Batch, state: SearchState) -> None:
+        """Report the rows narrower than ``eps`` as undecided, push the halves of the
+        others."""
         var = batch.choice()
         small = var < 0
         for i in np.flatnonzero(small):
@@ -494,7 +523,11 @@ class Solver:
         """The :class:`SolveResult` of a finished search (undecided and pending boxes summarised,
         :mod:`.summary`)."""
         state = run.state
-        sols = [Solution(e0, e1, u0, u1) for e0, e1, u0, u1 in state.solutions.items("ok")]
+        sols = [
+            Solution(e0, e1, u0, u1, certificate)
+            for kind, certificate in _PROVEN.items()
+            for e0, e1, u0, u1 in state.solutions.items(kind)
+        ]
         sols.sort(key=lambda s: tuple(s.midpoint))
         und = [(u.lo, u.hi, u.reason) for u in state.undecided]
         dlo, dhi = self.domain[:, 0], self.domain[:, 1]
@@ -502,27 +535,24 @@ class Solver:
             und.append((np.maximum(e0, dlo), np.minimum(e1, dhi), "boundary"))
         for e0, e1, _, _ in state.solutions.items("constraint"):
             und.append((e0, e1, "constraint"))
-        plo, phi = state.stack.snapshot()
-        summ = summarize(
-            und, plo, phi, max_undecided=self.max_undecided, max_pending=self.max_pending
-        )
-        status = run.status
-        if status == SearchStatus.COMPLETE and summ.undecided_dropped:
-            status = SearchStatus.TRUNCATED  # nothing pending, but not every box is listed
-        return SolveResult(
-            variables=list(self.system.variables),
-            status=status,
+        return SolveResult.of_search(
+            run,
+            variables=self.system.variables,
             solutions=sols,
-            undecided=[Undecided(a, b, r, k) for a, b, r, k in summ.undecided],
-            pending_lo=summ.pending_lo,
-            pending_hi=summ.pending_hi,
-            stats=Stats.of(run.stats, state.stats, run.status),
+            undecided=und,
+            stats=state.stats,
             eps=self.eps,
-            undecided_total=summ.undecided_total,
-            undecided_dropped=summ.undecided_dropped,
-            pending_boxes=summ.pending_boxes,
-            pending_total=summ.pending_total,
+            max_undecided=self.max_undecided,
+            max_pending=self.max_pending,
         )
+
+
+#: the options of :func:`solve` the paving of an under-determined system takes (the others
+#: shape the square solver's pipeline)
+_PAVER_OPTIONS = ("batch_size", "hc4_passes", "max_undecided", "max_pending")
+
+#: the kinds of the solution set reported as solutions, and their certificates
+_PROVEN = {"ok": Certificate.UNIQUE, "subsystem": Certificate.SQUARE_SUBSYSTEM}
 
 
 def _settings(obj) -> str:
@@ -565,7 +595,10 @@ def solve(
 ) -> SolveResult:
     """Find every solution of ``system`` in its domain (see :meth:`Solver.default` for the
     ``options`` and :meth:`Solver.solve`).  ``system``: a :class:`System`, a Minibex file's path, or
-    Minibex text (:func:`~certsolve.expr.minibex.load_system`).  The options are checked
+    Minibex text (:func:`~certsolve.expr.minibex.load_system`).  An over-determined
+    system is solved through a square subsystem, an under-determined one paved
+    (:mod:`.nonsquare`: in this process, without checkpoints; of the ``options`` only
+    those of :class:`~.nonsquare.ManifoldPaver` apply).  The options are checked
     as the ``solve`` job and ``certsolve solve`` check them (:class:`~.options.
     SolveOptions`): a value they refuse raises :class:`~certsolve.inputs.InputError`
     naming it."""
@@ -581,6 +614,22 @@ def solve(
             "verify": verify,
         },
     )
+    if len(system.equations) < system.n:  # under-determined: pave the solution set
+        if not system.equations:
+            raise InputError("system", "no equations (inequalities alone are not solved)")
+        if verify:
+            raise InputError("verify", "an under-determined system has no unique solutions")
+        if checkpoint is not None:
+            raise InputError("checkpoint", "not available for an under-determined system")
+        paving = {k: options[k] for k in _PAVER_OPTIONS if k in options}
+        paver = ManifoldPaver(system, eps=eps, **paving)
+        return paver.solve(
+            timeout=timeout,
+            max_boxes=max_boxes,
+            max_solutions=max_solutions,
+            progress=progress,
+            cancel=cancel,
+        )
     solver = Solver.default(system, eps=eps, **options)
     return solver.solve(
         timeout=timeout,

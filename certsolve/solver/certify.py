@@ -160,8 +160,13 @@ class Certifier:
         newton_iterations: int = 8,
         scales: tuple[float, ...] = (1.0, 0.2, 0.04, 0.008, 1e-3, 1e-4, 1e-6),
         tighten_steps: int = 4,
+        surplus: int = 0,
     ):
         self.csys = csys
+        #: the last ``surplus`` constraints are the equations an over-determined system has
+        #: beyond its square subsystem (:mod:`.nonsquare`): a proven solution of the
+        #: subsystem whose enclosures of them hold 0 is ``subsystem``, not ``constraint``
+        self.surplus = int(surplus)
         #: the search domain (solutions touching its boundary are ``boundary``); a search
         #: on another domain uses a copy with its own (:meth:`.Solver.on_domain`)
         self.domain = csys.system.domain
@@ -178,7 +183,8 @@ class Certifier:
         """The settings that shape the answer, as text (for the checkpoint fingerprint)."""
         return (
             f"{type(self).__name__}(newton_iterations={self.newton_iterations}, "
-            f"scales={self.scales!r}, tighten_steps={self.tighten_steps})"
+            f"scales={self.scales!r}, tighten_steps={self.tighten_steps}"
+            + (f", surplus={self.surplus})" if self.surplus else ")")
         )
 
     # -- float Newton -----------------------------------------------------------------------
@@ -331,7 +337,9 @@ class Certifier:
         return lo, hi
 
     def classify(self, elo, ehi) -> list[str]:
-        """``ok`` / ``boundary`` / ``constraint`` / ``rejected`` for proven existence boxes."""
+        """``ok`` / ``boundary`` / ``constraint`` / ``rejected`` for proven existence boxes;
+        ``subsystem`` for an ``ok`` box where only the surplus equations of an
+        over-determined system are undecided (their enclosures hold 0, not proven 0)."""
         B = elo.shape[0]
         dlo, dhi = self.domain[:, 0], self.domain[:, 1]
         inside = np.all((elo >= dlo) & (ehi <= dhi), axis=1)
@@ -340,7 +348,12 @@ class Certifier:
         if self._checked.size and B:
             glo, ghi = self.csys.eval_constraints(elo, ehi)
             glo, ghi = glo[:, self._checked], ghi[:, self._checked]
-            sat = np.all((glo >= self._clo) & (ghi <= self._chi), axis=1)
+            held = (glo >= self._clo) & (ghi <= self._chi)
             viol = np.any((ghi < self._clo) | (glo > self._chi), axis=1)
-            kinds = np.where(viol, "rejected", np.where(sat, kinds, "constraint"))
+            sat = np.all(held, axis=1)
+            undecided = np.where(sat, kinds, "constraint")
+            if self.surplus:  # the surplus equations are the last constraints checked
+                own = np.all(held[:, : held.shape[1] - self.surplus], axis=1)
+                undecided = np.where(~sat & own & (kinds == "ok"), "subsystem", undecided)
+            kinds = np.where(viol, "rejected", undecided)
         return [str(k) for k in kinds]

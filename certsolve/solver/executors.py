@@ -12,8 +12,9 @@ its own module so that :mod:`.dask_executor` does not import this one back):
    half of it never starts workers (starting processes costs 0.5-2 s), one that ends within
    it never sends them a task; the workers start during the second half; then the buffer is
    grown until it holds ``grow`` full batches for every slot (a batch of 5 boxes costs
-   nearly what one of 500 does: the numpy calls are the same), so a search too small to
-   fill the workers' batches stays serial;
+   nearly what one of 500 does: the numpy calls are the same), or for another ``warmup``
+   seconds at most (the depth-first order can keep the buffer below that for the whole
+   search);
 2. **tasks**: a slice of the buffer (an even share, at least a batch, at most
    ``slice_size`` boxes, default two batches), what the step already
    knows (e.g. certified solutions, so that workers prune them instead of proving them

@@ -133,7 +133,7 @@ class Inflate:
         idx, Elo, Ehi, Ulo, Uhi = batch.certifier.inflate(lo[try_inflate], hi[try_inflate])
         if idx.size == 0:
             return
-        assert batch.prove is not None and batch.stack is not None
+        assert batch.prove is not None
         batch.prove(Elo, Ehi, Ulo, Uhi)
         done = np.zeros(batch.size, dtype=bool)
         for k, r in enumerate(try_inflate[idx]):
@@ -144,7 +144,7 @@ class Inflate:
             if not np.all(ilo < ihi):
                 continue
             for plo, phi in box_difference(lo[r], hi[r], Ulo[k], Uhi[k]):
-                batch.stack.push(plo[None], phi[None])
+                batch.push_back(plo[None], phi[None])
             done[r] = True
         if np.any(done):
             batch.keep(~done)

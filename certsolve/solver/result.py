@@ -30,26 +30,47 @@ Nothing is ever silently dropped.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from enum import StrEnum
+from typing import Any
 
 import numpy as np
 
 from .search import SearchStats, SearchStatus
+from .summary import summarize
 
-__all__ = ["Solution", "Undecided", "Stats", "SolveResult"]
+__all__ = ["Certificate", "Solution", "Undecided", "Stats", "SolveResult"]
 
 
 def _box_list(lo: np.ndarray, hi: np.ndarray) -> list[list[float]]:
     return [[float(a), float(b)] for a, b in zip(lo, hi, strict=True)]
 
 
+class Certificate(StrEnum):
+    """What a solution box is proven to hold.
+
+    ``unique``: exactly one solution of the system (Krawczyk on the system).
+    ``square-subsystem-certified`` (over-determined systems): exactly one solution of a
+    square subsystem, and the other equations' enclosures over the box contain 0 -- they
+    are satisfied within their enclosure, not proven (:mod:`.nonsquare`).
+    ``parametric`` (under-determined systems): for every value of the ``parameters`` in
+    the box, exactly one value of the other variables in the box solves the system (a box
+    of the paving of the solution set; its unicity box is the box itself).
+    """
+
+    UNIQUE = "unique"
+    SQUARE_SUBSYSTEM = "square-subsystem-certified"
+    PARAMETRIC = "parametric"
+
+
 @dataclass
 class Solution:
-    lo: np.ndarray  # existence box: exactly one solution inside
+    lo: np.ndarray  # existence box: exactly one solution inside (see certificate)
     hi: np.ndarray
     ulo: np.ndarray  # unicity box: that solution is the only one in it
     uhi: np.ndarray
-    certificate: str = "unique"
+    certificate: Certificate = Certificate.UNIQUE
     verified: bool | None = None  # independent mpmath re-proof (None: not run)
+    parameters: list[str] | None = None  # the parameters of a parametric box
 
     @property
     def midpoint(self) -> np.ndarray:
@@ -60,13 +81,16 @@ class Solution:
         return _box_list(self.lo, self.hi)
 
     def to_dict(self) -> dict:
-        return {
+        out = {
             "box": self.box,
             "midpoint": [float(v) for v in self.midpoint],
             "unicity_box": _box_list(self.ulo, self.uhi),
-            "certificate": self.certificate,
+            "certificate": str(self.certificate),
             "verified": self.verified,
         }
+        if self.parameters is not None:
+            out["parameters"] = list(self.parameters)
+        return out
 
 
 @dataclass
@@ -141,6 +165,42 @@ class SolveResult:
     undecided_dropped: int = 0  # undecided boxes in no listed hull (then not complete)
     pending_boxes: np.ndarray | None = None  # pending boxes in each listed hull
     pending_total: int = 0  # pending boxes of the search
+
+    @classmethod
+    def of_search(
+        cls,
+        run: Any,
+        *,
+        variables: list[str],
+        solutions: list[Solution],
+        undecided: list[tuple[np.ndarray, np.ndarray, str]],
+        stats: Stats,
+        eps: float,
+        max_undecided: int,
+        max_pending: int,
+    ) -> SolveResult:
+        """The result of a finished search ``run`` (:class:`~.search.SearchRun`): its
+        ``undecided`` boxes ``(lo, hi, reason)`` and its pending boxes (the buffer)
+        summarised (:func:`.summary.summarize`); ``stats``: the step's counters."""
+        plo, phi = run.state.stack.snapshot()
+        summ = summarize(undecided, plo, phi, max_undecided=max_undecided, max_pending=max_pending)
+        status = run.status
+        if status == SearchStatus.COMPLETE and summ.undecided_dropped:
+            status = SearchStatus.TRUNCATED  # nothing pending, but not every box is listed
+        return cls(
+            variables=list(variables),
+            status=status,
+            solutions=solutions,
+            undecided=[Undecided(a, b, r, k) for a, b, r, k in summ.undecided],
+            pending_lo=summ.pending_lo,
+            pending_hi=summ.pending_hi,
+            stats=Stats.of(run.stats, stats, run.status),
+            eps=eps,
+            undecided_total=summ.undecided_total,
+            undecided_dropped=summ.undecided_dropped,
+            pending_boxes=summ.pending_boxes,
+            pending_total=summ.pending_total,
+        )
 
     @property
     def pending(self) -> list[list[list[float]]]:

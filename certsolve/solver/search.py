@@ -35,7 +35,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Any, Protocol
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -44,6 +44,7 @@ from .protocol import Saver, SearchStats, Step, Tally
 __all__ = [
     "Executor",
     "Limits",
+    "Listing",
     "Progress",
     "Search",
     "SearchRun",
@@ -100,6 +101,9 @@ class Progress:
 
     ``solutions`` and ``undecided`` are the step's counts (:class:`Tally`); ``extra`` holds
     the step's own figures (the paving's ``inside`` / ``outside`` / ``inside_share`` ...).
+    ``found``: what the step certified since the previous report, as the step lists it
+    (the solver: :class:`~.result.Solution` records), so a caller can stream solutions as
+    they are proven; empty for steps that do not list theirs (:class:`Listing`).
     """
 
     boxes: int  # processed so far
@@ -109,6 +113,17 @@ class Progress:
     elapsed: float  # wall seconds
     tasks: int = 0  # worker tasks finished
     extra: dict[str, float] = field(default_factory=dict)
+    found: list[Any] = field(default_factory=list)
+
+
+@runtime_checkable
+class Listing(Protocol):
+    """A step that lists what it certified, for :attr:`Progress.found`."""
+
+    def listed(self, state: Any, start: int) -> tuple[list[Any], int]:
+        """The results recorded in ``state`` from position ``start`` on, and the position
+        after them (the next call's ``start``)."""
+        ...
 
 
 @dataclass(kw_only=True)
@@ -167,6 +182,7 @@ class Search:
         self._elapsed0 = self.stats.time
         self._cpu0 = self.stats.cpu
         self._task_cpu = 0.0
+        self._listed = 0  # the step's records reported so far (Progress.found)
 
     # -- clock and limits --------------------------------------------------------------------
     def elapsed(self) -> float:
@@ -292,6 +308,9 @@ class Search:
         if self.progress is None:
             return
         t = self.step.tally(self.state)
+        found: list[Any] = []
+        if isinstance(self.step, Listing):
+            found, self._listed = self.step.listed(self.state, self._listed)
         p = Progress(
             self.stats.boxes,
             self.pending,
@@ -300,6 +319,7 @@ class Search:
             self._elapsed0 + self.elapsed(),
             self.stats.tasks,
             dict(t.extra),
+            found,
         )
         if self.progress(p) is False and self.reason is None:
             self.reason = SearchStatus.CANCELLED

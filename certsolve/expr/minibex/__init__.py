@@ -30,7 +30,7 @@ column; :class:`Limits` bounds nesting and size (:data:`LIMITS`, shared by the C
 
 :func:`read_minibex` / :func:`load_model` read any text IBEX reads into a :class:`Model`, with
 as many equations as written (over- and under-determined systems, inequalities only);
-:meth:`Model.system` is the square :class:`System` the solver takes, and
+`Model.system` is the :class:`System` the solver takes, and
 :func:`parse_minibex` / :func:`load_minibex` go through it.
 """
 
@@ -59,7 +59,7 @@ __all__ = [
 
 def read_minibex(text: str, limits: Limits = LIMITS) -> Model:
     """Read Minibex text into a :class:`Model`, square or not (raises :class:`MinibexError`
-    only).  :meth:`Model.system` is the square :class:`System` the solver takes."""
+    only).  `Model.system` is the :class:`System` the solver takes."""
     return parse(text, limits)
 
 
@@ -75,13 +75,13 @@ def load_model(path, limits: Limits = LIMITS) -> Model:
 
 
 def parse_minibex(text: str, name: str = "", limits: Limits = LIMITS) -> System:
-    """Parse Minibex text into a square :class:`System` (raises :class:`MinibexError` only:
+    """Parse Minibex text into a :class:`System` (raises :class:`MinibexError` only:
     a system with more or fewer equations than variables is refused, naming both counts)."""
     return parse(text, limits).system(name)
 
 
 def load_minibex(path, limits: Limits = LIMITS) -> System:
-    """Parse a Minibex file into a square :class:`System` (named after its stem)."""
+    """Parse a Minibex file into a :class:`System` (named after its stem)."""
     return load_model(path, limits).system(Path(path).stem)
 
 

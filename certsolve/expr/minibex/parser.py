@@ -42,7 +42,8 @@ class Model:
     ``(n, 2)``), the ``equations`` ``f_i(x) = 0`` and the extra ``constraints``.
 
     The number of equations ``m`` may differ from ``n`` (IBEX reads over- and under-determined
-    systems); :meth:`system` is the square :class:`System` the solver takes.
+    systems); :meth:`system` is the :class:`System` the solver takes, square or not
+    (``certsolve.solver.nonsquare``).
     """
 
     variables: list[str]
@@ -52,10 +53,7 @@ class Model:
     end: Token  # the end of the text: where errors about the whole system point
 
     def system(self, name: str = "") -> System:
-        """The :class:`System`; a non-square one is refused, with ``m`` and ``n`` named."""
-        n, m = len(self.variables), len(self.equations)
-        if m != n:
-            fail(f"the system is not square: {m} equations for {n} variables", self.end)
+        """The :class:`System` (``m != n``: the solver's non-square searches)."""
         return System(self.variables, self.domain, self.equations, self.constraints, name=name)
 
 
