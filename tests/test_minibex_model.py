@@ -1,10 +1,9 @@
-"""Minibex texts that are not square systems: read as a Model (as IBEX reads them), refused
-with both counts named when the square System is asked for.
+"""Minibex texts that are not square systems: read as a Model (as IBEX reads them), and
+passed on as a non-square System (the solver's over- and under-determined searches).
 
 IBEX's ``benchs/solver`` has over-determined files (``Ex14-2-3``: 9 equations, 6 unknowns),
 under-determined ones (``Prolog``, truncated ``Bratu-0065``) and inequalities only
-(``exnewton``).  The parser reads all of them; only :meth:`Model.system` (and so
-``parse_minibex`` / ``load_minibex``) refuses them, at the end of the text.
+(``exnewton``).  The parser reads all of them.
 """
 
 import math
@@ -67,19 +66,15 @@ def test_a_non_square_text_is_read(text, n, m, k):
 
 
 @pytest.mark.parametrize(
-    "text, counts",
-    [
-        (OVER, "3 equations for 2 variables"),
-        (UNDER, "2 equations for 3 variables"),
-        (INEQUALITIES_ONLY, "0 equations for 2 variables"),
-    ],  # fmt: skip
+    "text, n, m",
+    [(OVER, 2, 3), (UNDER, 3, 2), (INEQUALITIES_ONLY, 2, 0)],
 )
-def test_the_square_system_of_a_non_square_text_is_refused_naming_both_counts(text, counts):
-    with pytest.raises(MinibexError, match=f"the system is not square: {counts}") as err:
-        parse_minibex(text)
-    assert err.value.line == len(text.splitlines()) + 1  # the end of the text
-    with pytest.raises(MinibexError, match=counts):
-        read_minibex(text).system()
+def test_a_non_square_text_parses_to_a_non_square_system(text, n, m):
+    """The solver takes over- and under-determined systems (``solver/nonsquare.py``): the
+    parser passes them on, with both counts, as the Model read them."""
+    system = parse_minibex(text)
+    assert (system.n, len(system.equations), system.square) == (n, m, False)
+    assert read_minibex(text).system().variables == system.variables
 
 
 def test_the_model_of_an_under_determined_text_holds_its_loop_and_constants():
@@ -109,13 +104,12 @@ def test_a_square_model_gives_the_system_parse_minibex_gives():
     assert [str(e) for e in s.equations] == [str(e) for e in t.equations]
 
 
-def test_load_model_reads_a_non_square_file_and_load_minibex_refuses_it(tmp_path):
+def test_load_model_and_load_minibex_read_a_non_square_file(tmp_path):
     path = tmp_path / "ex14-like.bch"
     path.write_text(OVER)
     model = load_model(path)
     assert len(model.equations) == 3
-    with pytest.raises(MinibexError, match="not square: 3 equations for 2 variables"):
-        load_minibex(path)
+    assert len(load_minibex(path).equations) == 3
     path.write_bytes(b"Variables\n x in [0, 1];\xff\n")
     with pytest.raises(MinibexError, match="not UTF-8 text"):
         load_model(path)
