@@ -57,33 +57,46 @@ def _margin(x, tiny: bool = True) -> np.ndarray:
     return a
 
 
-def up(x, size: int | None = None):
-    """An upper bound, as a float, of any real that rounds to ``x`` (elementwise).
+def _next_up(x) -> np.ndarray:
+    """``nextafter(x, +inf)``, the same floats, with integer steps on the bit patterns.
 
-    Small arrays use ``nextafter``.  Large ones use ``x + (|x|·2^-52 + 2^-1074)``, ~9x
-    faster in numpy: ``|x|·2^-52`` is at least the spacing of floats above ``x`` (exactly
-    ``ulp(x)`` for positive ``x``, twice the spacing above a negative power of two), so the
-    rounded sum is at least the next float after ``x``; the ``2^-1074`` term covers 0 and
-    subnormals.  The ``|x|`` term is capped so that ``-inf`` (an overflowed negative value)
-    becomes ``-max_float`` as with ``nextafter``; NaN stays NaN.
-
-    ``size`` chooses the rule as for an array of that many elements: a column updated on
-    its own then rounds exactly as it would inside its whole array.
+    A float's bits read as an ``int64`` grow with the float for ``x >= +0`` and shrink for
+    ``x <= -0``, so the next float up is one step away (``+1`` or ``-1``).  ``-0`` is first
+    made ``+0`` (``x + 0.0``), and ``+inf`` and NaN are kept.  Four times faster than numpy's
+    ``nextafter`` on large arrays, as fast as a margin, and one ulp exactly.
     """
-    if (np.size(x) if size is None else size) < _SMALL:
+    y = np.add(x, 0.0, dtype=np.float64)  # a new array; -0.0 becomes +0.0
+    i = y.view(np.int64)
+    step = i >> 63  # 0 for x >= +0, -1 for x < 0
+    step |= 1
+    i += step
+    keep = ~(x < _POS_INF)  # +inf and NaN
+    if keep.any():
+        np.copyto(y, x, where=keep)
+    return y
+
+
+def up(x, size: int | None = None):
+    """The next float above ``x``: an upper bound of any real that rounds to ``x``.
+
+    Exactly ``nextafter(x, +inf)`` at every size (NaN stays NaN, ``-inf`` becomes
+    ``-max_float``): the bound of one element does not depend on the array it is in, so a
+    batched evaluation gives the same floats however its operations are grouped.  Small
+    arrays use numpy's ``nextafter`` (one call), large ones :func:`_next_up` (integer steps,
+    about four times faster there).  ``size`` chooses the path as for an array of that many
+    elements; the floats are the same either way.
+    """
+    if (np.size(x) if size is None else size) < _SMALL or np.ndim(x) == 0:
         return np.nextafter(x, _POS_INF)
-    a = _margin(x)
-    a += x
-    return np.maximum(a, -_MAX, out=a)
+    return _next_up(x)
 
 
 def down(x, size: int | None = None):
-    """A lower bound, as a float, of any real that rounds to ``x`` (mirror of :func:`up`)."""
-    if (np.size(x) if size is None else size) < _SMALL:
+    """The next float below ``x`` (mirror of :func:`up`)."""
+    if (np.size(x) if size is None else size) < _SMALL or np.ndim(x) == 0:
         return np.nextafter(x, _NEG_INF)
-    a = _margin(x)
-    np.subtract(x, a, out=a)
-    return np.minimum(a, _MAX, out=a)
+    y = _next_up(np.negative(x))
+    return np.negative(y, out=y)
 
 
 def up_inplace(x: np.ndarray, exact_tiny: bool = False) -> np.ndarray:
