@@ -197,11 +197,10 @@ def pow_int(alo, ahi, n: int):
     if n < 0:
         plo, phi = pow_int(alo, ahi, -n)
         return recip(plo, phi)
-    mlo = np.where(ahi < 0.0, -ahi, np.where(alo > 0.0, alo, 0.0))  # mignitude
-    mhi = np.maximum(np.abs(alo), np.abs(ahi))  # magnitude
-    plo, phi = _pow_pos(mlo, mhi, n)
     if n % 2 == 0:
-        lo, hi = plo, phi
+        mlo = np.where(ahi < 0.0, -ahi, np.where(alo > 0.0, alo, 0.0))  # mignitude
+        mhi = np.maximum(np.abs(alo), np.abs(ahi))  # magnitude
+        lo, hi = _pow_pos(mlo, mhi, n)
     else:
         # odd powers are increasing: bound sign(x)|x|**n at each end
         l1, h1 = _pow_pos(np.abs(alo), np.abs(alo), n)
