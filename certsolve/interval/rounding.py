@@ -66,13 +66,14 @@ def _next_up(x) -> np.ndarray:
     ``nextafter`` on large arrays, as fast as a margin, and one ulp exactly.
     """
     y = np.add(x, 0.0, dtype=np.float64)  # a new array; -0.0 becomes +0.0
+    keep = ~(y < _POS_INF)  # +inf and NaN
+    kept = y[keep] if keep.any() else None
     i = y.view(np.int64)
     step = i >> 63  # 0 for x >= +0, -1 for x < 0
     step |= 1
     i += step
-    keep = ~(x < _POS_INF)  # +inf and NaN
-    if keep.any():
-        np.copyto(y, x, where=keep)
+    if kept is not None:
+        y[keep] = kept
     return y
 
 
