@@ -37,6 +37,7 @@ __all__ = [
     "scale",
     "shift",
     "div",
+    "div_nonzero",
     "recip",
     "sqr",
     "sqrt",
@@ -100,16 +101,27 @@ def mul(alo, ahi, blo, bhi):
     return _keep_empty(down(lo), up(hi), alo, ahi, blo, bhi)
 
 
-def div(alo, ahi, blo, bhi):
-    """Quotient with IBEX semantics for divisors containing 0 (see module docstring)."""
-    alo, ahi, blo, bhi = np.broadcast_arrays(alo, ahi, blo, bhi)
+def div_nonzero(alo, ahi, blo, bhi):
+    """Quotient by a divisor free of 0: the hull of the four corner quotients, rounded out.
+
+    The quotient is monotone in each argument on such a box, so its extremes are corners.
+    (Where the divisor holds 0 the result means nothing; :func:`div` replaces it there.)
+    """
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         q1 = alo / blo
         q2 = alo / bhi
         q3 = ahi / blo
         q4 = ahi / bhi
-    lo = down(np.fmin(np.fmin(q1, q2), np.fmin(q3, q4)))
-    hi = up(np.fmax(np.fmax(q1, q2), np.fmax(q3, q4)))
+    return (
+        down(np.fmin(np.fmin(q1, q2), np.fmin(q3, q4))),
+        up(np.fmax(np.fmax(q1, q2), np.fmax(q3, q4))),
+    )
+
+
+def div(alo, ahi, blo, bhi):
+    """Quotient with IBEX semantics for divisors containing 0 (see module docstring)."""
+    alo, ahi, blo, bhi = np.broadcast_arrays(alo, ahi, blo, bhi)
+    lo, hi = div_nonzero(alo, ahi, blo, bhi)
     zb = (blo <= 0.0) & (bhi >= 0.0)
     if np.any(zb):
         a_pos = alo >= 0.0

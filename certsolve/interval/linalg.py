@@ -57,6 +57,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .arith import div_nonzero
 from .reductions import all_last
 from .rounding import down, up
 
@@ -287,13 +288,7 @@ def gauss_seidel(c, lo, hi, Mc, Mr, bc, br, ok):
             tr = up(up(br[:, i] + sr) + np.abs(tc) * (2 * _U))
             tlo = down(tc - tr)
             thi = up(tc + tr)
-            p0, p1 = plo[:, i], phi[:, i]
-            q1 = tlo / p0
-            q2 = tlo / p1
-            q3 = thi / p0
-            q4 = thi / p1
-            qlo = down(np.fmin(np.fmin(q1, q2), np.fmin(q3, q4)))
-            qhi = up(np.fmax(np.fmax(q1, q2), np.fmax(q3, q4)))
+            qlo, qhi = div_nonzero(tlo, thi, plo[:, i], phi[:, i])
             ci = c[:, i]
             use = usable[:, i]
             new_lo = np.where(use, np.fmax(lo[:, i], down(ci - qhi)), lo[:, i])
