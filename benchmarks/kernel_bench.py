@@ -3,15 +3,20 @@
     python benchmarks/kernel_bench.py [--batch 256,1024] [--runs 5] [--calls 20] [systems...]
 
 For each system (``katsura-6``, ``eco-7`` from ``examples/systems``, ``T-16``: the MARIONET-T
-forward-kinematics system at tau <= 60 N, u = 2) and batch size ``B``: random boxes inside the
-search domain (seeded; widths 1/64 of the domain, so that many straddle zeros), then the
-median over ``--runs`` runs of the CPU time (``time.process_time``) of ``--calls`` calls of
+forward-kinematics system at tau <= 60 N, u = 2; or the path of a ``.mbx`` / ``.bch`` file,
+its domain clipped to [-1000, 1000]) and batch size ``B``: random boxes inside the search
+domain (seeded; widths 1/64 of the domain, so that many straddle zeros), then the median over
+``--runs`` runs of the CPU time (``time.process_time``) of ``--calls`` calls of
 
 * ``forward``  -- interval values of every node of the HC4 program,
 * ``hc4``      -- one HC4-revise pass (forward + backward projections),
 * ``fj``       -- ``f`` and the Jacobian with the domain check,
 * ``columns``  -- ``f`` and the first Newton group's Jacobian columns (FK: mixed Jacobian),
+* ``mixed``    -- Hansen's mixed Jacobian over the solver's groups (one variable per group,
+  FK: its own), one stacked program at small batches,
 * ``newton``   -- the interval Newton contractor (linearisation, Krawczyk, Hansen–Sengupta),
+* ``round``    -- an HC4 + Newton round as the solver runs it: HC4 (up to 4 passes), then
+  interval Newton with the mixed Jacobian on HC4's boxes,
 * ``relax``    -- the polytope-hull contractor (X-Taylor rows + batched dual LPs).
 
 Printed per call in milliseconds and per box in microseconds.  The same boxes are used for
@@ -58,6 +63,15 @@ SYSTEMS = {"katsura-6": lambda: _minibex("katsura-6"), "eco-7": lambda: _minibex
 SYSTEMS["T-16"] = _t16
 
 
+def _file(path: str):
+    from certsolve.expr.compiled import CompiledSystem
+    from certsolve.expr.minibex import load_minibex
+
+    system = load_minibex(Path(path))
+    dom = np.clip(np.asarray(system.domain, dtype=float), -1000.0, 1000.0)
+    return CompiledSystem(system), dom, None
+
+
 def boxes(dom: np.ndarray, B: int, seed: int = 0):
     """``B`` random boxes of width 1/64 of the (bounded) domain, inside it."""
     rng = np.random.default_rng(seed)
@@ -69,19 +83,25 @@ def boxes(dom: np.ndarray, B: int, seed: int = 0):
 
 def kernels(csys, groups):
     """name -> function(lo, hi) running one kernel call."""
-    from certsolve.solver.contractors import IntervalNewton
+    from certsolve.interval.core import midpoint
+    from certsolve.solver.contractors import HC4, IntervalNewton
     from certsolve.solver.relaxation import PolytopeHull
 
     p = csys.hc4
     cols = np.flatnonzero(groups[0]) if groups else np.arange(csys.n)
     newton = IntervalNewton(csys, groups)
     relax = PolytopeHull(csys)
+    mixed = groups if groups is not None else list(np.eye(csys.n, dtype=bool))
+    hc4 = HC4(csys)
+    newton_mixed = IntervalNewton(csys, mixed)
     return {
         "forward": lambda lo, hi: p.eval_interval(lo, hi, csys.param_lo, csys.param_hi),
         "hc4": csys.hc4_revise,
         "fj": lambda lo, hi: csys.eval_fj(lo, hi, check_domain=True),
         "columns": lambda lo, hi: csys.eval_fj_columns(lo, hi, cols),
+        "mixed": lambda lo, hi: csys.eval_fj_mixed(lo, hi, midpoint(lo, hi), mixed),
         "newton": newton.contract,
+        "round": lambda lo, hi: newton_mixed.contract(*hc4.contract(lo, hi)[:2]),
         "relax": relax.contract,
     }
 
@@ -115,7 +135,11 @@ def main() -> None:
     )
     print(f"{'system':<10} {'kernel':<8} {'B':>5} {'ms/call':>9} {'us/box':>8}")
     for name in names:
-        csys, dom, groups = SYSTEMS[name]()
+        if name in SYSTEMS:
+            csys, dom, groups = SYSTEMS[name]()
+        else:
+            csys, dom, groups = _file(name)
+            name = Path(name).stem
         ks = kernels(csys, groups)
         if args.kernels:
             ks = {k: v for k, v in ks.items() if k in args.kernels.split(",")}

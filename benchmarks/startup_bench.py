@@ -1,11 +1,14 @@
 """Start-up cost of the command line: whole-process wall time of short commands.
 
 Targets (issue 10): ``certsolve --help`` <= 0.3 s; ``certsolve fk examples/robots/planar.json
---u 0.5,0.5,0.5,0.5 --tau-max 10`` <= 0.5 s for the whole process.  Each command runs
-``--repeat`` times as a fresh process (``python -m certsolve.cli``, the console script's
-code path); the median, min and max wall times are printed beside the bare interpreter's
-start-up.  ``--imports`` adds the largest cumulative import costs of each command
-(``python -X importtime``), which is where start-up time goes.
+--u 0.5,0.5,0.5,0.5 --tau-max 10`` <= 0.5 s for the whole process; (issue 30) ``certsolve
+solve`` to the first box <= 0.15 s (``--max-boxes 1``: imports, parsing, the compiled
+system and the solver's programs, one round).  Each command runs ``--repeat`` times as a
+fresh process (``python -m certsolve.cli``, the console script's code path); the median,
+min and max wall times, and the median CPU time of the process (user + system: steadier on
+a shared machine), are printed beside the bare interpreter's start-up.  ``--imports`` adds
+the largest cumulative import costs of each command (``python -X importtime``), which is
+where start-up time goes.
 
 Usage::
 
@@ -16,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import resource
 import statistics
 import subprocess
 import sys
@@ -38,13 +42,25 @@ COMMANDS: dict[str, list[str]] = {
         "10",
     ],
     "certsolve solve circle-line": [*CLI, "solve", "examples/systems/circle-line.mbx"],
+    "solve katsura-6, first box": [
+        *CLI,
+        "solve",
+        "examples/systems/katsura-6.mbx",
+        "--max-boxes",
+        "1",
+    ],
+    "solve kin2-6r, first box": [*CLI, "solve", "examples/systems/kin2-6r.mbx", "--max-boxes", "1"],
 }
 
 
-def wall(cmd: list[str]) -> float:
+def wall(cmd: list[str]) -> tuple[float, float]:
+    """Wall time and CPU time (user + system) of one run of ``cmd``."""
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     subprocess.run(cmd, cwd=ROOT, check=True, stdout=subprocess.DEVNULL)
-    return time.perf_counter() - t0
+    t = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return t, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
 
 
 def top_imports(cmd: list[str], n: int = 8) -> list[tuple[float, str]]:
@@ -69,11 +85,17 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=7, help="runs per command (7)")
     ap.add_argument("--imports", action="store_true", help="also show the largest imports")
     args = ap.parse_args()
-    print(f"{'command':<34} {'median':>8} {'min':>8} {'max':>8}   ({args.repeat} runs)")
+    head = f"{'command':<34} {'median':>8} {'min':>8} {'max':>8} {'cpu':>8}"
+    print(f"{head}   ({args.repeat} runs)")
     for name, cmd in COMMANDS.items():
         wall(cmd)  # warm the file cache
-        times = [wall(cmd) for _ in range(args.repeat)]
-        print(f"{name:<34} {statistics.median(times):8.3f} {min(times):8.3f} {max(times):8.3f}")
+        runs = [wall(cmd) for _ in range(args.repeat)]
+        times = [t for t, _ in runs]
+        cpu = statistics.median(c for _, c in runs)
+        print(
+            f"{name:<34} {statistics.median(times):8.3f} {min(times):8.3f} {max(times):8.3f}"
+            f" {cpu:8.3f}"
+        )
         if args.imports and name.startswith("certsolve"):
             for seconds, module in top_imports(cmd):
                 print(f"    {seconds:6.3f} s  import {module}")

@@ -1,5 +1,6 @@
-"""Outward rounding: both code paths (nextafter for small arrays, arithmetic for large ones)
-must bound every real that rounds to the given float."""
+"""Outward rounding: both code paths (numpy's nextafter for small arrays, integer steps on the
+bit patterns for large ones) must bound every real that rounds to the given float, and give
+the same floats: one ulp out, whatever the size of the array."""
 
 from fractions import Fraction
 
@@ -60,6 +61,20 @@ def test_up_down_bound_the_rounding_interval(size):
     fin = np.isfinite(x) & (np.abs(x) > 1e-300) & (np.abs(x) < 1e300)
     steps_u = np.abs(u[fin] - x[fin]) / np.spacing(np.abs(x[fin]))
     assert np.all(steps_u <= 3.0)
+
+
+@pytest.mark.parametrize("size", [1, 63, 64, 65, 1000, 100_000])
+def test_up_down_are_nextafter_at_every_size(size):
+    x = np.concatenate([_samples(size, seed=size)[:size], [np.nan, -np.nan], SPECIALS])
+    with np.errstate(all="ignore"):
+        for got, want in ((up(x), np.nextafter(x, np.inf)), (down(x), np.nextafter(x, -np.inf))):
+            assert np.array_equal(np.isnan(got), np.isnan(want))
+            ok = ~np.isnan(want)
+            assert np.array_equal(got[ok].view(np.int64), want[ok].view(np.int64))  # -0.0 too
+        # a strided view and a 2-D array round element by element as well
+        y = x[: 2 * (x.size // 2)].reshape(2, -1)[:, ::3]
+        assert np.array_equal(up(y), np.nextafter(y, np.inf), equal_nan=True)
+        assert np.array_equal(down(y), np.nextafter(y, -np.inf), equal_nan=True)
 
 
 def test_overflowed_values_stay_valid_bounds():

@@ -20,9 +20,14 @@ import numpy as np
 
 from .graph import Graph
 from .program import Program
+from .stacked import StackedColumns
 from .system import System
 
 __all__ = ["CompiledSystem"]
+
+#: largest batch x nodes for which the mixed Jacobian is evaluated as one stacked program
+#: (8 MB per bound array); above, one program per group costs few calls per element anyway
+STACK_ELEMENTS = 1 << 20
 
 
 class CompiledSystem:
@@ -58,6 +63,7 @@ class CompiledSystem:
         self._fj_jac = self.fj.outputs[n:]
         self._jac_flat = np.flatnonzero(self.jac_structure.ravel())
         self._col_programs: dict = {}  # column subsets -> (Program, flat indices)
+        self._mixed_programs: dict = {}  # groups of columns -> StackedColumns
         self.set_parameters(system.parameters)
 
     # -- parameters -------------------------------------------------------------------------
@@ -162,6 +168,53 @@ class CompiledSystem:
             jhi.reshape(B, n, n),
             prog.defined_mask(LO, HI),
         )
+
+    def _mixed_program(self, groups: tuple[tuple[int, ...], ...]) -> StackedColumns:
+        """The stacked program of Hansen's mixed Jacobian over ``groups`` (built on first use)."""
+        if groups not in self._mixed_programs:
+            self._mixed_programs[groups] = StackedColumns(
+                self.graph, self.eq_roots, self.jac_structure, groups
+            )
+        return self._mixed_programs[groups]
+
+    def prepare_mixed(self, groups) -> None:
+        """Build the programs :meth:`eval_fj_mixed` uses for ``groups`` (at load time)."""
+        self._mixed_program(tuple(tuple(int(j) for j in np.flatnonzero(g)) for g in groups))
+
+    def eval_fj_mixed(self, lo, hi, c, groups):
+        """Hansen's mixed Jacobian: the columns of group ``k`` (boolean masks partitioning
+        the variables) over the box that is ``[lo, hi]`` on groups ``1..k`` and ``c`` on the
+        later ones.
+
+        Returns ``jlo, jhi`` ``(B, n, n)`` and the ``(B,)`` mask of boxes on which ``f`` and
+        those columns are defined and smooth (the last group's box is ``X`` itself).  Small
+        batches evaluate every group in one stacked program (:mod:`.stacked`), large ones
+        one column program per group (:meth:`eval_fj_columns`, built on first use): the
+        same floats.
+        """
+        key = tuple(tuple(int(j) for j in np.flatnonzero(g)) for g in groups)
+        stacked = self._mixed_program(key)
+        B, n = lo.shape
+        if B * stacked.program.n_nodes <= STACK_ELEMENTS:
+            return stacked.eval(lo, hi, c, self.param_lo, self.param_hi)
+        return self._mixed_by_group(lo, hi, c, groups)
+
+    def _mixed_by_group(self, lo, hi, c, groups):
+        """:meth:`eval_fj_mixed` one column program per group."""
+        B, n = lo.shape
+        mlo = np.zeros((B, n, n))
+        mhi = np.zeros((B, n, n))
+        defined = np.ones(B, dtype=bool)
+        done = np.zeros(n, dtype=bool)
+        for g in groups:
+            done |= g
+            blo = np.where(done, lo, c)
+            bhi = np.where(done, hi, c)
+            _, _, jlo, jhi, de = self.eval_fj_columns(blo, bhi, np.flatnonzero(g))
+            mlo[:, :, g] = jlo[:, :, g]
+            mhi[:, :, g] = jhi[:, :, g]
+            defined &= de
+        return mlo, mhi, defined
 
     def eval_constraints(self, lo, hi):
         """Enclosures of the constraint expressions over boxes: two ``(B, m)`` arrays."""

@@ -230,6 +230,27 @@ class Graph:
                 stack.extend((a, False) for a in x.args if id(a) not in memo)
         return memo[id(e)]
 
+    def copy_nodes(self, src: Graph, roots: Sequence[int], var_offset: int = 0) -> dict[int, int]:
+        """Copy the nodes ``roots`` of ``src`` need into this graph, as they are (no rewrite).
+
+        Variable ``j`` of ``src`` becomes variable ``var_offset + j`` here; parameters and
+        constants are shared (same index, same value).  Returns the map from ``src`` ids to
+        ids here.  The copy computes the same operations in the same order of arguments.
+        """
+        n_src = len(src.variables)
+        mapped: dict[int, int] = {}
+        for x in src.ancestors(roots):
+            op = src.op[x]
+            if op == "var":
+                mapped[x] = var_offset + src.param[x]
+            elif op == "param":
+                mapped[x] = len(self.variables) + (x - n_src)
+            elif op == "const":
+                mapped[x] = self.const(*src.param[x])
+            else:
+                mapped[x] = self._make(op, tuple(mapped[a] for a in src.args[x]), src.param[x])
+        return mapped
+
     # -- derivatives -----------------------------------------------------------------------
     def derivative(self, nid: int, k: int) -> int | None:
         """Node id of ``∂node/∂x_k`` (``None`` when it is identically zero)."""

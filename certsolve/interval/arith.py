@@ -38,6 +38,7 @@ __all__ = [
     "scale",
     "shift",
     "div",
+    "div_nonzero",
     "recip",
     "sqr",
     "sqrt",
@@ -101,16 +102,27 @@ def mul(alo: np.ndarray, ahi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> P
     return _keep_empty(down(lo), up(hi), alo, ahi, blo, bhi)
 
 
-def div(alo: np.ndarray, ahi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> Pair:
-    """Quotient with IBEX semantics for divisors containing 0 (see module docstring)."""
-    alo, ahi, blo, bhi = np.broadcast_arrays(alo, ahi, blo, bhi)
+def div_nonzero(alo: np.ndarray, ahi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> Pair:
+    """Quotient by a divisor free of 0: the hull of the four corner quotients, rounded out.
+
+    The quotient is monotone in each argument on such a box, so its extremes are corners.
+    (Where the divisor holds 0 the result means nothing; :func:`div` replaces it there.)
+    """
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         q1 = alo / blo
         q2 = alo / bhi
         q3 = ahi / blo
         q4 = ahi / bhi
-    lo = down(np.fmin(np.fmin(q1, q2), np.fmin(q3, q4)))
-    hi = up(np.fmax(np.fmax(q1, q2), np.fmax(q3, q4)))
+    return (
+        down(np.fmin(np.fmin(q1, q2), np.fmin(q3, q4))),
+        up(np.fmax(np.fmax(q1, q2), np.fmax(q3, q4))),
+    )
+
+
+def div(alo: np.ndarray, ahi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> Pair:
+    """Quotient with IBEX semantics for divisors containing 0 (see module docstring)."""
+    alo, ahi, blo, bhi = np.broadcast_arrays(alo, ahi, blo, bhi)
+    lo, hi = div_nonzero(alo, ahi, blo, bhi)
     zb = (blo <= 0.0) & (bhi >= 0.0)
     if np.any(zb):
         a_pos = alo >= 0.0
@@ -198,11 +210,10 @@ def pow_int(alo: np.ndarray, ahi: np.ndarray, n: int) -> Pair:
     if n < 0:
         plo, phi = pow_int(alo, ahi, -n)
         return recip(plo, phi)
-    mlo = np.where(ahi < 0.0, -ahi, np.where(alo > 0.0, alo, 0.0))  # mignitude
-    mhi = np.maximum(np.abs(alo), np.abs(ahi))  # magnitude
-    plo, phi = _pow_pos(mlo, mhi, n)
     if n % 2 == 0:
-        lo, hi = plo, phi
+        mlo = np.where(ahi < 0.0, -ahi, np.where(alo > 0.0, alo, 0.0))  # mignitude
+        mhi = np.maximum(np.abs(alo), np.abs(ahi))  # magnitude
+        lo, hi = _pow_pos(mlo, mhi, n)
     else:
         # odd powers are increasing: bound sign(x)|x|**n at each end
         l1, h1 = _pow_pos(np.abs(alo), np.abs(alo), n)

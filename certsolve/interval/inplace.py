@@ -4,9 +4,9 @@ Same enclosures as :mod:`.arith` / :mod:`.projections`, computed with fewer temp
 arrays and memory passes (``out=`` arguments, results written straight into the
 evaluator's node arrays).  Differences from the general functions, all sound:
 
-* results of ``+`` and ``-`` are rounded without the ``2^-1074`` term: a sum or difference
-  of floats that rounds to zero or to a subnormal is exact (gradual underflow), so only
-  normal results need moving, and for those ``|x|·2^-52`` is at least one ulp;
+* results of ``+`` and ``-`` that are zero or subnormal are not moved: such a sum or
+  difference of floats is exact (gradual underflow); the others move one ulp out, as
+  everywhere (:func:`.rounding.up_inplace`);
 * empty operands are not propagated as empty results (the evaluator detects an empty
   node wherever it occurs; mapping an empty operand to a non-empty result only loses
   information);

@@ -35,6 +35,19 @@ most ``n + 4`` relative roundings (factor ``1 + 2 γ_{n+4}``), ``c - bc`` one ro
 (``2u |c - bc|``), then one ``nextafter`` outward.  Everything is batched over stacks of
 boxes: ``(B, n)`` vectors and ``(B, n, n)`` (or shared ``(n, n)``) matrices; a NaN or an
 infinity anywhere makes the test fail, never succeed.
+
+**Gauss–Seidel.**  The Hansen–Sengupta contraction (preconditioned interval Gauss–Seidel)
+uses the same ``M`` and ``b``: with ``d = X - c`` (enclosed as ``dc ± dr``), for
+``i = 1..n``::
+
+    x_i ∈ X_i ∩ ( c_i - (b_i + Σ_{j≠i} M_ij d_j) / M_ii )
+
+with the already narrowed ``d_j`` for ``j < i`` (:func:`gauss_seidel`).  The sum is a dot
+product in midpoint-radius form (``Σ |M_ij| |d_j|`` times ``γ_n`` for its rounding, the
+radii added, the total times ``1 + 2 γ_{n+4}``), then every bound is rounded outward.
+The work that does not depend on ``i`` -- the off-diagonal parts of ``M`` and their
+magnitudes, the pivots ``M_ii`` and whether they are free of 0 -- is done once for all
+components, so a sweep costs about 25 numpy calls per component whatever the batch size.
 """
 
 from __future__ import annotations
@@ -44,8 +57,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .arith import div_nonzero
 from .reductions import all_last
-from .rounding import up
+from .rounding import down, up
 
 __all__ = [
     "U",
@@ -61,6 +75,7 @@ __all__ = [
     "krawczyk_magnitude",
     "krawczyk_image",
     "krawczyk_mr",
+    "gauss_seidel",
 ]
 
 U = 2.0**-53  # unit roundoff of binary64, round to nearest
@@ -223,3 +238,67 @@ def krawczyk_mr(c, lo, hi, fc, fr, Jc, Jr):
     pre = precondition(Jc, Jr, fc, fr)
     klo, khi, proven = krawczyk_image(c, lo, hi, krawczyk_magnitude(pre.Mc, pre.Mr), pre.bc, pre.br)
     return klo, khi, proven & pre.ok
+
+
+def gauss_seidel(c, lo, hi, Mc, Mr, bc, br, ok):
+    """One preconditioned interval Gauss–Seidel sweep (module docstring): ``(lo, hi, empty)``.
+
+    ``c ∈ X = [lo, hi]`` ``(B, n)``; ``M ∈ Mc ± Mr`` ``(B, n, n)`` and ``b ∈ bc ± br``
+    ``(B, n)`` enclose ``Y J(X)`` and ``Y f(c)``.  Rows where ``ok`` is false, and components
+    whose pivot ``M_ii`` contains 0 (no extended division), are left unchanged; ``empty[k]``
+    proves that box ``k`` holds no zero.  Every bound is rounded as an array of ``B``
+    elements (:func:`.rounding.up`), whatever the number of components done at once.
+    """
+    lo = lo.copy()
+    hi = hi.copy()
+    B, n = lo.shape
+    g = 1.0 + 2.0 * gamma(n + 4)
+    gn = gamma(n)
+    tiny = n * _UNDERFLOW
+    with np.errstate(all="ignore"):
+        # the parts of the sweep that do not depend on the narrowed components
+        off_c = Mc.copy()
+        off_r = Mr.copy()
+        diag = np.arange(n)
+        off_c[:, diag, diag] = 0.0
+        off_r[:, diag, diag] = 0.0
+        off_abs = np.abs(off_c)
+        piv_c = Mc[:, diag, diag]
+        piv_r = Mr[:, diag, diag]
+        plo = down(piv_c - piv_r, size=B)
+        phi = up(piv_c + piv_r, size=B)
+        usable = ok[:, None] & ((plo > 0.0) | (phi < 0.0))
+        dlo = down(lo - c)
+        dhi = up(hi - c)
+        dc, dr = mr_from_bounds(dlo, dhi)  # column i is updated after step i
+        adc = np.abs(dc)
+        adr = adc + dr
+        for i in range(n):
+            # S = Σ_{j≠i} M_ij d_j, midpoint-radius with a priori rounding bound
+            mc, amc, mr = off_c[:, i, :], off_abs[:, i, :], off_r[:, i, :]
+            sc = np.einsum("bj,bj->b", mc, dc)
+            sr = (
+                np.einsum("bj,bj->b", amc, adc) * gn
+                + np.einsum("bj,bj->b", amc, dr)
+                + np.einsum("bj,bj->b", mr, adr)
+            )
+            sr = sr * g + tiny
+            # numerator t = b_i + S, then c_i - t / M_ii (the pivot is free of 0 where used)
+            tc = bc[:, i] + sc
+            tr = up(up(br[:, i] + sr) + np.abs(tc) * (2 * _U))
+            tlo = down(tc - tr)
+            thi = up(tc + tr)
+            qlo, qhi = div_nonzero(tlo, thi, plo[:, i], phi[:, i])
+            ci = c[:, i]
+            use = usable[:, i]
+            new_lo = np.where(use, np.fmax(lo[:, i], down(ci - qhi)), lo[:, i])
+            new_hi = np.where(use, np.fmin(hi[:, i], up(ci - qlo)), hi[:, i])
+            lo[:, i] = new_lo
+            hi[:, i] = new_hi
+            dci, dri = mr_from_bounds(down(new_lo - ci), up(new_hi - ci), size=dlo.size)
+            dc[:, i] = dci
+            dr[:, i] = dri
+            adc[:, i] = np.abs(dci)
+            adr[:, i] = adc[:, i] + dri
+    empty = ~np.all(lo <= hi, axis=1)
+    return lo, hi, empty

@@ -42,65 +42,81 @@ TINY = 2.0**-1074
 LIBM_ULPS = 8
 
 
-_MAX = float(np.finfo(np.float64).max)
-_BIG = 2.0**1000
 _SMALL = 64  # below this many elements numpy's nextafter is cheaper (one call)
+_MIN_NORMAL = 2.0**-1022
 
 
-def _margin(x, tiny: bool = True) -> np.ndarray:
-    """``min(|x|·2^-52, 2^1000) (+ 2^-1074)``: at least one ulp of ``x`` (a new array)."""
-    a = np.abs(x)
-    a *= EPS
-    np.fmin(a, _BIG, out=a)
-    if tiny:
-        a += TINY
-    return a
+def _step_up(x: np.ndarray, keep: np.ndarray) -> np.ndarray:
+    """``x`` moved to the next float up, in place, except where ``keep`` (float64 ``x``).
+
+    Small arrays use numpy's ``nextafter``.  Large ones step the bit patterns: a float's
+    bits read as an ``int64`` grow with the float for ``x >= +0`` and shrink for ``x <= -0``,
+    so the next float up is one integer step away (``+1`` or ``-1``), once ``-0`` is made
+    ``+0``; the same floats, about four times faster than ``nextafter`` there and as fast
+    as a margin.  ``keep`` must hold ``+inf`` and NaN (a step would change them).
+    """
+    kept = x[keep] if keep.any() else None
+    if x.size < _SMALL:
+        np.nextafter(x, _POS_INF, out=x)
+    else:
+        np.add(x, 0.0, out=x)  # -0.0 becomes +0.0
+        i = x.view(np.int64)
+        step = i >> 63  # 0 for x >= +0, -1 for x < 0
+        step |= 1
+        i += step
+    if kept is not None:
+        x[keep] = kept
+    return x
 
 
 def up(x, size: int | None = None):
-    """An upper bound, as a float, of any real that rounds to ``x`` (elementwise).
+    """The next float above ``x``: an upper bound of any real that rounds to ``x``.
 
-    Small arrays use ``nextafter``.  Large ones use ``x + (|x|·2^-52 + 2^-1074)``, ~9x
-    faster in numpy: ``|x|·2^-52`` is at least the spacing of floats above ``x`` (exactly
-    ``ulp(x)`` for positive ``x``, twice the spacing above a negative power of two), so the
-    rounded sum is at least the next float after ``x``; the ``2^-1074`` term covers 0 and
-    subnormals.  The ``|x|`` term is capped so that ``-inf`` (an overflowed negative value)
-    becomes ``-max_float`` as with ``nextafter``; NaN stays NaN.
-
-    ``size`` chooses the rule as for an array of that many elements: a column updated on
-    its own then rounds exactly as it would inside its whole array.
+    Exactly ``nextafter(x, +inf)`` at every size (NaN stays NaN, ``-inf`` becomes
+    ``-max_float``): the bound of one element does not depend on the array it is in, so a
+    batched evaluation gives the same floats however its operations are grouped.  Small
+    arrays use numpy's ``nextafter`` (one call), large ones integer steps on the bit
+    patterns (:func:`_step_up`).  ``size`` chooses the path as for an array of that many
+    elements; the floats are the same either way.
     """
-    if (np.size(x) if size is None else size) < _SMALL:
+    if (np.size(x) if size is None else size) < _SMALL or np.ndim(x) == 0:
         return np.nextafter(x, _POS_INF)
-    a = _margin(x)
-    a += x
-    return np.maximum(a, -_MAX, out=a)
+    y = np.add(x, 0.0, dtype=np.float64)  # a new array
+    return _step_up(y, ~(y < _POS_INF))
 
 
 def down(x, size: int | None = None):
-    """A lower bound, as a float, of any real that rounds to ``x`` (mirror of :func:`up`)."""
-    if (np.size(x) if size is None else size) < _SMALL:
+    """The next float below ``x`` (mirror of :func:`up`)."""
+    if (np.size(x) if size is None else size) < _SMALL or np.ndim(x) == 0:
         return np.nextafter(x, _NEG_INF)
-    a = _margin(x)
-    np.subtract(x, a, out=a)
-    return np.minimum(a, _MAX, out=a)
+    y = np.negative(x, dtype=np.float64)
+    _step_up(y, ~(y < _POS_INF))
+    return np.negative(y, out=y)
+
+
+def _kept(x: np.ndarray, exact_tiny: bool) -> np.ndarray:
+    """Where :func:`up_inplace` leaves ``x``: ``+inf``, NaN, and with ``exact_tiny`` zeros
+    and subnormals."""
+    if exact_tiny:
+        return ~((np.abs(x) >= _MIN_NORMAL) & (x < _POS_INF))
+    return ~(x < _POS_INF)
 
 
 def up_inplace(x: np.ndarray, exact_tiny: bool = False) -> np.ndarray:
-    """:func:`up` written into the float array ``x`` (the large-array rule at any size).
+    """:func:`up` written into the float array ``x``: the same floats.
 
     ``exact_tiny=True`` is for results of ``+`` and ``-`` only: a sum or difference of
-    floats that rounds to zero or to a subnormal is exact (gradual underflow), so the
-    ``2^-1074`` term is not needed there.
+    floats that rounds to zero or to a subnormal is exact (gradual underflow), so it is
+    left as it is.
     """
-    x += _margin(x, not exact_tiny)
-    return np.maximum(x, -_MAX, out=x)
+    return _step_up(x, _kept(x, exact_tiny))
 
 
 def down_inplace(x: np.ndarray, exact_tiny: bool = False) -> np.ndarray:
     """:func:`down` written into ``x`` (see :func:`up_inplace`)."""
-    x -= _margin(x, not exact_tiny)
-    return np.minimum(x, _MAX, out=x)
+    np.negative(x, out=x)
+    _step_up(x, _kept(x, exact_tiny))
+    return np.negative(x, out=x)
 
 
 def widen_down(x):

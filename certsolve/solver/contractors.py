@@ -104,28 +104,13 @@ class IntervalNewton:
     def __init__(self, csys: CompiledSystem, groups=None):
         self.csys = csys
         self.groups = None if groups is None else [np.asarray(g, dtype=bool) for g in groups]
-        for g in self.groups or ():  # compile the column programs now, not in the search
-            csys._column_program(tuple(int(j) for j in np.flatnonzero(g)))
+        if self.groups is not None:  # compile the programs now, not in the search
+            csys.prepare_mixed(self.groups)
 
     def _mixed(self, lo, hi, c, flo, fhi):
-        """Mixed linearisation: group ``k``'s columns over ``(X_{1..k}, c_{k+1..})``.
-
-        Each group evaluates only its own columns (and ``f``); the last group's box is
-        ``X`` itself, so ``defined`` covers ``f`` on all of ``X``.
-        """
-        B, n = lo.shape
-        mlo = np.zeros((B, n, n))
-        mhi = np.zeros((B, n, n))
-        defined = np.ones(B, dtype=bool)
-        done = np.zeros(n, dtype=bool)
-        for g in self.groups:
-            done |= g
-            blo = np.where(done, lo, c)
-            bhi = np.where(done, hi, c)
-            _, _, jlo, jhi, de = self.csys.eval_fj_columns(blo, bhi, np.flatnonzero(g))
-            mlo[:, :, g] = jlo[:, :, g]
-            mhi[:, :, g] = jhi[:, :, g]
-            defined &= de
+        """Mixed linearisation: group ``k``'s columns over ``(X_{1..k}, c_{k+1..})``
+        (:meth:`~certsolve.expr.compiled.CompiledSystem.eval_fj_mixed`)."""
+        mlo, mhi, defined = self.csys.eval_fj_mixed(lo, hi, c, self.groups)
         return linearization_from_bounds(lo, hi, c, flo, fhi, mlo, mhi, defined)
 
     def contract(self, lo, hi) -> NewtonStep:

@@ -31,19 +31,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..expr.compiled import CompiledSystem
-from ..interval import arith
 from ..interval.core import midpoint
 from ..interval.linalg import (
-    U,
     batched_inverse,
-    gamma,
+    gauss_seidel,
     krawczyk_image,
     krawczyk_magnitude,
     mr_from_bounds,
     precondition,
 )
 from ..interval.reductions import all_last
-from ..interval.rounding import down, up
 
 __all__ = [
     "Linearization",
@@ -170,50 +167,6 @@ def hansen_sengupta(lin: Linearization) -> tuple[np.ndarray, np.ndarray, np.ndar
 
     Boxes whose linearisation is unusable (``lin.ok`` false) are returned unchanged; a
     component whose pivot ``M_ii`` contains 0 is left unchanged (no extended division).
+    The kernel is :func:`certsolve.interval.linalg.gauss_seidel`.
     """
-    lo = lin.lo.copy()
-    hi = lin.hi.copy()
-    c = lin.c
-    B, n = lo.shape
-    ok = lin.ok
-    empty = np.zeros(B, dtype=bool)
-    with np.errstate(all="ignore"):
-        dlo = down(lo - c)
-        dhi = up(hi - c)
-        g = 1.0 + 2.0 * gamma(n + 4)
-        dc, dr = mr_from_bounds(dlo, dhi)  # (B, n); column i is updated after step i
-        for i in range(n):
-            mc = lin.Mc[:, i, :].copy()
-            mr = lin.Mr[:, i, :].copy()
-            piv_c, piv_r = mc[:, i].copy(), mr[:, i].copy()
-            mc[:, i] = 0.0
-            mr[:, i] = 0.0
-            # S = Σ_{j≠i} M_ij d_j, midpoint-radius with a priori rounding bound
-            sc = np.einsum("bj,bj->b", mc, dc)
-            amc = np.abs(mc)
-            adc = np.abs(dc)
-            sr = (
-                np.einsum("bj,bj->b", amc, adc) * gamma(n)
-                + np.einsum("bj,bj->b", amc, dr)
-                + np.einsum("bj,bj->b", mr, adc + dr)
-            )
-            sr = sr * g + n * 2.0**-1000
-            # numerator b_i + S
-            tc = lin.bc[:, i] + sc
-            tr = up(up(lin.br[:, i] + sr) + np.abs(tc) * (2 * U))
-            tlo = down(tc - tr)
-            thi = up(tc + tr)
-            plo = down(piv_c - piv_r)
-            phi = up(piv_c + piv_r)
-            usable = ok & ((plo > 0.0) | (phi < 0.0))
-            qlo, qhi = arith.div(tlo, thi, plo, phi)
-            nlo, nhi = arith.sub(c[:, i], c[:, i], qlo, qhi)
-            new_lo = np.where(usable, np.fmax(lo[:, i], nlo), lo[:, i])
-            new_hi = np.where(usable, np.fmin(hi[:, i], nhi), hi[:, i])
-            empty |= ~(new_lo <= new_hi)
-            lo[:, i] = new_lo
-            hi[:, i] = new_hi
-            dlo[:, i] = down(new_lo - c[:, i])
-            dhi[:, i] = up(new_hi - c[:, i])
-            dc[:, i], dr[:, i] = mr_from_bounds(dlo[:, i], dhi[:, i], size=dlo.size)
-    return lo, hi, empty
+    return gauss_seidel(lin.c, lin.lo, lin.hi, lin.Mc, lin.Mr, lin.bc, lin.br, lin.ok)

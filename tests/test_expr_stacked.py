@@ -1,0 +1,86 @@
+"""Hansen's mixed Jacobian: the stacked program (:mod:`certsolve.expr.stacked`) against one
+column program per group, on random boxes of the reference systems.
+
+The two paths of this code apply the same operations to the same inputs, and the outward
+rounding of a bound does not depend on the size of the array it is in; so they must give the
+same floats and mark the same boxes defined, at every batch size, and the stacked program
+must have merged the copies' groups.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from certsolve.expr.compiled import STACK_ELEMENTS, CompiledSystem
+from certsolve.expr.minibex import load_minibex
+from certsolve.interval.core import midpoint
+
+SYSTEMS = Path(__file__).resolve().parent.parent / "examples" / "systems"
+NAMES = ["katsura-5", "eco-6", "brown-5", "trig-exp", "kin2-6r", "double-root", "troesch-10"]
+
+
+def boxes(domain, B, rng, scale):
+    dom = np.clip(np.asarray(domain, dtype=float), -100.0, 100.0)
+    w = (dom[:, 1] - dom[:, 0]) * scale
+    lo = dom[:, 0] + rng.random((B, dom.shape[0])) * (dom[:, 1] - dom[:, 0] - w)
+    return lo, lo + w
+
+
+def partitions(n):
+    """One variable per group (the solver's default), and two uneven groups."""
+    yield list(np.eye(n, dtype=bool))
+    first = np.arange(n) < (n + 1) // 3
+    yield [first, ~first]
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_stacked_gives_the_per_group_floats(name):
+    system = load_minibex(SYSTEMS / f"{name}.mbx")
+    csys = CompiledSystem(system)
+    rng = np.random.default_rng(len(name))
+    for groups in partitions(csys.n):
+        csys.prepare_mixed(groups)
+        for B, scale in [(1, 1 / 8), (3, 1e-3), (9, 1 / 64), (70, 1 / 16)]:
+            lo, hi = boxes(system.domain, B, rng, scale)
+            c = midpoint(lo, hi)
+            got = csys.eval_fj_mixed(lo, hi, c, groups)
+            want = csys._mixed_by_group(lo, hi, c, groups)
+            for a, b in zip(got, want):
+                assert np.array_equal(a, b, equal_nan=True)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_stacked_merges_the_groups_of_the_copies(name):
+    system = load_minibex(SYSTEMS / f"{name}.mbx")
+    csys = CompiledSystem(system)
+    rng = np.random.default_rng(7)
+    groups = list(np.eye(csys.n, dtype=bool))
+    csys.prepare_mixed(groups)
+    lo, hi = boxes(system.domain, 64, rng, 1 / 32)
+    c = midpoint(lo, hi)
+    key = tuple((j,) for j in range(csys.n))
+    stacked = csys._mixed_program(key)
+    assert 64 * stacked.program.n_nodes <= STACK_ELEMENTS  # the stacked path is the one run
+    got = csys.eval_fj_mixed(lo, hi, c, groups)
+    want = csys._mixed_by_group(lo, hi, c, groups)
+    for a, b in zip(got, want):
+        assert np.array_equal(a, b, equal_nan=True)
+    # the copies were merged: far fewer groups than the column programs have together
+    per_group = sum(len(csys._column_program(cols)[0].fwd_groups) for cols in key)
+    assert len(stacked.program.fwd_groups) < per_group
+
+
+def test_large_batches_take_one_program_per_group():
+    system = load_minibex(SYSTEMS / "eco-6.mbx")
+    csys = CompiledSystem(system)
+    groups = list(np.eye(csys.n, dtype=bool))
+    csys.prepare_mixed(groups)
+    stacked = csys._mixed_program(tuple((j,) for j in range(csys.n)))
+    B = STACK_ELEMENTS // stacked.program.n_nodes + 1
+    lo, hi = boxes(system.domain, B, np.random.default_rng(1), 1 / 16)
+    c = midpoint(lo, hi)
+    got = csys.eval_fj_mixed(lo, hi, c, groups)
+    want = csys._mixed_by_group(lo, hi, c, groups)
+    for a, b in zip(got, want):
+        assert np.array_equal(a, b, equal_nan=True)
