@@ -42,9 +42,8 @@ included.  The counters (``boxes``, ``time``, ``cpu`` ...) go on from their save
 ``resumed`` counts the restores and ``resumed_boxes`` is the boxes already processed at
 the last one.
 
-A search with a loop of its own (the certified design, :mod:`certsolve.force.design`)
-uses the same archive through :meth:`Checkpoint.begin_records` / :meth:`~Checkpoint.due`
-/ :meth:`~Checkpoint.save_records`: its records are whatever it needs to go on.
+Every search that checkpoints runs on the driver, the certified design
+(:mod:`certsolve.force.design`) included: one snapshot format, one restore.
 """
 
 from __future__ import annotations
@@ -339,31 +338,6 @@ class Checkpoint:
         stats.resumed += 1
         stats.resumed_boxes = stats.boxes
         return state, stats
-
-    # -- loops of their own (not on the driver) -------------------------------------------------
-    def begin_records(self, describe: str) -> Any | None:
-        """For a search with its own loop: fingerprint it from ``describe`` (its problem and
-        settings as text) and the key; the records of a stored snapshot of it, or None."""
-        self.fingerprint = hashlib.sha256(f"{describe}\nkey:{self.key}".encode()).hexdigest()
-        self._last = time.monotonic()
-        data = self._load()
-        if data is None:
-            return None
-        try:
-            return unpack(data, self.fingerprint)
-        except CheckpointError as exc:
-            if self.strict:
-                raise
-            self.ignored = str(exc)
-            return None
-
-    def due(self) -> bool:
-        """``interval`` seconds have passed since the last write."""
-        return time.monotonic() - self._last >= self.interval
-
-    def save_records(self, what: str, records: Any) -> None:
-        """Write ``records`` now (errors as :meth:`write`)."""
-        self._write(lambda: pack(self.fingerprint, what, records))
 
 
 def pack(fingerprint: str | None, what: str, records: Any) -> bytes:
