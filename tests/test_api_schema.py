@@ -82,6 +82,10 @@ def _repair_params(kind: str, robot: dict | None, params: dict) -> None:
     if kind in ("fk", "fk/track"):
         params["u"] = (list(params["u"]) + [0.0] * m)[:m]
         params.pop("formulation", None)  # which ones a robot admits depends on its geometry
+    if kind == "ik" and m:
+        if params.get("u_last") is not None:
+            params["u_last"] = (list(params["u_last"]) + [0.0] * m)[:m]
+        params["fixed_wire"] = min(params.get("fixed_wire", 1), m)
     if kind in ("ik", "ik-sweep", "isotropic") and robot is not None:
         _no_zero_wire(robot, params["pose"])
     if kind == "ik-sweep":

@@ -67,13 +67,13 @@ def test_stroke_violation_in_table(capsys):
          "no elastic wire model"),
         (["ik", "examples/robots/nope.json", "--pose", "0,0"], "cannot read robot file"),
         (["ik", MARIONET, "--pose", "111,58,107", "--method", "alg1", "--u-last", "1,2"],
-         "--u-last: expected 7 numbers"),
+         "--u-last: expected 7 values"),
         (["ik", MARIONET, "--pose", "111,58,107", "--u-last", "0,0,0,0,0,0,0"],
-         "--u-last applies to --method alg1 or alg2"),
+         "--u-last: applies to method alg1 or alg2"),
         (["ik", MARIONET, "--pose", "111,58,107", "--method", "alg2", "--fixed-wire", "9"],
          "--fixed-wire: the robot has wires 1..7"),
         (["ik", MARIONET, "--pose", "111,58,107", "--method", "alg1", "--u-last",
-          "0,0,0,0,0,0,0", "--window", "-1"], "--window must be positive"),
+          "0,0,0,0,0,0,0", "--window", "-1"], "--window: must be greater than 0"),
     ],
 )  # fmt: skip
 def test_errors_are_one_line(capsys, argv, needle):

@@ -13,11 +13,13 @@ from certsolve.jobs.errors import describe_validation_error, validation_details
 from certsolve.jobs.jsonutil import dumps, plain, truncate_lists
 from certsolve.jobs.kinds import KINDS, QUICK_CALLS, RunContext, public_kinds, request_adapter
 from certsolve.jobs.worker import JobMonitor, progress_dict, run_job
+from certsolve.robot import load_robot_spec
 from certsolve.solver import Progress
 
 ROOT = Path(__file__).resolve().parents[1]
 CIRCLE = (ROOT / "examples/systems/circle-line.mbx").read_text()
 PLANAR = json.loads((ROOT / "examples/robots/planar.json").read_text())
+MARIONET = ROOT / "examples/robots/marionet.json"
 DESIGN = json.loads((ROOT / "examples/design/planar-spec.json").read_text())
 
 
@@ -55,7 +57,8 @@ def test_registry_and_models():
     }
     assert KINDS["sleep"].hidden and not KINDS["solve"].hidden
     assert KINDS["solve"].has_timeout and KINDS["solve"].has_max_boxes
-    assert not KINDS["ik"].has_timeout
+    assert KINDS["ik"].has_timeout  # Algorithm 1's own time limit
+    assert not KINDS["isotropic-map"].has_timeout
     public = request_adapter(False)
     with pytest.raises(ValidationError):
         public.validate_python({"kind": "sleep"})
@@ -307,7 +310,14 @@ QUICK_SAMPLES = {
     "fk/track": {"u": [0, 0, 0, 0], "near_pose": [90, 60, 0], "half_width": 0.2},
 }
 # functions with **options, and where those go
-FORWARDED = {"solve": "certsolve.solver.branch_and_prune:Solver.default"}
+FORWARDED = {
+    "solve": ("certsolve.solver.branch_and_prune:Solver.default",),
+    "ik": (  # by method: test_ik_passes_each_option_to_its_methods_function
+        "certsolve.kinematics.ik_first:ik_tension_first",
+        "certsolve.kinematics.ik_alg1:ik_algorithm1",
+        "certsolve.kinematics.ik_alg2:ik_algorithm2",
+    ),
+}
 
 
 def _named(fn) -> set[str]:
@@ -319,13 +329,14 @@ def _named(fn) -> set[str]:
 
 
 def _forwarded(name: str) -> set[str]:
-    if name not in FORWARDED:
-        return set()
-    module, attr = FORWARDED[name].split(":")
-    obj = sys.modules[module] if module in sys.modules else __import__(module, fromlist=["_"])
-    for part in attr.split("."):
-        obj = getattr(obj, part)
-    return _named(obj)
+    named: set[str] = set()
+    for path in FORWARDED.get(name, ()):
+        module, attr = path.split(":")
+        obj = sys.modules[module] if module in sys.modules else __import__(module, fromlist=["_"])
+        for part in attr.split("."):
+            obj = getattr(obj, part)
+        named |= _named(obj)
+    return named
 
 
 def _replace_function(monkeypatch, real, accepted: set[str]) -> list:
@@ -364,11 +375,55 @@ def test_each_operation_passes_only_options_its_function_takes(name, monkeypatch
     assert len(calls) == 1
 
 
+# each ik method with every option it reads set away from its default (MARIONET: 7 wires)
+IK_SAMPLES = {
+    "tension": {"distribution": "lp", "check_lp": True},
+    "alg1": {"u_last": [0.3] * 7, "window": 0.5, "timeout": 2.0, "max_boxes": 50},
+    "alg2": {"u_last": [0.3] * 7, "window": 0.5, "fixed_wire": 3, "tau_fixed": 5.0,
+             "solve": "newton"},
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("method", sorted(IK_SAMPLES))
+def test_ik_passes_each_option_to_its_methods_function(method, monkeypatch):
+    """``run_ik`` hands ``inverse_kinematics`` the options of ``method`` only, and they
+    bind to that method's function; every option of the params reaches some method."""
+    from certsolve.kinematics import ik as ik_module
+    from certsolve.kinematics.ik_alg1 import ik_algorithm1
+    from certsolve.kinematics.ik_alg2 import ik_algorithm2
+    from certsolve.kinematics.ik_first import ik_tension_first
+    from certsolve.robot.inputs import IK_METHOD_OPTIONS
+
+    functions = {"tension": ik_tension_first, "alg1": ik_algorithm1, "alg2": ik_algorithm2}
+    calls: list = []
+
+    def fake(robot, pose, method, **options):
+        inspect.signature(functions[method]).bind(robot, pose, **options)
+        calls.append(options)
+        return {"fake": True}
+
+    monkeypatch.setattr(ik_module, "inverse_kinematics", fake)
+    spec = load_robot_spec(MARIONET)
+    params = KINDS["ik"].params.model_validate(
+        {"pose": [111, 58, 107, 0, 0, 0], "method": method, **IK_SAMPLES[method]}
+    )
+    params.check_robot(spec)
+    ctx = RunContext(time_limit=1.0, max_boxes=10)
+    assert KINDS["ik"].run(params, spec, ctx) == {"fake": True}
+    (options,) = calls
+    expected = {**IK_SAMPLES[method]}
+    if method == "alg1":  # within the job's limits
+        expected.update(timeout=1.0, max_boxes=10)
+    assert options == expected
+    fields = set(KINDS["ik"].params.model_fields) - {"pose", "method"}
+    assert fields == set().union(*IK_METHOD_OPTIONS.values())
+
+
 @pytest.mark.parametrize("name", sorted(QUICK_SAMPLES))
 def test_each_quick_call_passes_only_options_its_function_takes(name, monkeypatch):
     call = QUICK_CALLS[name]
     real = call.load()
-    calls = _replace_function(monkeypatch, real, _named(real))
+    calls = _replace_function(monkeypatch, real, _named(real) | _forwarded(name))
     req = call.model.model_validate({"robot": PLANAR, "params": QUICK_SAMPLES[name]})
     assert call.run(req.params, req.robot) == {"fake": True}
     assert len(calls) == 1

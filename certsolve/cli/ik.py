@@ -10,9 +10,9 @@ import argparse
 
 import numpy as np
 
-from ..kinematics.ik import METHODS, IKResult, inverse_kinematics
+from ..kinematics.ik import METHODS, IKResult
 from ..kinematics.ik_sweep import IKSweepResult
-from ..robot import Pose, Robot, load_robot_spec
+from ..robot import Robot, load_robot_spec
 from .common import CliError, parse_floats, print_json, print_result, validated
 
 
@@ -81,38 +81,6 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _options(args: argparse.Namespace, robot: Robot) -> dict:
-    m = robot.m
-    u_last = None
-    if args.u_last is not None:
-        u_last = parse_floats(args.u_last, "--u-last", m)
-    if args.window is not None and not args.window > 0:
-        raise CliError("--window must be positive (cm)")
-    if args.method == "tension":
-        for flag, val in (("--u-last", args.u_last), ("--window", args.window)):
-            if val is not None:
-                raise CliError(f"{flag} applies to --method alg1 or alg2")
-        return {"distribution": args.distribution, "check_lp": True}
-    if args.method == "alg1":
-        if args.max_boxes < 1:
-            raise CliError("--max-boxes must be at least 1")
-        return {
-            "u_last": u_last,
-            "window": args.window,
-            "timeout": 10.0 if args.timeout is None else args.timeout,
-            "max_boxes": args.max_boxes,
-        }
-    if not 1 <= args.fixed_wire <= m:
-        raise CliError(f"--fixed-wire: the robot has wires 1..{m}")
-    return {
-        "u_last": u_last,
-        "window": args.window,
-        "fixed_wire": args.fixed_wire,
-        "tau_fixed": args.tau_fixed,
-        "solve": "newton" if args.newton else "tau",
-    }
-
-
 # the parts of --sweep J=START:STOP:N, as the ik-sweep job's params name them
 SWEEP_PARTS = {"joint": "J", "start": "START", "stop": "STOP", "count": "N"}
 
@@ -157,22 +125,27 @@ def _check_sweep_options(args: argparse.Namespace) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..jobs.kinds.ik import IkParams
+    from ..jobs.kinds.base import RunContext
+    from ..jobs.kinds.ik import IkParams, run_ik
 
     _check_sweep_options(args)
     spec = load_robot_spec(args.robot)
     if args.sweep is not None:
         return run_sweep(args, spec)
-    values = {"pose": parse_floats(args.pose, "--pose"), "method": args.method or "tension"}
+    method = args.method or "tension"
+    values = {
+        "pose": parse_floats(args.pose, "--pose"),
+        "method": method,
+        "u_last": None if args.u_last is None else parse_floats(args.u_last, "--u-last"),
+        "solve": "newton" if args.newton else "tau",
+        "check_lp": method == "tension",  # the table shows the closed form against the LP
+    }
     params = validated(IkParams, args, values, robot=spec)  # the ik job's checks
-    robot = Robot.from_spec(spec)
-    pose = Pose.from_params(robot.dof, params.pose)
-    args.method = params.method
-    result = inverse_kinematics(robot, pose, args.method, **_options(args, robot))
+    result = run_ik(params, spec, RunContext())
     if args.json:
         print_json(result.to_dict())
     else:
-        print(format_result(result, robot))
+        print(format_result(result, Robot.from_spec(spec)))
     return 0
 
 

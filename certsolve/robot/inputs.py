@@ -22,9 +22,10 @@ from collections.abc import Sequence
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from ..inputs import (
+    MAX_COORD,
     MAX_FORCE,
     Coord,
     InputError,
@@ -39,6 +40,8 @@ from .schema import MAX_WIRES
 __all__ = [
     "Formulation",
     "FkOptions",
+    "ALG1_TIMEOUT",
+    "IK_METHOD_OPTIONS",
     "IkOptions",
     "IsotropicOptions",
     "PoseValues",
@@ -103,11 +106,73 @@ class TrackOptions(StrictModel):
     half_width: float = Field(default=0.1, gt=0, le=1e4)
 
 
+#: the options each method of :func:`certsolve.inverse_kinematics` takes from
+#: :class:`IkOptions` (the keywords of ``ik_tension_first``, ``ik_algorithm1``,
+#: ``ik_algorithm2``; a test binds them to those signatures)
+IK_METHOD_OPTIONS: dict[str, tuple[str, ...]] = {
+    "tension": ("distribution", "check_lp"),
+    "alg1": ("u_last", "window", "timeout", "max_boxes"),
+    "alg2": ("u_last", "window", "fixed_wire", "tau_fixed", "solve"),
+}
+#: Algorithm 1's time limit (s) when ``timeout`` is not given
+ALG1_TIMEOUT = 10.0
+
+
 class IkOptions(StrictModel):
-    """Options of :func:`certsolve.inverse_kinematics` (and of the ``ik`` job)."""
+    """Options of :func:`certsolve.inverse_kinematics` (and of the ``ik`` job and
+    ``certsolve ik``).
+
+    Each method reads its own (:data:`IK_METHOD_OPTIONS`); ``u_last`` and ``window`` are
+    refused with ``tension`` (it has no search window), the others keep their defaults
+    where their method does not run.  ``fixed_wire`` is 1-based and checked against the
+    robot by the job (``IkParams.check_robot``), as ``u_last``'s length.
+    """
 
     pose: PoseValues
     method: Literal["tension", "alg1", "alg2"] = "tension"
+    u_last: Controls | None = Field(
+        default=None,
+        description="alg1: centre of the search window; alg2: Newton start and window centre (cm)",
+    )
+    window: float | None = Field(
+        default=None,
+        gt=0,
+        le=MAX_COORD,
+        description="alg1/alg2: full width (cm) of the window around u_last (alg1: 0.1)",
+    )
+    fixed_wire: int = Field(default=1, ge=1, le=MAX_WIRES, description="alg2: wire fixed (1-based)")
+    tau_fixed: float | None = Field(
+        default=None,
+        ge=-MAX_FORCE,
+        le=MAX_FORCE,
+        description="alg2: tension of the fixed wire (N; default: middle of its range)",
+    )
+    solve: Literal["tau", "newton"] = Field(
+        default="tau", description="alg2: one linear solve in the tensions, or Newton in u"
+    )
+    timeout: float | None = Field(
+        default=None, gt=0, description=f"alg1: time limit (s; default {ALG1_TIMEOUT:g})"
+    )
+    max_boxes: int = Field(default=20000, ge=1, description="alg1: limit on processed boxes")
+    distribution: Literal["auto", "closed-form", "lp"] = Field(
+        default="auto", description="tension: how the tensions are chosen"
+    )
+    check_lp: bool = Field(
+        default=False, description="tension: also solve the LP and report the difference"
+    )
+
+    @model_validator(mode="after")
+    def _window_needs_a_search(self) -> IkOptions:
+        if self.method == "tension":
+            for name in ("u_last", "window"):
+                if getattr(self, name) is not None:
+                    raise ValueError(f"{name}: applies to method alg1 or alg2")
+        return self
+
+    def method_options(self) -> dict[str, Any]:
+        """The keywords of this method's function (:data:`IK_METHOD_OPTIONS`), limits
+        aside: the caller bounds ``timeout`` and ``max_boxes``."""
+        return {name: getattr(self, name) for name in IK_METHOD_OPTIONS[self.method]}
 
 
 class IsotropicOptions(StrictModel):

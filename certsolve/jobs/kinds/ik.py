@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from ...robot.inputs import IkOptions
+from ...robot.inputs import ALG1_TIMEOUT, IkOptions
 from ...robot.schema import RobotSpec, robot_dof_schema
 from .base import (
     POSE_LENGTH,
@@ -18,6 +18,7 @@ from .base import (
     RunContext,
     check_pose,
     check_wire_lengths,
+    check_wires,
     require_elastic,
     robot_model,
 )
@@ -28,11 +29,13 @@ __all__ = ["KIND", "QUICK", "IkCall", "IkJob", "IkParams", "ik_cost", "run_ik"]
 class IkParams(IkOptions, Params):  # the library's options as job params
     @classmethod
     def schema_variants(cls, dof: int) -> list[tuple[dict, dict[str, Any]]]:
-        """The tension method takes any robot; Algorithms 1 and 2 need the elastic model."""
+        """The tension method takes any robot (and no search window: ``u_last`` and
+        ``window`` absent); Algorithms 1 and 2 need the elastic model."""
         tension = {"const": "tension", "default": "tension", "type": "string"}
         algorithms = Required({"enum": ["alg1", "alg2"], "type": "string"})
+        no_window = {"u_last": None, "window": None}
         return [
-            (robot_dof_schema(dof), {"pose": POSE_LENGTH[dof], "method": tension}),
+            (robot_dof_schema(dof), {"pose": POSE_LENGTH[dof], "method": tension, **no_window}),
             (robot_dof_schema(dof, elastic=True), {"pose": POSE_LENGTH[dof], "method": algorithms}),
         ]
 
@@ -45,6 +48,11 @@ class IkParams(IkOptions, Params):  # the library's options as job params
                 f"inverse kinematics ({self.method})",
                 "; use method 'tension' for the tensions only",
             )
+        if self.u_last is not None:
+            check_wires(robot, self.u_last, "u_last")
+        m = len(robot.wires)
+        if self.method == "alg2" and not self.fixed_wire <= m:
+            raise ValueError(f"fixed_wire: the robot has wires 1..{m}")
 
 
 class IkJob(Job):
@@ -62,13 +70,24 @@ def inverse_kinematics() -> Any:
 
 def run_ik(p: IkParams, spec: RobotSpec, ctx: RunContext | None = None) -> Any:
     """Actuator values and tensions at ``p.pose``:
-    :func:`~certsolve.kinematics.inverse_kinematics` (no limits: ``ctx`` is unused)."""
+    :func:`~certsolve.kinematics.inverse_kinematics` with the options of ``p.method``
+    (:meth:`~certsolve.robot.inputs.IkOptions.method_options`).  Algorithm 1's time and
+    box limits are its own (``timeout``, default 10 s; ``max_boxes``) within ``ctx``'s."""
     from ...kinematics.ik import inverse_kinematics
     from ...robot.geometry import Pose
 
     robot = robot_model(spec)
     pose = Pose.from_params(robot.dof, p.pose)
-    return inverse_kinematics(robot, pose, method=p.method)
+    options = p.method_options()
+    if p.method == "alg1":
+        ctx = ctx or RunContext()
+        options["timeout"] = _within(p.timeout or ALG1_TIMEOUT, ctx.time_limit)
+        options["max_boxes"] = int(_within(p.max_boxes, ctx.max_boxes))
+    return inverse_kinematics(robot, pose, method=p.method, **options)
+
+
+def _within(value: float, limit: float | None) -> float:
+    return value if limit is None else min(value, limit)
 
 
 KIND = Kind(
@@ -89,9 +108,10 @@ class IkCall(Request):
 
 
 def ik_cost(req: IkCall) -> float:
-    """Seconds, roughly: Algorithm 1 searches until its time limit (10 s); the others take
-    milliseconds."""
-    return 10.0 if req.params.method == "alg1" else 0.05
+    """Seconds, roughly: Algorithm 1 searches until its time limit (``timeout``, default
+    10 s); the others take milliseconds."""
+    p = req.params
+    return (p.timeout or ALG1_TIMEOUT) if p.method == "alg1" else 0.05
 
 
 QUICK = QuickCall(
