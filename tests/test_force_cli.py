@@ -27,6 +27,21 @@ def test_isotropic_at_json(capsys):
     assert d["status"] == "inside" and len(d["polytope"]["facets"]) == 6
 
 
+def test_isotropic_grid_has_the_command_lines_ceiling_not_the_services(capsys):
+    """The CLI runs the isotropic-map operation with its own grid limit (5000 a side); the
+    job keeps the service's (MAX_GRID_SIDE)."""
+    from pydantic import ValidationError
+
+    from certsolve.jobs.kinds.isotropic_map import MAX_GRID_SIDE, IsotropicMapParams
+
+    side = MAX_GRID_SIDE + 1
+    with pytest.raises(ValidationError, match="nx"):
+        IsotropicMapParams.model_validate({"grid": [0, 1, 0, 1], "nx": side, "ny": 1})
+    code, out, _ = run(capsys, "isotropic", KRUT3, "--grid", f"0,1,0,1,{side},1", "--json")
+    d = json.loads(out)
+    assert code == 0 and len(d["xs"]) == side and d["summary"]["poses"] == side
+
+
 def test_isotropic_at_text_krut_algorithm(capsys):
     code, out, _ = run(capsys, "isotropic", KRUT3, "--at", "0,0", "--algorithm", "krut")
     assert code == 0 and "389.711" in out and "krut2004" in out
@@ -117,6 +132,11 @@ def test_workspace_marionet_orientation_ranges(capsys):
         (["isotropic", KRUT3, "--grid", "0,1,0"], "--grid"),
         (["isotropic", KRUT3, "--grid", "1,0,0,1"], "--grid"),
         (["isotropic", KRUT3, "--grid", "0,1,0,1,0,5"], "--grid"),
+        (
+            ["isotropic", KRUT3, "--grid", "0,1,0,1,5001,1"],
+            "--grid: must be less than or equal to 5000",
+        ),
+        (["isotropic", KRUT3, "--grid", "0,1,0,1,2.5,3"], "--grid: nx and ny must be integers"),
         (["isotropic", KRUT3, "--grid", "0,1,0,1", "--z", "3"], "--z"),
         (["isotropic", KRUT3, "--grid", "0,1,0,1", "--orientation", "3"], "--orientation"),
         (["isotropic", KRUT3, "--at", "0,0", "--external", "1"], "--external"),

@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import re
 from collections.abc import Mapping
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
@@ -33,6 +34,9 @@ from .common import (
     progress_reporter,
     validated,
 )
+
+if TYPE_CHECKING:
+    from ..jobs.kinds.isotropic_map import IsotropicMapParams
 
 
 def register(sub) -> None:
@@ -167,6 +171,47 @@ def _orientation_ranges(robot: Robot, text: str | None):
     return out[0] if n == 1 else out
 
 
+# the command line's own grid ceilings: larger than the service's (a map runs here, with no
+# time limit, and is not stored); the service keeps MAX_GRID_SIDE and MAX_GRID_POINTS
+CLI_GRID_SIDE = 5000
+CLI_GRID_DEFAULT = 200
+
+
+def _grid_params(args: argparse.Namespace, robot: Robot) -> IsotropicMapParams:
+    """``--grid``, ``--z``, ``--orientation``, ``--external`` as the map operation's params:
+    the syntax is checked here, the values by the job's model with the command line's
+    ceilings (``--grid`` up to 5000 x 5000; 200 x 200 when ``nx``, ``ny`` are not given)."""
+    from pydantic import Field
+
+    from ..jobs.kinds.isotropic_map import IsotropicMapParams
+
+    class CliGridParams(IsotropicMapParams):
+        max_grid_points: ClassVar[int] = CLI_GRID_SIDE * CLI_GRID_SIDE
+        nx: int = Field(default=CLI_GRID_DEFAULT, ge=1, le=CLI_GRID_SIDE)
+        ny: int = Field(default=CLI_GRID_DEFAULT, ge=1, le=CLI_GRID_SIDE)
+
+    vals = parse_floats(args.grid, "--grid")
+    if len(vals) not in (4, 6):
+        raise CliError("--grid: expected xmin,xmax,ymin,ymax[,nx,ny]")
+    if not all(np.isfinite(vals)):
+        raise CliError("--grid: the bounds and sizes must be finite")
+    if len(vals) == 6 and (vals[4] != int(vals[4]) or vals[5] != int(vals[5])):
+        raise CliError("--grid: nx and ny must be integers")
+    if args.algorithm != "shifting":
+        raise CliError("--algorithm: maps always use hyperplane shifting")
+    if args.ellipse:
+        raise CliError("--ellipse goes with --at")
+    values = {
+        "grid": vals[:4],
+        "nx": int(vals[4]) if len(vals) == 6 else None,
+        "ny": int(vals[5]) if len(vals) == 6 else None,
+        "orientation": _fixed_orientation(robot, args.orientation),
+        "external": _external(robot, args.external),
+    }
+    option = {"nx": "grid", "ny": "grid"}
+    return validated(CliGridParams, args, values, robot=robot.spec, option=option)
+
+
 def _fmt(x) -> str:
     return "n/a" if x is None else f"{x:.6g}"
 
@@ -181,7 +226,8 @@ def _check_plot(args: argparse.Namespace) -> None:
 
 
 def run_isotropic(args: argparse.Namespace) -> int:
-    from ..force import isotropic_map
+    from ..jobs.kinds.base import RunContext
+    from ..jobs.kinds.isotropic_map import run_isotropic_map
 
     _check_plot(args)
     robot = Robot.load(args.robot)
@@ -206,25 +252,8 @@ def run_isotropic(args: argparse.Namespace) -> int:
         print_result(args.json, res, lambda: format_isotropic(res, args.plot), plot=args.plot)
         return 0
 
-    vals = parse_floats(args.grid, "--grid")
-    if len(vals) not in (4, 6):
-        raise CliError("--grid: expected xmin,xmax,ymin,ymax[,nx,ny]")
-    xmin, xmax, ymin, ymax = vals[:4]
-    if not all(np.isfinite(vals)) or xmin > xmax or ymin > ymax:
-        raise CliError("--grid: need finite bounds with xmin <= xmax and ymin <= ymax")
-    nx, ny = (200, 200) if len(vals) == 4 else (vals[4], vals[5])
-    if nx != int(nx) or ny != int(ny) or not (1 <= nx <= 5000 and 1 <= ny <= 5000):
-        raise CliError("--grid: nx and ny must be integers between 1 and 5000")
-    if args.z is not None and robot.dof != 6:
-        raise CliError(f"--z: a dof-{robot.dof} robot is planar")
-    if args.algorithm != "shifting":
-        raise CliError("--algorithm: maps always use hyperplane shifting")
-    if args.ellipse:
-        raise CliError("--ellipse goes with --at")
-    rotation = _fixed_orientation(robot, args.orientation)
-    xs = np.linspace(xmin, xmax, int(nx))
-    ys = np.linspace(ymin, ymax, int(ny))
-    fmap = isotropic_map(robot, xs, ys, z=args.z, rotation=rotation, external=external)
+    grid = _grid_params(args, robot)
+    fmap = run_isotropic_map(grid, robot.spec, RunContext())
     if args.plot:
         from ..force.plots import plot_map
 

@@ -5,7 +5,7 @@
 from __future__ import annotations
 
 from math import comb
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 from pydantic import Field, model_validator
 
@@ -56,6 +56,14 @@ def check_external(robot: RobotSpec, external: list[float] | None) -> None:
 
 
 class IsotropicMapParams(Params):
+    """A grid of ``nx`` x ``ny`` positions.  The service's ceilings: ``nx``, ``ny`` <=
+    ``MAX_GRID_SIDE`` and ``nx * ny`` <= :attr:`max_grid_points` (a subclass with larger
+    ones is how ``certsolve isotropic --grid`` runs the same operation on its own machine:
+    ``cli.force.CliGridParams``)."""
+
+    #: the ceiling of ``nx * ny`` (a class's own, not a field)
+    max_grid_points: ClassVar[int] = MAX_GRID_POINTS
+
     grid: tuple[Coord, Coord, Coord, Coord] = Field(description="[xmin, xmax, ymin, ymax] (cm)")
     nx: int = Field(default=41, ge=1, le=MAX_GRID_SIDE)
     ny: int = Field(default=41, ge=1, le=MAX_GRID_SIDE)
@@ -68,8 +76,9 @@ class IsotropicMapParams(Params):
         xmin, xmax, ymin, ymax = self.grid
         if xmin > xmax or ymin > ymax:
             raise ValueError("grid: need xmin <= xmax and ymin <= ymax")
-        if self.nx * self.ny > MAX_GRID_POINTS:
-            raise ValueError(f"nx * ny = {self.nx * self.ny} points; at most {MAX_GRID_POINTS}")
+        limit = type(self).max_grid_points
+        if self.nx * self.ny > limit:
+            raise ValueError(f"nx * ny = {self.nx * self.ny} points; at most {limit}")
         return self
 
     @classmethod
