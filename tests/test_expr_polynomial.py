@@ -215,3 +215,14 @@ def test_solver_finds_the_same_solutions_on_the_lowered_system(build, count):
     if count is not None:
         assert len(results[True]) == count
         assert any(np.allclose(r, [0.7, 0.4, 0.9]) for r in results[True])
+
+
+def test_expand_walks_a_deep_chain_without_recursion():
+    """A sum of thousands of terms is a chain that deep (IBEX's Yamamura1-0400 raised
+    RecursionError): the walk is iterative, and the coefficients are exact."""
+    x = var("x")
+    e = x
+    for i in range(5000):
+        e = e + x * x if i % 2 else e - x
+    p = expand(e, ["x"])
+    assert p == {(1,): (Fraction(-2499), Fraction(-2499)), (2,): (Fraction(2500), Fraction(2500))}

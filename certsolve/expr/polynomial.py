@@ -94,14 +94,23 @@ def expand(expr: Expr, variables: list[str], max_terms: int = 400) -> Polynomial
     zero = (0,) * len(variables)
     memo: dict[int, Polynomial | None] = {}
 
-    def go(e: Expr) -> Polynomial | None:
-        key = id(e)
-        if key in memo:
-            return memo[key]
-        memo[key] = res = _node(e)
-        if res is not None and len(res) > max_terms:
-            memo[key] = res = None
-        return res
+    def go(root: Expr) -> Polynomial | None:
+        # children before parents with an explicit stack, not recursion: a sum of a few
+        # thousand terms is a chain that deep (IBEX's Yamamura1-0400)
+        stack = [root]
+        while stack:
+            e = stack[-1]
+            if id(e) in memo:
+                stack.pop()
+                continue
+            todo = [a for a in e.args if id(a) not in memo]
+            if todo:
+                stack.extend(todo)
+                continue
+            stack.pop()
+            res = _node(e)
+            memo[id(e)] = None if res is not None and len(res) > max_terms else res
+        return memo[id(root)]
 
     def product(p: Polynomial, q: Polynomial) -> Polynomial | None:
         # bounds the work as well as the result: at most 16 max_terms products
@@ -117,7 +126,7 @@ def expand(expr: Expr, variables: list[str], max_terms: int = 400) -> Polynomial
             if not (math.isfinite(lo) and math.isfinite(hi)):
                 return None
             return {zero: (Fraction(lo), Fraction(hi))}
-        maybe = [go(a) for a in e.args]
+        maybe = [memo[id(a)] for a in e.args]  # computed first (go)
         args = [a for a in maybe if a is not None]
         if len(args) < len(maybe):
             return None
