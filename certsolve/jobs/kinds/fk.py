@@ -98,10 +98,8 @@ def _fk_geometry_problem(robot: RobotSpec, formulation: str) -> str | None:
         require_elastic(robot, "forward kinematics")
     except ValueError as exc:
         return str(exc)
-    try:
-        from ...kinematics.fk_systems import check_formulation as check
-    except ImportError:
-        return None  # the job will say the kind is missing
+    from ...kinematics.fk_systems import check_formulation as check
+
     model = robot_model(robot)
     try:
         check(model, formulation)
