@@ -19,9 +19,9 @@ from certsolve.kinematics import (
     inverse_kinematics,
     with_tau_max,
 )
-from certsolve.kinematics.seeding import _subtract
 from certsolve.robot import Pose, Robot, platform_points
 from certsolve.solver import ProcessExecutor
+from certsolve.solver.certify import boxes_minus
 
 ROBOTS = "examples/robots"
 
@@ -220,7 +220,7 @@ def test_seed_subtraction_covers_the_domain_exactly():
     for _ in range(3):
         a = rng.uniform(0, 8, 5)
         seeds.append((a, a + rng.uniform(0.5, 3, 5)))
-    pieces = _subtract(lo, hi, [s[0] for s in seeds], [s[1] for s in seeds])
+    pieces = list(zip(*boxes_minus(lo, hi, [s[0] for s in seeds], [s[1] for s in seeds])))
     pts = rng.uniform(0, 10, (20000, 5))
     covered = np.zeros(len(pts), dtype=bool)
     for a, b in list(seeds) + pieces:

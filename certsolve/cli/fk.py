@@ -65,6 +65,13 @@ def register(sub) -> None:
         "--workers/--scheduler and --verify like the plain search)",
     )
     p.add_argument(
+        "--no-seed-minima",
+        dest="seed_minima",
+        action="store_false",
+        help="spatial robots: do not search around the energy's local minima (the stable "
+        "poses) first (same answer; by default they come first)",
+    )
+    p.add_argument(
         "--seeded-only",
         action="store_true",
         help="with --seed-planar: skip the rest of the domain (incomplete answer)",
@@ -210,8 +217,13 @@ def format_result(res: Mapping) -> str:
         f"{count_of(res, 'undecided')} undecided, {count_of(res, 'pending')} pending; "
         f"{st['boxes']} boxes, {st['time']:.2f} s, {describe_run(st)}",
     ]
-    if res.get("seeding"):
-        sd = res["seeding"]
+    sd = res.get("seeding") or {}
+    if sd.get("method") == "energy minima":
+        lines.append(
+            f"seeds: {sd['minima']} local minim{'um' if sd['minima'] == 1 else 'a'} of the "
+            f"energy found in {sd['time']:.2f} s, searched first"
+        )
+    elif sd:
         lines.append(
             f"planar seeding: {sd['planar_solutions']} planar solution(s), "
             f"{sd['solutions_in_seeds']} found in the seed boxes after "

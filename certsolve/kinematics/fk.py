@@ -33,6 +33,7 @@ def forward_kinematics(
     seed_planar: bool = False,
     seeded_only: bool = False,
     stable_only: bool = False,
+    seed_minima: bool = True,
     progress=None,
     executor: Any = None,
     verify: bool = False,
@@ -53,11 +54,14 @@ def forward_kinematics(
     (:func:`.seeding.seeded_forward_kinematics`); ``seeded_only`` skips the rest (the rest
     is then reported pending).  ``stable_only`` returns the stable equilibria only (and
     those whose verdict is undecided); ``complete`` then means that no other stable
-    equilibrium is in the domain (:mod:`.stable_only`).  ``executor`` (or the older
-    ``workers``), ``verify``, the limits, ``progress`` and ``cancel`` apply to either search
-    (see :meth:`.Solver.solve`);
-    ``checkpoint`` (:class:`~certsolve.solver.checkpoint.Checkpoint`) to the plain search
-    only.
+    equilibrium is in the domain (:mod:`.stable_only`).  ``seed_minima`` (spatial robots):
+    search first around the local minima of the potential energy, found in floats -- the
+    stable poses, where a robot at rest is -- then the whole domain (the same answer, the
+    stable poses in the first rounds: :meth:`.FKSolver.seeded_boxes`).  ``executor`` (or
+    the older ``workers``), ``verify``, the limits, ``progress`` and ``cancel`` apply to
+    either search (see :meth:`.Solver.solve`); ``checkpoint``
+    (:class:`~certsolve.solver.checkpoint.Checkpoint`) to the one-phase search only (not
+    ``seed_planar``).
     """
     opts = checked(
         FkOptions,
@@ -72,6 +76,7 @@ def forward_kinematics(
             "seed_planar": seed_planar,
             "seeded_only": seeded_only,
             "stable_only": stable_only,
+            "seed_minima": seed_minima,
         },
     )
     check_controls(robot.m, opts.u)
@@ -96,7 +101,13 @@ def forward_kinematics(
             robot, u, formulation=formulation, eps=eps, seeded_only=seeded_only, **search
         )
     t0 = time.perf_counter()
-    fk = FKSolver(robot, formulation, eps=eps, stable_only=search.pop("stable_only"))
+    fk = FKSolver(
+        robot,
+        formulation,
+        eps=eps,
+        stable_only=search.pop("stable_only"),
+        seed_minima=seed_minima,
+    )
     compile_time = time.perf_counter() - t0
     res = fk.solve(u, checkpoint=checkpoint, **search)
     res.notes.append(f"compiled in {compile_time:.3f} s")

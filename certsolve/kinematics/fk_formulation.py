@@ -74,6 +74,29 @@ class FKFormulation(ABC):
         """``(position, rotation, platform_points)`` at a point ``x`` of the variables: the
         platform frame's origin ``(d,)``, ``R`` ``(d, d)`` and every ``B_i`` ``(m, d)``."""
 
+    def pose_box(
+        self, position: np.ndarray, rotation: np.ndarray, radius: float, domain: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """A box of ``domain`` around the pose ``(position, rotation)``: its pose variables
+        within ``radius`` of the pose's (centres rounded to 1e-6, so that a checkpoint's
+        initial boxes do not depend on the last bits of a float search), the wire lengths
+        as in ``domain``; ``None`` if it misses the domain or this formulation cannot write
+        a pose (the seeds of :meth:`.FKSolver.solve`)."""
+        c = self.encode(np.asarray(position, dtype=float), np.asarray(rotation, dtype=float))
+        if c is None:
+            return None
+        lo, hi = domain[:, 0].copy(), domain[:, 1].copy()
+        c = np.round(c, 6)
+        k = c.size
+        lo[:k] = np.maximum(lo[:k], c - radius)
+        hi[:k] = np.minimum(hi[:k], c + radius)
+        return (lo, hi) if np.all(lo <= hi) else None
+
+    def encode(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray | None:
+        """The pose variables (those before the wire lengths) of a pose, or ``None`` if
+        this formulation does not write poses (the inverse of :meth:`decode`)."""
+        return None
+
     @abstractmethod
     def levers(self) -> tuple[list[Expr], list[list[Expr]]]:
         """``G`` and ``r_i = B_i - G`` as expressions of the variables (enclosures of the

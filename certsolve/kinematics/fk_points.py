@@ -396,6 +396,10 @@ class PlatformFormulation(FKFormulation):
         """The inverse of :meth:`points_from`: the first ``k*d`` variables for points ``P``."""
         return np.array(P, dtype=float).ravel()
 
+    def encode(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+        """The chosen points' coordinates of the pose: ``P_j = p + R Q_j``."""
+        return self.coordinates_of(position + self.Q @ rotation.T)
+
     def decode(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The rigid transform ``P_j = p + R Q_j`` fitted to the chosen points (Kabsch), and
         ``B_i = Σ_j l_ij P_j``."""

@@ -11,6 +11,7 @@ in its box, plus undecided and pending boxes -- the solver's guarantees, read ba
 from __future__ import annotations
 
 import functools
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -26,12 +27,17 @@ from ..solver.certify import Certifier
 from ..solver.contractors import HC4
 from ..solver.pipeline import FixPoint, Inflate, Sequence, core
 from ..solver.result import SolveResult
+from .energy_minima import energy_minima
 from .fk_formulation import FKFormulation
 from .fk_systems import build_formulation
 from .stability import EnergyHessian, Stability, StabilityVerdict
 from .stable_only import StableOnly
 
-__all__ = ["FKPose", "FKResult", "FKSearch", "FKSolver", "with_tau_max"]
+__all__ = ["SEED_RADIUS", "FKPose", "FKResult", "FKSearch", "FKSolver", "with_tau_max"]
+
+#: half-width (cm) of the seed boxes around the energy's local minima, in every chosen
+#: point's coordinates (``seed_minima``)
+SEED_RADIUS = 0.5
 
 
 @dataclass
@@ -153,6 +159,13 @@ class FKSolver:
     whose interval Hessian of the energy is proven not positive definite are dropped, and
     so are the certified poses proven unstable); ``complete`` then means that no other
     stable equilibrium is in the domain.
+
+    ``seed_minima`` (spatial robots, point formulations): each search first finds the
+    local minima of the potential energy in floats (:mod:`.energy_minima`, a fraction of
+    a second) and searches boxes of :data:`SEED_RADIUS` cm around them before the whole
+    domain (:meth:`seeded_boxes`: the answer is the same, and as complete); the stable
+    equilibria -- where a robot at rest is -- come first, in the
+    first rounds, and a search stopped by a limit still reports them.
     """
 
     def __init__(
@@ -163,6 +176,7 @@ class FKSolver:
         eps: float = 1e-8,
         batch_size: int = 2048,
         stable_only: bool = False,
+        seed_minima: bool = True,
     ):
         # batch_size: boxes per numpy call.  The FK systems' batches are large enough for
         # numpy's per-call cost to matter: 2048 against 512 is 25-30 % less CPU with the
@@ -177,6 +191,8 @@ class FKSolver:
         #: search for stable equilibria only: boxes proven to hold none are dropped, after
         #: HC4 and the partial Newton, before the full Newton step
         self.stable_only = stable_only
+        #: search around the energy's local minima first (spatial robots only)
+        self.seed_minima = seed_minima and robot.dof == 6
         # the parts' compiled programs (Newton's columns, the sub-systems', the energy's
         # Hessian for stable_only) are made now, once, and shared by every search's copy
         self.search(np.zeros(robot.m))
@@ -251,6 +267,9 @@ class FKSolver:
         search = self.search(u)
         u = search.u
         notes = []
+        seeding = None
+        if boxes is None and self.seed_minima and search.ok:
+            boxes, seeding = self.seeded_boxes(u, search.domain)
         for i in (
             np.flatnonzero(u < self.robot.u_min).tolist()
             + np.flatnonzero(u > self.robot.u_max).tolist()
@@ -279,7 +298,37 @@ class FKSolver:
         if len(sols) < len(res.solutions):
             left = len(res.solutions) - len(sols)
             notes.append(f"stable only: {left} unstable pose(s) left out")
-        return FKResult(self.robot.name, self.formulation, u, res.status, sols, res, notes=notes)
+        return FKResult(
+            self.robot.name, self.formulation, u, res.status, sols, res, seeding, notes=notes
+        )
+
+    def seeded_boxes(self, u, domain: np.ndarray) -> tuple[Any, dict]:
+        """The initial boxes of a search seeded by the energy's local minima -- the whole
+        domain, then the seed boxes, last, so that they are on top of the search's stack --
+        and what the seeding did (for the result).
+
+        A pose certified in a seed box is certified again where the domain's boxes reach
+        it: the second proof is recognised as the same solution, and boxes inside its
+        unicity box are dropped (:meth:`.SolutionSet.prune`), so the seeds cost little more
+        than their own boxes.  (The exact difference of the domain minus the seeds, as
+        planar seeding does, costs more: its slabs split worse; general-19 at 10 N,
+        u = 0: 153,022 boxes against 128,670.)
+        """
+        t0 = time.perf_counter()
+        minima = energy_minima(self.robot, u)
+        boxes = (self.form.pose_box(m.position, m.rotation, SEED_RADIUS, domain) for m in minima)
+        seeds = [s for s in boxes if s is not None]
+        n = domain.shape[0]
+        slo = np.array([a for a, _ in seeds]).reshape(-1, n)
+        shi = np.array([b for _, b in seeds]).reshape(-1, n)
+        info = {
+            "method": "energy minima",
+            "minima": len(minima),
+            "seed_boxes": len(seeds),
+            "seed_radius": SEED_RADIUS,
+            "time": time.perf_counter() - t0,
+        }
+        return (np.vstack([domain[:, 0], slo]), np.vstack([domain[:, 1], shi])), info
 
     @functools.cached_property
     def hessian(self) -> EnergyHessian:

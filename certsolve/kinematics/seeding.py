@@ -25,7 +25,7 @@ import numpy as np
 from ..robot.geometry import rotation_2d
 from ..robot.model import Robot
 from ..solver import Limits, SearchStatus, resolve_executor, run_search
-from ..solver.certify import box_difference
+from ..solver.certify import boxes_minus
 from ..solver.search import SearchRun
 from .fk_points import PlatformFormulation
 from .fk_solver import FKResult, FKSolver
@@ -56,20 +56,6 @@ def planar_counterpart(robot: Robot) -> Robot:
         w["platform"] = w["platform"][:2]
     data["domain"] = {"points": [list(p) for p in robot.domain[:2]]}
     return Robot.load(data)
-
-
-def _subtract(domain_lo, domain_hi, seeds_lo, seeds_hi):
-    """Boxes covering ``domain \\ ∪ int(seeds)`` (iterated exact box differences)."""
-    pieces = [(domain_lo, domain_hi)]
-    for slo, shi in zip(seeds_lo, seeds_hi, strict=True):
-        nxt = []
-        for plo, phi in pieces:
-            if np.all(np.maximum(plo, slo) < np.minimum(phi, shi)):
-                nxt.extend(box_difference(plo, phi, slo, shi))
-            else:
-                nxt.append((plo, phi))
-        pieces = nxt
-    return pieces
 
 
 def seeded_forward_kinematics(
@@ -128,9 +114,7 @@ def seeded_forward_kinematics(
             seeds_lo.append(lo)
             seeds_hi.append(hi)
     n = step.csys.n
-    rest = _subtract(dom[:, 0], dom[:, 1], seeds_lo, seeds_hi)
-    rest_lo = np.array([a for a, _ in rest]).reshape(-1, n)
-    rest_hi = np.array([b for _, b in rest]).reshape(-1, n)
+    rest_lo, rest_hi = boxes_minus(dom[:, 0], dom[:, 1], seeds_lo, seeds_hi)
 
     ex = resolve_executor(executor)
 

@@ -92,6 +92,11 @@ class FkOptions(StrictModel):
     )
     seed_planar: bool = False
     seeded_only: bool = False
+    seed_minima: bool = Field(
+        default=True,
+        description="spatial robots: search around the energy's local minima (the stable "
+        "poses) first; same answer, found sooner",
+    )
     stable_only: bool = Field(
         default=False,
         description="stable equilibria only; complete then means no other stable one exists",

@@ -26,7 +26,7 @@ from ..interval.core import is_subset
 from ..interval.reductions import all_last, any_last, count_last
 from .newton import batched_solve, krawczyk, linearize
 
-__all__ = ["Certifier", "SolutionSet", "box_difference"]
+__all__ = ["Certifier", "SolutionSet", "box_difference", "boxes_minus"]
 
 
 def box_difference(lo, hi, ulo, uhi) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -47,6 +47,25 @@ def box_difference(lo, hi, ulo, uhi) -> list[tuple[np.ndarray, np.ndarray]]:
         if clo[i] > chi[i]:  # X and U disjoint along i: X itself is the remainder
             return [(lo.copy(), hi.copy())]
     return pieces
+
+
+def boxes_minus(lo, hi, cut_lo, cut_hi) -> tuple[np.ndarray, np.ndarray]:
+    """Boxes ``(B, n)`` covering ``X \\ ∪ int(U_j)``: :func:`box_difference` iterated over the
+    boxes ``U_j`` (rows of ``cut_lo, cut_hi``) on every piece that meets their interior."""
+    pieces = [(np.asarray(lo, dtype=float), np.asarray(hi, dtype=float))]
+    for ulo, uhi in zip(cut_lo, cut_hi, strict=True):
+        nxt = []
+        for plo, phi in pieces:
+            if np.all(np.maximum(plo, ulo) < np.minimum(phi, uhi)):
+                nxt.extend(box_difference(plo, phi, ulo, uhi))
+            else:
+                nxt.append((plo, phi))
+        pieces = nxt
+    n = len(lo)
+    return (
+        np.array([a for a, _ in pieces]).reshape(-1, n),
+        np.array([b for _, b in pieces]).reshape(-1, n),
+    )
 
 
 class SolutionSet:

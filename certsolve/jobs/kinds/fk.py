@@ -143,6 +143,7 @@ def run_fk(p: FkParams, robot: RobotSpec, ctx: RunContext) -> Any:
         seed_planar=p.seed_planar,
         seeded_only=p.seeded_only,
         stable_only=p.stable_only,
+        seed_minima=p.seed_minima,
         progress=ctx.progress,
         executor=ctx.executor,
         cancel=ctx.cancel,
