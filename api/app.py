@@ -101,7 +101,12 @@ def create_app(
     app.build_middleware_stack = lambda: SecurityHeadersMiddleware(build_stack())  # type: ignore[method-assign]
     install_error_handlers(app)
     app.include_router(meta.router)
-    app.include_router(jobs.router(job_request_type(settings.enable_test_kinds, check=False)))
+    app.include_router(
+        jobs.router(
+            job_request_type(settings.enable_test_kinds, check=False),
+            public_kinds(settings.enable_test_kinds),
+        )
+    )
     app.include_router(sync.router)
     app.include_router(admin.router)
     app.include_router(pictures.router)

@@ -96,6 +96,9 @@ def test_pagination_and_status_filter(client):
     assert client.get("/v1/jobs?status=nonsense").status_code == 422
     assert client.get("/v1/jobs?cursor=abc").status_code == 422
     assert client.get("/v1/jobs?limit=0").status_code == 422
+    r = client.get("/v1/jobs?kind=fkk")  # a typo is refused, not an empty list
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["query", "kind"]
+    assert "fk" in r.json()["error"]
 
 
 def test_batch_forms(client):

@@ -9,6 +9,7 @@ settings (the hidden test kind), so :func:`router` builds the router for a reque
 (and this module keeps its annotations evaluated: no ``from __future__ import annotations``).
 """
 
+from collections.abc import Sequence
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Path, Query, Request
@@ -90,9 +91,10 @@ def _missing(exc: NoSuchJob, name: str = "job_id") -> APIError:
 
 
 # -- the routes -----------------------------------------------------------------------------------
-def router(job_request: Any) -> APIRouter:
+def router(job_request: Any, kinds: Sequence[str]) -> APIRouter:
     """The jobs router for the request type ``job_request`` (a union of kinds' models,
-    deferred: :func:`..deps.checked_body` checks them against their robots)."""
+    deferred: :func:`..deps.checked_body` checks them against their robots) and the names
+    of those ``kinds`` (the list's filter)."""
     r = APIRouter(tags=["jobs"])
     job_body = checked_body(job_request, "job")
 
@@ -157,6 +159,10 @@ def router(job_request: Any) -> APIRouter:
     ):
         """The caller's jobs (an admin's: all), newest first, without results; filter by
         status, kind or batch."""
+        if kind is not None and kind not in kinds:
+            raise APIError(
+                422, f"unknown job kind {kind!r}; one of: {', '.join(kinds)}", loc=("query", "kind")
+            )
         rows, nxt = service.jobs(
             caller,
             status=status,
