@@ -82,6 +82,13 @@ def _repair_params(kind: str, robot: dict | None, params: dict) -> None:
     if kind in ("fk", "fk/track"):
         params["u"] = (list(params["u"]) + [0.0] * m)[:m]
         params.pop("formulation", None)  # which ones a robot admits depends on its geometry
+    if kind == "ik":  # another method's options keep their defaults
+        from certsolve.robot.inputs import IK_METHOD_OPTIONS
+
+        own = IK_METHOD_OPTIONS[params.get("method", "tension")]
+        for name in {n for names in IK_METHOD_OPTIONS.values() for n in names} - set(own):
+            if name not in ("timeout", "max_boxes"):
+                params.pop(name, None)
     if kind == "ik" and m:
         if params.get("u_last") is not None:
             params["u_last"] = (list(params["u_last"]) + [0.0] * m)[:m]

@@ -81,3 +81,21 @@ def test_errors_are_one_line(capsys, argv, needle):
     assert code == 2 and out == ""
     assert err.startswith("error: ") and needle in err
     assert err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_another_methods_option_is_refused_not_ignored():
+    from certsolve.inputs import InputError, checked
+    from certsolve.robot.inputs import IkOptions
+
+    pose = [111, 58, 107, 0, 0, 0]
+    for method, name, value in [
+        ("tension", "fixed_wire", 3),
+        ("tension", "solve", "newton"),
+        ("alg2", "distribution", "lp"),
+        ("alg1", "tau_fixed", 5.0),
+    ]:
+        with pytest.raises(InputError) as e:
+            checked(IkOptions, {"pose": pose, "method": method, name: value})
+        assert e.value.field == name and method in str(e.value)
+    # defaults given explicitly (the CLI's) are fine
+    checked(IkOptions, {"pose": pose, "method": "tension", "fixed_wire": 1, "solve": "tau"})

@@ -128,9 +128,10 @@ class IkOptions(StrictModel):
     ``certsolve ik``).
 
     Each method reads its own (:data:`IK_METHOD_OPTIONS`); ``u_last`` and ``window`` are
-    refused with ``tension`` (it has no search window), the others keep their defaults
-    where their method does not run.  ``fixed_wire`` is 1-based and checked against the
-    robot by the job (``IkParams.check_robot``), as ``u_last``'s length.
+    refused with ``tension`` (it has no search window), and another method's option given
+    a value other than its default is refused (it would be ignored).  ``fixed_wire`` is
+    1-based and checked against the robot by the job (``IkParams.check_robot``), as
+    ``u_last``'s length.
     """
 
     pose: PoseValues
@@ -167,11 +168,19 @@ class IkOptions(StrictModel):
     )
 
     @model_validator(mode="after")
-    def _window_needs_a_search(self) -> IkOptions:
+    def _options_of_the_method(self) -> IkOptions:
         if self.method == "tension":
             for name in ("u_last", "window"):
                 if getattr(self, name) is not None:
                     raise ValueError(f"{name}: applies to method alg1 or alg2")
+        # another method's option, given a value of its own, would be silently ignored
+        for name in ("distribution", "check_lp", "fixed_wire", "tau_fixed", "solve"):
+            field = type(self).model_fields[name]
+            if name in IK_METHOD_OPTIONS[self.method] or name not in self.model_fields_set:
+                continue
+            if getattr(self, name) != field.default:
+                owner = next(m for m, names in IK_METHOD_OPTIONS.items() if name in names)
+                raise ValueError(f"{name}: applies to method {owner}, not {self.method}")
         return self
 
     def method_options(self) -> dict[str, Any]:
