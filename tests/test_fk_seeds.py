@@ -95,3 +95,4 @@ def test_the_stable_pose_comes_first_at_60_newtons():
     pose = res.solutions[0]
     assert np.allclose(pose.position, POSE[:3], atol=1e-6)
     assert pose.stability.stability == "stable"
+    assert any("another stable pose is not excluded" in n for n in res.notes)

@@ -298,6 +298,11 @@ class FKSolver:
         if len(sols) < len(res.solutions):
             left = len(res.solutions) - len(sols)
             notes.append(f"stable only: {left} unstable pose(s) left out")
+        if self.stable_only and res.status != SearchStatus.COMPLETE:
+            notes.append(
+                f"stable only: the search stopped ({res.status}) before the rest of the "
+                "domain was refuted: another stable pose is not excluded"
+            )
         return FKResult(
             self.robot.name, self.formulation, u, res.status, sols, res, seeding, notes=notes
         )
