@@ -38,6 +38,7 @@ from ..interval.linalg import (
     krawczyk_image,
     krawczyk_magnitude,
     mr_from_bounds,
+    mr_matmul,
     precondition,
 )
 from ..interval.reductions import all_last
@@ -144,15 +145,28 @@ class KrawczykPoint:
     """
 
     def __init__(self, c, flo, fhi, jlo, jhi):
+        # :func:`precondition` for one box, without the stack's masks (a step of tracking
+        # pays numpy's per-call cost, not the arithmetic): the same bounds
         self.c = c
         Jc, Jr = mr_from_bounds(jlo, jhi)
         fc, fr = mr_from_bounds(flo, fhi)
-        pre = precondition(Jc[None], Jr[None], fc[None], fr[None])
-        self.ok = bool(pre.ok[0])
+        self.ok = False
+        if not (np.isfinite(Jc).all() and np.isfinite(Jr).all() and np.isfinite(fr).all()):
+            return
+        try:
+            Y = np.linalg.inv(Jc)
+        except np.linalg.LinAlgError:
+            return
+        with np.errstate(all="ignore"):
+            Mc, Mr = mr_matmul(Y, None, Jc, Jr)
+            bc, br = mr_matmul(Y, None, fc[:, None], fr[:, None])
+        self.ok = bool(np.isfinite(Mr).all() and np.isfinite(br).all())
+        #: the preconditioner ``Y ≈ mid(J)^-1`` (any ``Y`` is sound: tests at other centres)
+        self.Y = Y
         if self.ok:
-            self.mag = krawczyk_magnitude(pre.Mc[0], pre.Mr[0])
-            self.bc = pre.bc[0]
-            self.br = pre.br[0]
+            self.mag = krawczyk_magnitude(Mc, Mr)
+            self.bc = bc[:, 0]
+            self.br = br[:, 0]
 
     def image(self, lo, hi):
         """``(klo, khi, proven)``: ``K(X)`` and whether ``K(X) ⊂ int X``."""
