@@ -271,8 +271,8 @@ class TrajectoryFollower:
             if not msg:
                 return _Point(u=u, x=x)
         if msg == "singular Jacobian":
-            raise _Lost(index, LostReason.SINGULAR, f"step {index}: the Jacobian is singular")
-        raise _Lost(index, LostReason.NEWTON, f"step {index}: Newton did not converge")
+            raise _Lost(index, LostReason.SINGULAR, "the Jacobian is singular")
+        raise _Lost(index, LostReason.NEWTON, "Newton did not converge")
 
     def _own_proof(self, index: int, p: _Point, h: float) -> None:
         """The step's own Krawczyk proof (params set to ``p.u``), at ``h``, ``h/2``, ``h/4``."""
@@ -290,14 +290,14 @@ class TrajectoryFollower:
             raise _Lost(
                 index,
                 LostReason.SINGULAR,
-                f"step {index}: the Jacobian is nearly singular (condition number {cond:.3g}): "
+                f"the Jacobian is nearly singular (condition number {cond:.3g}): "
                 "a fold or a bifurcation of the equilibria",
                 p,
             )
         raise _Lost(
             index,
             LostReason.CERTIFICATE,
-            f"step {index}: Krawczyk test failed at half-width {0.25 * h:g} cm: the "
+            f"Krawczyk test failed at half-width {0.25 * h:g} cm: the "
             "equilibrium may not be unique near the Newton point",
             p,
         )
@@ -418,7 +418,7 @@ class TrajectoryFollower:
             raise _Lost(
                 index,
                 LostReason.LINK,
-                f"step {index}: the link from step {index - 1} could not be proven "
+                f"the link from step {index - 1} could not be proven "
                 f"(cut {depth} times): two equilibria may meet near there (a fold), "
                 "the path may jump branch",
                 b,
@@ -565,7 +565,7 @@ class TrajectoryFollower:
         return _Lost(
             index + j,
             LostReason.TENSION,
-            f"step {index + j}: wire {i + 1} {'leaves' if sure else 'may leave'} its tension "
+            f"wire {i + 1} {'leaves' if sure else 'may leave'} its tension "
             f"bounds: tension in [{tlo[j, i]:.6g}, {thi[j, i]:.6g}] N, {word} {bound:g} N",
             pts[j],
         )
