@@ -29,7 +29,7 @@ import statistics
 import time
 
 import numpy as np
-from fk_bench import R, TRACK, trajectory
+from fk_bench import TRACK, R, trajectory
 
 import certsolve
 from certsolve.kinematics import Tracker, inverse_kinematics
@@ -88,9 +88,8 @@ def main() -> None:
         us = np.array([np.asarray(inverse_kinematics(robot, p).u, dtype=float) for p in poses])
         runs = [bench_step(robot, start, us) for _ in range(args.runs)]
         w, c = medians(runs)
-        print(
-            f"{name:<12} {'step':<10} {1e3 * w:>8.3f}ms {1e3 * c:>8.3f}ms  {runs[0][2]}/200 certified"
-        )
+        ok = f"{runs[0][2]}/200 certified"
+        print(f"{name:<12} {'step':<10} {1e3 * w:>8.3f}ms {1e3 * c:>8.3f}ms  {ok}")
         w, c = medians([bench_track(robot, start, us) for _ in range(args.runs)])
         print(f"{name:<12} {'track':<10} {1e3 * w:>8.1f}ms {1e3 * c:>8.1f}ms  one-off call")
         if robot.dof == 6 and robot.m == 7:
@@ -98,7 +97,9 @@ def main() -> None:
             print(f"{name:<12} {'IK alg2':<10} {1e3 * w:>8.3f}ms {1e3 * c:>8.3f}ms  per call")
         samples = []
         for _ in range(args.runs):
-            res, w, c = timed(lambda: certsolve.track_trajectory(robot, us, list(start)))
+            res, w, c = timed(
+                lambda r=robot, us=us, s=start: certsolve.track_trajectory(r, us, list(s))
+            )
             samples.append((w, c))
         w, c = medians(samples)
         print(

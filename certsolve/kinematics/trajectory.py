@@ -601,8 +601,9 @@ def track_trajectory(
     vector per row), each step certified and joined to the previous one (module
     docstring); the one-off form of :class:`TrajectoryFollower`.
 
-    ``start``: a :class:`~certsolve.robot.Pose`, an :class:`FKPose` or pose parameters (``[x, y, theta]``,
-    ``[x, y, z, yaw, pitch, roll]``; cm, degrees) near the equilibrium at the first row.
+    ``start``: a :class:`~certsolve.robot.Pose`, an :class:`FKPose` or pose parameters
+    (``[x, y, theta]``, ``[x, y, z, yaw, pitch, roll]``; cm, degrees) near the equilibrium
+    at the first row.
     The inputs are checked as the ``trajectory`` job and ``certsolve track`` check them
     (:class:`~certsolve.robot.inputs.TrajectoryOptions`): a value they refuse raises
     :class:`~certsolve.inputs.InputError` naming it (``controls.3``: the fourth row).
