@@ -113,6 +113,16 @@ class Tracker:
         self._lengths = self._length_program() if self._is_rho.any() else None
         self.csys.scalar()  # generate the per-box code now, not in the first step
 
+    def set_controls(self, u: np.ndarray | tuple[np.ndarray, np.ndarray]) -> None:
+        """The compiled system's parameters: the controls ``u`` (floats), or their bounds
+        ``(lo, hi)`` arrays for every ``u`` in a box."""
+        names = self.csys.param_names
+        if isinstance(u, tuple):
+            lo, hi = (np.asarray(b, dtype=float).tolist() for b in u)
+            self.csys.set_parameters(dict(zip(names, zip(lo, hi, strict=True), strict=True)))
+        else:
+            self.csys.set_parameters(dict(zip(names, np.asarray(u).tolist(), strict=True)))
+
     @property
     def rho_mask(self) -> np.ndarray:
         """Which of the system's variables are wire lengths ``rho_i``."""
@@ -208,13 +218,14 @@ class Tracker:
         """Float Newton from ``x`` for the current parameter values: ``(x, iterations,
         last step, message)``; the message is empty when it converged.
 
-        It stops when a step is below ``1e-11 (1 + |x|)``, or once a step is below
-        ``1e-6 (1 + |x|)`` after one at least ten times larger: Newton converging
+        It stops when a step is below ``1e-11 (1 + |x_0|)``, or once a step is below
+        ``1e-6 (1 + |x_0|)`` after one at least ten times larger: Newton converging
         quadratically, the next step would be below ``1e-12``.  Nothing rests on that
         guess: the Krawczyk test that follows is the proof, and fails if the point is poor.
         """
         csys = self.csys
         res = prev = np.inf
+        scale = 1.0 + float(np.abs(x).max())  # of the start: the steps are small beside it
         for it in range(1, self.max_iterations + 1):
             f, J = csys.fj_point_float(x)
             try:
@@ -222,10 +233,9 @@ class Tracker:
             except np.linalg.LinAlgError:
                 return x, it, float("nan"), "singular Jacobian"
             x = x - step
-            res = float(np.max(np.abs(step)))
+            res = float(np.abs(step).max())
             if not math.isfinite(res):
                 break
-            scale = 1.0 + float(np.max(np.abs(x)))
             if res <= 1e-11 * scale or (res <= 1e-6 * scale and res <= 0.1 * prev):
                 return x, it, res, ""
             prev = res
@@ -258,7 +268,7 @@ class Tracker:
         if not half_width > 0:
             raise ValueError("half_width must be positive")
         unknown = StabilityVerdict.unknown()
-        self.csys.set_parameters(self.fk.form.parameters_for(u))
+        self.set_controls(u)
         x, it, res, msg = self.newton(self.initial_point(near))
         if msg:
             nan = float("nan") if msg == "singular Jacobian" else res

@@ -253,13 +253,10 @@ class TrajectoryFollower:
 
     # -- parameters ------------------------------------------------------------------------
     def _set_u(self, u: np.ndarray) -> None:
-        self.tracker.csys.set_parameters(dict(zip(self._names, u.tolist(), strict=True)))
+        self.tracker.set_controls(u)
 
     def _set_hull(self, us: np.ndarray) -> None:
-        lo, hi = us.min(axis=0).tolist(), us.max(axis=0).tolist()
-        self.tracker.csys.set_parameters(
-            {n: (a, b) for n, a, b in zip(self._names, lo, hi, strict=True)}
-        )
+        self.tracker.set_controls((us.min(axis=0), us.max(axis=0)))
 
     # -- the parts -------------------------------------------------------------------------
     def _newton(self, index: int, u: np.ndarray, guesses) -> _Point:

@@ -151,8 +151,8 @@ class KrawczykPoint:
         Jc, Jr = mr_from_bounds(jlo, jhi)
         fc, fr = mr_from_bounds(flo, fhi)
         self.ok = False
-        if not (np.isfinite(Jc).all() and np.isfinite(Jr).all() and np.isfinite(fr).all()):
-            return
+        if not (np.isfinite(Jr).all() and np.isfinite(fr).all()):  # a NaN or inf midpoint
+            return  # makes its radius NaN
         try:
             Y = np.linalg.inv(Jc)
         except np.linalg.LinAlgError:
