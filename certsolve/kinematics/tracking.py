@@ -169,36 +169,39 @@ class Tracker:
         return self.box(x - h, x + h)
 
     def krawczyk(self, lo, hi, c, steps: int = 3, b=None, rounds: int = 2):
-        """:meth:`_prove`, and the :class:`KrawczykPoint` of the last test (None if none):
-        its ``Y`` and ``|I - Y J|`` hold for every box inside ``[lo, hi]`` and every
-        parameter value inside the current ones (an enclosure of ``J`` over the larger
-        set is one over the smaller).  ``b``: instead of ``f(c)`` over the current
-        parameter values, a function of ``Y`` giving bounds ``bc ± br`` of ``Y f(c)`` for
-        every parameter value of interest (tighter than ``Y`` times a box of ``f``).
-        ``rounds``: how many Jacobian enclosures at most (the second over the narrowed
-        box, when the first stalls)."""
+        """:meth:`_prove`, with the :class:`KrawczykPoint` of the last test (None if none)
+        and the box ``(jlo, jhi)`` its Jacobian was enclosed over: its ``Y`` and
+        ``|I - Y J|`` hold for every box inside that one and every parameter value inside
+        the current ones (an enclosure of ``J`` over the larger set is one over the
+        smaller).  ``b``: instead of ``f(c)`` over the current parameter values, a function
+        of ``Y`` giving bounds ``bc ± br`` of ``Y f(c)`` for every parameter value of
+        interest (tighter than ``Y`` times a box of ``f``).  ``rounds``: how many Jacobian
+        enclosures at most (the second over the narrowed box, when the first stalls).
+        Returns ``(proven, lo, hi, kp, (jlo, jhi))``."""
         csys = self.csys
         if b is None:
             flo, fhi = csys.f_point(c)
         else:  # K(X) needs Y f(c) only: the KrawczykPoint's own is replaced
             flo = fhi = np.zeros(csys.n)
         kp = None
+        jbox = (lo, hi)
         for _ in range(rounds):
-            _, _, jlo, jhi = csys.fj_box(np.minimum(lo, c), np.maximum(hi, c))
+            jbox = (np.minimum(lo, c), np.maximum(hi, c))
+            _, _, jlo, jhi = csys.fj_box(*jbox)
             kp = KrawczykPoint(c, flo, fhi, jlo, jhi)
             if b is not None and kp.ok:
                 kp.bc, kp.br = b(kp.Y)
             for _ in range(steps):
                 klo, khi, ok = kp.image(lo, hi)
                 if ok:
-                    return True, np.fmax(klo, lo), np.fmin(khi, hi), kp
+                    return True, np.fmax(klo, lo), np.fmin(khi, hi), kp, jbox
                 nlo, nhi = np.fmax(klo, lo), np.fmin(khi, hi)
                 if np.any(nlo > nhi):  # no zero at all in X (cannot happen at a Newton point)
-                    return False, lo, hi, kp
+                    return False, lo, hi, kp, jbox
                 if np.all(nhi - nlo > 0.9 * (hi - lo)):
                     break  # no progress
                 lo, hi = nlo, nhi
-        return False, lo, hi, kp
+        return False, lo, hi, kp, jbox
 
     def _prove(self, lo, hi, c, steps: int = 3):
         """Exactly one zero in ``[lo, hi]``?  Krawczyk about the Newton point ``c``.
@@ -211,7 +214,7 @@ class Tracker:
         ``J`` (an enclosure over ``X`` is one over ``X' ⊂ X``): only matrix work, no new
         evaluation.  If that stalls, ``J`` is evaluated once more over the narrowed box.
         """
-        ok, lo, hi, _ = self.krawczyk(lo, hi, c, steps)
+        ok, lo, hi, _, _ = self.krawczyk(lo, hi, c, steps)
         return ok, lo, hi
 
     def newton(self, x: np.ndarray) -> tuple[np.ndarray, int, float, str]:

@@ -276,7 +276,7 @@ class TrajectoryFollower:
         tr = self.tracker
         self._set_u(p.u)
         for hh in (h, 0.5 * h, 0.25 * h):
-            ok, elo, ehi, _ = tr.krawczyk(*tr.box(p.x - hh, p.x + hh), p.x)
+            ok, elo, ehi, _, _ = tr.krawczyk(*tr.box(p.x - hh, p.x + hh), p.x)
             if ok:
                 p.elo, p.ehi, p.h = elo, ehi, hh
                 self.own_proofs += 1
@@ -314,9 +314,11 @@ class TrajectoryFollower:
         c = pts[len(pts) // 2].x
         bounds = self._b_along(c, us, pts[len(pts) // 2].u)
         self._set_hull(us)
-        ok, _, _, kp = tr.krawczyk(box_lo, box_hi, c, steps=2, b=bounds)
+        ok, _, _, kp, (box_lo, box_hi) = tr.krawczyk(box_lo, box_hi, c, steps=2, b=bounds)
         if not ok or kp is None:
             return False
+        # from here [box_lo, box_hi] is where the chunk's J was enclosed (X, or the box
+        # narrowed by the first test): the steps' boxes are taken inside it
         todo = [i for i, f in enumerate(fs) if f is not None and pts[i].elo is None]
         if todo:
             c_k = xs[todo]
@@ -329,14 +331,17 @@ class TrajectoryFollower:
             hi = np.empty_like(c_k)
             for j, i in enumerate(todo):
                 lo[j], hi[j] = tr.box(pts[i].x - h, pts[i].x + h)
-            lo, hi = np.fmax(lo, box_lo), np.fmin(hi, box_hi)  # inside X, where J holds
+            lo, hi = np.fmax(lo, box_lo), np.fmin(hi, box_hi)  # inside where J holds
+            # |I - Y J| bounds the Jacobians over the hull of a box and its centre only if
+            # that centre is inside too (a step whose point is not is proven alone)
+            inside = np.all((box_lo <= c_k) & (c_k <= box_hi), axis=1)
             done = np.zeros(len(todo), dtype=bool)
             for _ in range(3):  # a box whose test fails is re-tested narrowed (Tracker._prove)
                 klo, khi, proven = krawczyk_image(c_k, lo, hi, kp.mag, bc.T, br.T)
                 nlo, nhi = np.fmax(klo, lo), np.fmin(khi, hi)
-                for j in np.flatnonzero(proven & ~done).tolist():
+                for j in np.flatnonzero(proven & inside & ~done).tolist():
                     pts[todo[j]].elo, pts[todo[j]].ehi, pts[todo[j]].h = nlo[j], nhi[j], h
-                done |= proven
+                done |= proven & inside
                 if done.all():
                     break
                 keep = ~np.any(nlo > nhi, axis=1)  # empty: no zero (cannot be at a Newton point)
@@ -457,7 +462,7 @@ class TrajectoryFollower:
             pts.append(first)
             joined.append(None)
             depths.append(0)
-            size = self.chunk
+            size, cap = self.chunk, self.max_chunk  # cap: below the last size that failed
             pending: list[_Point] = []  # solved ahead, not yet proven
             fs: list = []  # their rigorous f(x; u)
             ahead: _Lost | None = None  # where Newton failed ahead
@@ -483,9 +488,11 @@ class TrajectoryFollower:
                 if self._chunk_proof([pts[-1], *chunk], [None, *fs[: len(chunk)]], h):
                     self.chunks += 1
                     depth = [0] * len(chunk)
-                    size = min(2 * size, self.max_chunk)
+                    cap = min(cap + 1, self.max_chunk)  # probe upwards again, slowly
+                    size = min(2 * size, cap)
                 elif len(chunk) > 1:  # split: retry with the first half
                     self.chunk_failures += 1
+                    cap = max(1, len(chunk) - 1)
                     size = max(1, len(chunk) // 2)
                     continue
                 else:  # one link: cut it
