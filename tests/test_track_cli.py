@@ -120,3 +120,33 @@ def test_the_trajectory_job_runs_and_draws_its_picture(tmp_path):
     with pytest.raises(ValueError, match="controls.0"):
         req = request_adapter().validate_python(bad)
         req.params.check_robot(req.robot)
+
+
+def test_the_trajectory_job_through_the_service(tmp_path):
+    """Submitted, run as a worker runs it, stored as JSON with its steps cut to the
+    service's max_result_items (the count of the rest kept), and its picture drawn."""
+    from certsolve.jobs import JobService, ServiceSettings
+    from certsolve.jobs.pictures import Pictures
+    from certsolve.jobs.worker import run_job
+
+    svc = JobService(ServiceSettings(data_dir=tmp_path, workers=0, max_result_items=5))
+    try:
+        robot = json.load(open(PLANAR))
+        rows = path_to_slack(80).tolist()
+        req = {
+            "kind": "trajectory",
+            "robot": robot,
+            "params": {"controls": rows, "start": [90, 60, 0]},
+        }
+        (job_id,) = svc.submit([svc.validate(req)])
+        job, lease = svc.store.claim(worker_pid=1)
+        run_job(svc.store, job, lease, svc.settings)
+        row = svc.store.get(job_id)
+        assert row.status == "done", row.error
+        result = json.loads(row.result)
+        assert result["status"] == "lost" and "wire 3" in result["reason"]
+        assert len(result["steps"]) == 5 and result["truncated"]["steps"] == result["lost_at"] + 1
+        png = Pictures(svc.store, tmp_path / "pictures").png(job_id, "path")
+        assert png.stat().st_size > 10_000
+    finally:
+        svc.close()

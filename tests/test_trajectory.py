@@ -229,3 +229,21 @@ def test_tracker_is_exported_and_matches_track():
     b = certsolve.track(robot, u, [90.0, 60.0, 0.0], half_width=0.1)
     assert a.certified and b.certified
     assert np.allclose(a.pose.position, b.pose.position, atol=1e-12)
+
+
+def test_the_tension_enclosure_holds_every_tension_of_the_lengths():
+    from certsolve.kinematics.trajectory import tension_enclosure
+
+    robot = certsolve.load_robot(f"{ROBOTS}/marionet.json")
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        a = rng.uniform(50.0, 250.0, robot.m)
+        b = a + rng.uniform(0.0, 1.0, robot.m)
+        u = rng.uniform(-20.0, 20.0, robot.m)
+        lo, hi = tension_enclosure(robot, a, b, u)
+        for rho in np.linspace(a, b, 7):
+            tau = robot.k * (1.0 - robot.L0 / (rho + robot.V + robot.K * u))
+            assert np.all((lo <= tau) & (tau <= hi))
+        # and it is tight: its ends are the tensions at the ends
+        ta = robot.k * (1.0 - robot.L0 / (a + robot.V + robot.K * u))
+        assert np.allclose(lo, ta, rtol=1e-12, atol=1e-9)
