@@ -18,9 +18,14 @@ pose.  For each step ``k`` float Newton (started from the secant prediction
   path from ``u_0`` to ``u_k`` thus moves the platform continuously along one branch: no
   silent jump to another equilibrium.
 
+``Y f(c; u)`` over the polyline is bounded in mean value form in ``u``, with ``∂f/∂u``
+generated from the same equations (:meth:`TrajectoryFollower._b_along`): ``Y`` times one
+box of ``f`` over ``U`` is several times too wide (the wrapping effect).
+
 Cost: the chunk's ``Y ≈ mid J(X, U)^-1`` and ``|I - Y J(X, U)|`` hold for every step box
-inside ``X`` and every ``u`` in ``U``, so a step's proof needs only a rigorous ``f(x_k;
-u_k)``: the step proofs of a chunk are one batched :func:`~certsolve.interval.linalg.
+inside the box ``J`` was enclosed over (``X``, or ``X`` narrowed by the chunk's first
+test) and every ``u`` in ``U``, so a step's proof needs only a rigorous ``f(x_k; u_k)``:
+the step proofs of a chunk are one batched :func:`~certsolve.interval.linalg.
 krawczyk_image`, and one Jacobian enclosure serves the whole chunk.  A chunk whose proof
 fails is split in halves, down to one link; a link that fails is cut at its middle
 control (Newton there, a step proof, two links), at most ``max_halvings`` times deep.  A
@@ -225,11 +230,14 @@ class _Lost(Exception):
 
 
 class TrajectoryFollower:
-    """Follow control paths on one robot (the :class:`Tracker` compiled once).
+    """Follow control paths on one robot (the :class:`Tracker` compiled once, and the
+    generated code of ``∂f/∂u``).
 
-    ``chunk``: steps per chunk to start with (it doubles after a proven chunk, up to
-    ``max_chunk``, and halves after a failed one); ``max_halvings``: how deep a link may
-    be cut.
+    ``chunk``: steps per chunk to start with.  A proven chunk doubles the size, up to a cap
+    that starts at ``max_chunk``; a failed one halves it and sets the cap one below its
+    size, and each proven chunk raises the cap by one again.  ``max_halvings``: how deep a
+    link may be cut.  :meth:`follow` sets the compiled system's parameters and its
+    counters as it goes: one follower per thread.
     """
 
     def __init__(
