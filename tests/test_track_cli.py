@@ -92,6 +92,10 @@ def test_bad_options_name_the_option(capsys, tmp_path):
         capsys, "track", PLANAR, "--trajectory", csv, "--start", START, "--half-width", "0"
     )
     assert code == 2 and err.strip() == "error: --half-width: must be greater than 0"
+    code, _, err = run(
+        capsys, "track", PLANAR, "--trajectory", csv, "--start", START, "--formulation", "pose"
+    )
+    assert code == 2 and err.startswith("error: --formulation: tracking uses the paper's point")
 
 
 def test_the_trajectory_job_runs_and_draws_its_picture(tmp_path):

@@ -22,7 +22,10 @@ from .fk import (
     fk_robot_schema,
 )
 
-__all__ = ["KIND", "TrajectoryJob", "TrajectoryParams", "run_trajectory"]
+__all__ = ["KIND", "NOT_POINTS", "TrajectoryJob", "TrajectoryParams", "run_trajectory"]
+
+#: formulations that are not on the paper's chosen points: the tracker cannot use them
+NOT_POINTS = ("frame", "pose")
 
 
 class TrajectoryParams(TrajectoryOptions, Params):  # the library's options as job params
@@ -30,7 +33,9 @@ class TrajectoryParams(TrajectoryOptions, Params):  # the library's options as j
     def dof_shapes(cls, dof: int) -> dict[str, Any] | None:
         if dof == 2:
             return None
-        names = FORMULATIONS + (PLANAR_FORMULATIONS if dof == 3 else SPATIAL_FORMULATIONS)
+        names = tuple(f for f in FORMULATIONS if f not in NOT_POINTS) + (
+            PLANAR_FORMULATIONS if dof == 3 else SPATIAL_FORMULATIONS
+        )
         return {
             "start": POSE_LENGTH[dof],
             "formulation": {"enum": list(names), "default": "auto", "type": "string"},
@@ -41,6 +46,11 @@ class TrajectoryParams(TrajectoryOptions, Params):  # the library's options as j
         return fk_robot_schema(dof)
 
     def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
+        if self.formulation in NOT_POINTS:
+            raise ValueError(
+                f"formulation: tracking uses the paper's point formulations, not "
+                f"{self.formulation!r} (auto picks the paper's for the robot)"
+            )
         check_trajectory(len(robot.wires), self.controls)
         check_pose(robot, self.start, "start")
         check_fk_geometry(robot, self.formulation, memo)
