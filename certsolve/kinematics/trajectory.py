@@ -213,7 +213,7 @@ class TrajectoryFollower:
         c = pts[len(pts) // 2].x
         bounds = self._b_along(c, us, pts[len(pts) // 2].u)
         self._set_hull(us)
-        ok, _, _, kp, (box_lo, box_hi) = tr.krawczyk(box_lo, box_hi, c, steps=2, b=bounds)
+        ok, _, _, kp, (box_lo, box_hi) = tr.krawczyk(box_lo, box_hi, c, b=bounds)
         if not ok or kp is None:
             return False
         # from here [box_lo, box_hi] is where the chunk's J was enclosed (X, or the box
