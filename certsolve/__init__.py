@@ -9,7 +9,9 @@ The functions a script needs, with the result dataclasses the CLI prints (each h
 ``load_robot``            robot file (path, JSON text or dict) -> :class:`Robot`
 ``inverse_kinematics``    controls and tensions at a pose (tension-first, Alg. 1, Alg. 2)
 ``forward_kinematics``    every certified equilibrium pose for a control vector
-``track``                 one real-time tracking step near a known pose
+``track``                 one real-time tracking step near a known pose (one-off form)
+``Tracker``               reusable tracker: ``Tracker(robot).step(u, near, half_width=)``
+``track_trajectory``      a control path, certified at every step and between steps
 ``ik_sweep``              controls along a sweep of one control (Merlet 2007, Fig. 3)
 ``isotropic_force``       maximum isotropic force and force polytope at a pose (Krut 2004)
 ``certified_workspace``   paving of the poses where the isotropic force is >= F
@@ -33,6 +35,8 @@ _EXPORTS = {
     "inverse_kinematics": "certsolve.kinematics.ik:inverse_kinematics",
     "forward_kinematics": "certsolve.kinematics.fk:forward_kinematics",
     "track": "certsolve.kinematics.tracking:track",
+    "Tracker": "certsolve.kinematics.tracking:Tracker",
+    "track_trajectory": "certsolve.kinematics.trajectory:track_trajectory",
     "ik_sweep": "certsolve.kinematics.ik_sweep:ik_sweep",
     "isotropic_force": "certsolve.force.isotropic:isotropic_force",
     "certified_workspace": "certsolve.force.certified:certified_workspace",
@@ -45,6 +49,7 @@ _EXPORTS = {
     "IKResult": "certsolve.kinematics.ik:IKResult",
     "FKResult": "certsolve.kinematics.fk:FKResult",
     "TrackResult": "certsolve.kinematics.tracking:TrackResult",
+    "TrajectoryResult": "certsolve.kinematics.trajectory:TrajectoryResult",
     "IKSweepResult": "certsolve.kinematics.ik_sweep:IKSweepResult",
     "IsotropicForceResult": "certsolve.force.isotropic:IsotropicForceResult",
     "CertifiedWorkspace": "certsolve.force.certified:CertifiedWorkspace",

@@ -55,7 +55,7 @@ def _repair_robot(robot: dict, kind: str | None) -> None:
             w["u"] = sorted(w["u"])
         if w.get("k") is not None and not w["tau"][1] < w["k"]:
             w["k"] = min(1e12, max(abs(w["tau"][1]) * 2, 1.0) + 1.0)
-        if kind in ("fk", "fk/track", "ik-sweep") and robot["dof"] != 2:
+        if kind in ("fk", "fk/track", "ik-sweep", "trajectory") and robot["dof"] != 2:
             # attachment points that span the FK frame: a non-degenerate simplex
             corner = [[10, 0, 0], [0, 10, 0], [0, 0, 10], [-7, -7, 3]][i % 4][:dim]
             w["platform"] = [c + 0.5 * (i // 4) for c in corner]
@@ -89,6 +89,9 @@ def _repair_params(kind: str, robot: dict | None, params: dict) -> None:
         for name in {n for names in IK_METHOD_OPTIONS.values() for n in names} - set(own):
             if name not in ("timeout", "max_boxes"):
                 params.pop(name, None)
+    if kind == "trajectory":
+        params["controls"] = [(list(row) + [0.0] * m)[:m] for row in params["controls"]]
+        params.pop("formulation", None)  # as fk's
     if kind == "ik" and m:
         if params.get("u_last") is not None:
             params["u_last"] = (list(params["u_last"]) + [0.0] * m)[:m]

@@ -53,6 +53,7 @@ def test_registry_and_models():
         "isotropic-map",
         "workspace",
         "design",
+        "trajectory",
         "sleep",
     }
     assert KINDS["sleep"].hidden and not KINDS["solve"].hidden
@@ -302,6 +303,11 @@ SAMPLES = {
         "kind": "design",
         "robot": PLANAR,
         "params": {k: v for k, v in DESIGN.items() if k != "robot"},
+    },
+    "trajectory": {
+        "kind": "trajectory",
+        "robot": PLANAR,
+        "params": {"controls": [[0, 0, 0, 0], [0.01, 0.01, 0.01, 0.01]], "start": [90, 60, 0]},
     },
 }
 QUICK_SAMPLES = {

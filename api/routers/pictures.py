@@ -1,7 +1,7 @@
 """Pictures of finished jobs, as PNG: ``/v1/jobs/{id}/poses/{k}.png`` (certified pose k
 of an ``fk`` job, 0-based), ``/v1/jobs/{id}/poses.png`` (all of them overlaid),
-``/v1/jobs/{id}/map.png`` (``isotropic-map``) and ``/v1/jobs/{id}/paving.png``
-(``workspace``).
+``/v1/jobs/{id}/map.png`` (``isotropic-map``), ``/v1/jobs/{id}/paving.png``
+(``workspace``) and ``/v1/jobs/{id}/path.png`` (``trajectory``).
 
 Drawing and caching are :class:`certsolve.jobs.pictures.Pictures`' (``app.state.pictures``);
 the routes are plain functions, so FastAPI runs them in its thread pool and the event loop
@@ -110,3 +110,10 @@ def map_picture(job_id: JobId, pictures: PicturesDep, service: Service, caller: 
 def paving_picture(job_id: JobId, pictures: PicturesDep, service: Service, caller: Caller):
     """The certified paving of a ``workspace`` job (dof 6: the slice at mid-height)."""
     return _png(pictures, service, caller, job_id, "paving")
+
+
+@router.get("/v1/jobs/{job_id}/path.png", response_class=FileResponse, responses=_RESPONSES)
+def path_picture(job_id: JobId, pictures: PicturesDep, service: Service, caller: Caller):
+    """The pose components and tensions along a ``trajectory`` job's path, the lost step
+    marked in red."""
+    return _png(pictures, service, caller, job_id, "path")

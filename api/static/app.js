@@ -780,7 +780,26 @@ function renderWorkspace(job, r, out) {
   );
 }
 
-const RENDER = { fk: renderFk, solve: renderSolve, "isotropic-map": renderMap, workspace: renderWorkspace };
+function renderTrajectory(job, r, out) {
+  const st = r.stats || {};
+  out.append(
+    el(
+      "div",
+      { class: "pose-body" },
+      figure(picturePath(job.id, "path.png"), "pose and tensions along the path"),
+      kv([
+        ["robot", r.robot],
+        ["status", r.status],
+        ["certified and joined", `${num(r.certified)} step(s)`],
+        ["lost at", r.lost_at === null || r.lost_at === undefined ? "–" : `step ${r.lost_at}: ${r.reason}`],
+        ["chunks proven / split", `${num(st.chunks)} / ${num(st.chunk_failures)}`],
+        ["time", duration(st.time)],
+      ])
+    )
+  );
+}
+
+const RENDER = { fk: renderFk, solve: renderSolve, "isotropic-map": renderMap, workspace: renderWorkspace, trajectory: renderTrajectory };
 
 function renderResult(job, v) {
   const out = $("#job-result");

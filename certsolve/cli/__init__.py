@@ -6,6 +6,7 @@ parser(s) and sets ``func`` (called with the parsed arguments, returns an exit c
 * :mod:`.solve`   -- ``certsolve solve FILE`` (Minibex systems)
 * :mod:`.fk`      -- ``certsolve fk ROBOT --u ...`` (forward kinematics, all solutions; tracking)
 * :mod:`.ik`      -- ``certsolve ik ROBOT --pose ...``
+* :mod:`.track`   -- ``certsolve track ROBOT --trajectory U.csv --start POSE`` (a path)
 * :mod:`.force`   -- ``certsolve isotropic`` and ``certsolve workspace``
 * :mod:`.design`  -- ``certsolve design SPEC.json`` (certified design of the force index)
 * :mod:`.service` -- ``certsolve serve`` and ``batch`` (the job service on this machine)
@@ -61,6 +62,11 @@ COMMANDS: tuple[Command, ...] = (
     ),
     Command(
         name="ik", module="ik", help="inverse kinematics: controls u (and tensions) holding a pose"
+    ),
+    Command(
+        name="track",
+        module="track",
+        help="follow a control path from a start pose, every step certified and joined",
     ),
     Command(
         name="isotropic",

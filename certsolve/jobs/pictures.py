@@ -13,6 +13,8 @@ kind            picture          drawn by
 ``fk``          ``poses``        :func:`certsolve.kinematics.plots.plot_poses`: all overlaid
 ``isotropic-map`` ``map``        :func:`certsolve.force.plots.plot_map` (Krut's Figs. 9, 10)
 ``workspace``   ``paving``       :func:`certsolve.force.plots.plot_paving`
+``trajectory``  ``path``         :func:`certsolve.kinematics.plots.plot_trajectory`: pose and
+                                 tensions along the path, the lost step marked
 ==============  ===============  =============================================================
 
 A job that has not finished, or finished without a result, has no picture yet
@@ -49,6 +51,7 @@ PICTURES: dict[str, tuple[str, ...]] = {
     "fk": ("pose", "poses"),
     "isotropic-map": ("map",),
     "workspace": ("paving",),
+    "trajectory": ("path",),
 }
 
 
@@ -197,4 +200,21 @@ def _draw_paving(request, result, index, out: Path) -> None:
     plot_paving(ws, out, title=title, anchors=robot.A)
 
 
-_DRAW = {"pose": _draw_pose, "poses": _draw_poses, "map": _draw_map, "paving": _draw_paving}
+def _draw_path(request, result, index, out: Path) -> None:
+    from ..kinematics.plots import plot_trajectory
+
+    robot = _robot(request)
+    title = None
+    note = _truncation_note(result)
+    if note:
+        title = f"{robot.name}: {result.get('status')}, lost at {result.get('lost_at')}\n{note}"
+    plot_trajectory(result, out, tau_limits=(robot.tau_min, robot.tau_max), title=title)
+
+
+_DRAW = {
+    "pose": _draw_pose,
+    "poses": _draw_poses,
+    "map": _draw_map,
+    "paving": _draw_paving,
+    "path": _draw_path,
+}

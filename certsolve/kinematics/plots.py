@@ -23,7 +23,7 @@ from ..plotting import pyplot, save
 from ..robot.model import Robot
 from .ik_sweep import IKSweepResult, PointStatus
 
-__all__ = ["plot_pose", "plot_poses", "plot_sweep"]
+__all__ = ["plot_pose", "plot_poses", "plot_sweep", "plot_trajectory"]
 
 _STYLE = {
     PointStatus.CERTIFIED: {"marker": "o", "fill": True},
@@ -299,3 +299,69 @@ def plot_poses(robot: Robot, poses, path=None, title=None):
     ax.set_title(title, fontsize=9)
     fig.tight_layout()
     return save(fig, path)
+
+
+# -- a followed path (certsolve track) ------------------------------------------------------------
+def plot_trajectory(result, path=None, tau_limits=None, title=None):
+    """Pose components and tensions along a followed path, the lost step marked; saved as
+    PNG if ``path`` is given.  Returns the figure.
+
+    ``result``: a :class:`~.trajectory.TrajectoryResult` or its ``to_dict()`` (a stored
+    job's result).  Three panels against the step index: the position (cm), the
+    orientation angles (degrees), the wires' tensions (N) with ``tau_limits``
+    (``(tau_min, tau_max)`` arrays) dashed.  Certified steps are lines with dots; the lost
+    step, if any, is a red vertical line with its reason in the title.
+    """
+    data = result if isinstance(result, dict) else result.to_dict()
+    plt = pyplot()
+    steps = [s for s in data["steps"] if s.get("pose") is not None]
+    idx = np.array([s["index"] for s in steps])
+    ok = np.array([bool(s["certified"]) for s in steps], dtype=bool)
+    pos = np.array([s["pose"]["position"] for s in steps]).reshape(len(steps), -1)
+    ang = np.array([s["pose"]["euler"] for s in steps]).reshape(len(steps), -1)
+    tau = np.array([s["tensions"] for s in steps]).reshape(len(steps), -1)
+    fig, axes = plt.subplots(3, 1, figsize=(6.4, 8.0), dpi=120, sharex=True)
+    colours = plt.get_cmap("tab10")
+    panels = (
+        (axes[0], pos, ("x", "y", "z"), "position (cm)"),
+        (axes[1], ang, ("yaw", "pitch", "roll") if ang.shape[1] == 3 else ("theta",), "angles (°)"),
+        (axes[2], tau, tuple(f"τ_{j + 1}" for j in range(tau.shape[1])), "tensions (N)"),
+    )
+    for ax, Y, names, label in panels:
+        for j in range(Y.shape[1]):
+            c = colours(j % 10)
+            ax.plot(idx[ok], Y[ok, j], "-", color=c, lw=1.0, label=names[j])
+            if len(idx) <= 200:
+                ax.scatter(idx[ok], Y[ok, j], s=6, color=c, zorder=3)
+            if (~ok).any():
+                ax.scatter(idx[~ok], Y[~ok, j], s=18, marker="x", color=c, zorder=3)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, ncol=4)
+    if tau_limits is not None:
+        for v in (np.unique(np.asarray(b, dtype=float)) for b in tau_limits):
+            for x in v:
+                axes[2].axhline(x, color="k", ls="--", lw=0.8)
+    lost = data.get("lost_at")
+    if lost is not None:
+        for ax in axes:
+            ax.axvline(lost, color="red", lw=1.2)
+        axes[0].annotate(
+            f"lost at step {lost}", (lost, 1.0), xycoords=("data", "axes fraction"),
+            color="red", ha="right", va="top", fontsize=8, rotation=90,
+        )  # fmt: skip
+    axes[2].set_xlabel("step")
+    if title is None:
+        n = sum(1 for s in data["steps"] if s["certified"])
+        title = f"{data['robot']}: {data['status']}, {n} step(s) certified and joined"
+        if data.get("reason"):
+            title += "\n" + _wrap(f"step {data['lost_at']}: {data['reason']}", 80)
+    axes[0].set_title(title, fontsize=9)
+    fig.tight_layout()
+    return save(fig, path)
+
+
+def _wrap(text: str, width: int) -> str:
+    import textwrap
+
+    return "\n".join(textwrap.wrap(text, width))

@@ -21,6 +21,7 @@ CLI) a certified step also says whether the pose is stable (:mod:`.stability`).
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -64,7 +65,26 @@ class TrackResult:
 
 
 class Tracker:
-    """Newton + Krawczyk steps of forward kinematics near a known pose."""
+    """Newton + Krawczyk steps of forward kinematics near a known pose: the reusable form
+    of :func:`track`, for control loops (``certsolve.Tracker(robot)``).
+
+    The formulation is built and compiled once, here (~0.1-0.2 s); then each
+    :meth:`step` costs a few float Newton iterations and one Krawczyk test on generated
+    straight-line code (about 0.3 ms for T-16 and 0.4 ms for general-19, see
+    ``benchmarks/trajectory_bench.py``)::
+
+        tracker = certsolve.Tracker(robot)
+        pose = start
+        for u in controls:
+            res = tracker.step(u, pose, half_width=0.1)
+            if not res.certified:
+                break  # fall back to certsolve.forward_kinematics(robot, u)
+            pose = res.pose
+
+    A step is stateless: its result depends on ``u``, ``near`` and ``half_width`` only.
+    Whole paths, with a proof that the platform stays on one equilibrium branch between
+    the steps, are :func:`certsolve.track_trajectory`'s.
+    """
 
     def __init__(
         self,
@@ -93,6 +113,21 @@ class Tracker:
         self._lengths = self._length_program() if self._is_rho.any() else None
         self.csys.scalar()  # generate the per-box code now, not in the first step
 
+    def set_controls(self, u: np.ndarray | tuple[np.ndarray, np.ndarray]) -> None:
+        """The compiled system's parameters: the controls ``u`` (floats), or their bounds
+        ``(lo, hi)`` arrays for every ``u`` in a box."""
+        names = self.csys.param_names
+        if isinstance(u, tuple):
+            lo, hi = (np.asarray(b, dtype=float).tolist() for b in u)
+            self.csys.set_parameters(dict(zip(names, zip(lo, hi, strict=True), strict=True)))
+        else:
+            self.csys.set_parameters(dict(zip(names, np.asarray(u).tolist(), strict=True)))
+
+    @property
+    def rho_mask(self) -> np.ndarray:
+        """Which of the system's variables are wire lengths ``rho_i``."""
+        return self._is_rho
+
     def initial_point(self, pose: Pose | FKPose) -> np.ndarray:
         """The system's variables at a pose: chosen points and wire lengths."""
         f = self.form
@@ -119,14 +154,54 @@ class Tracker:
             nodes.append(g.add_expr(sqrt(esum(sqr(B[c] - float(r.A[i, c])) for c in range(d)))))
         return ScalarProgram(g, nodes)
 
-    def _box(self, x: np.ndarray, h: float):
-        """Points within ±h of the Newton point; lengths: the exact range over that box."""
-        lo, hi = x - h, x + h
+    def box(self, plo: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The box whose chosen points are ``[plo, phi]`` (their wire-length components
+        ignored) and whose lengths are the rigorous range of ``|A_i - B_i|`` over it."""
+        lo, hi = plo.copy(), phi.copy()
         if self._lengths is not None:
             rlo, rhi = self._lengths.interval(lo.tolist(), hi.tolist(), [], [])
             lo[self._is_rho] = rlo
             hi[self._is_rho] = rhi
         return lo, hi
+
+    def _box(self, x: np.ndarray, h: float):
+        """Points within ±h of the Newton point; lengths: the exact range over that box."""
+        return self.box(x - h, x + h)
+
+    def krawczyk(self, lo, hi, c, steps: int = 3, b=None, rounds: int = 2):
+        """:meth:`_prove`, with the :class:`KrawczykPoint` of the last test (None if none)
+        and the box ``(jlo, jhi)`` its Jacobian was enclosed over: its ``Y`` and
+        ``|I - Y J|`` hold for every box inside that one and every parameter value inside
+        the current ones (an enclosure of ``J`` over the larger set is one over the
+        smaller).  ``b``: instead of ``f(c)`` over the current parameter values, a function
+        of ``Y`` giving bounds ``bc ± br`` of ``Y f(c)`` for every parameter value of
+        interest (tighter than ``Y`` times a box of ``f``).  ``rounds``: how many Jacobian
+        enclosures at most (the second over the narrowed box, when the first stalls).
+        Returns ``(proven, lo, hi, kp, (jlo, jhi))``."""
+        csys = self.csys
+        if b is None:
+            flo, fhi = csys.f_point(c)
+        else:  # K(X) needs Y f(c) only: the KrawczykPoint's own is replaced
+            flo = fhi = np.zeros(csys.n)
+        kp = None
+        jbox = (lo, hi)
+        for _ in range(rounds):
+            jbox = (np.minimum(lo, c), np.maximum(hi, c))
+            _, _, jlo, jhi = csys.fj_box(*jbox)
+            kp = KrawczykPoint(c, flo, fhi, jlo, jhi)
+            if b is not None and kp.ok:
+                kp.bc, kp.br = b(kp.Y)
+            for _ in range(steps):
+                klo, khi, ok = kp.image(lo, hi)
+                if ok:
+                    return True, np.fmax(klo, lo), np.fmin(khi, hi), kp, jbox
+                nlo, nhi = np.fmax(klo, lo), np.fmin(khi, hi)
+                if np.any(nlo > nhi):  # no zero at all in X (cannot happen at a Newton point)
+                    return False, lo, hi, kp, jbox
+                if np.all(nhi - nlo > 0.9 * (hi - lo)):
+                    break  # no progress
+                lo, hi = nlo, nhi
+        return False, lo, hi, kp, jbox
 
     def _prove(self, lo, hi, c, steps: int = 3):
         """Exactly one zero in ``[lo, hi]``?  Krawczyk about the Newton point ``c``.
@@ -139,22 +214,35 @@ class Tracker:
         ``J`` (an enclosure over ``X`` is one over ``X' ⊂ X``): only matrix work, no new
         evaluation.  If that stalls, ``J`` is evaluated once more over the narrowed box.
         """
+        ok, lo, hi, _, _ = self.krawczyk(lo, hi, c, steps)
+        return ok, lo, hi
+
+    def newton(self, x: np.ndarray) -> tuple[np.ndarray, int, float, str]:
+        """Float Newton from ``x`` for the current parameter values: ``(x, iterations,
+        last step, message)``; the message is empty when it converged.
+
+        It stops when a step is below ``1e-11 (1 + |x_0|)``, or once a step is below
+        ``1e-6 (1 + |x_0|)`` after one at least ten times larger: Newton converging
+        quadratically, the next step would be below ``1e-12``.  Nothing rests on that
+        guess: the Krawczyk test that follows is the proof, and fails if the point is poor.
+        """
         csys = self.csys
-        flo, fhi = csys.f_point(c)
-        for _ in range(2):
-            _, _, jlo, jhi = csys.fj_box(np.minimum(lo, c), np.maximum(hi, c))
-            kp = KrawczykPoint(c, flo, fhi, jlo, jhi)
-            for _ in range(steps):
-                klo, khi, ok = kp.image(lo, hi)
-                if ok:
-                    return True, np.fmax(klo, lo), np.fmin(khi, hi)
-                nlo, nhi = np.fmax(klo, lo), np.fmin(khi, hi)
-                if np.any(nlo > nhi):  # no zero at all in X (cannot happen at a Newton point)
-                    return False, lo, hi
-                if np.all(nhi - nlo > 0.9 * (hi - lo)):
-                    break  # no progress
-                lo, hi = nlo, nhi
-        return False, lo, hi
+        res = prev = np.inf
+        scale = 1.0 + float(np.abs(x).max())  # of the start: the steps are small beside it
+        for it in range(1, self.max_iterations + 1):
+            f, J = csys.fj_point_float(x)
+            try:
+                step = np.linalg.solve(J, f)
+            except np.linalg.LinAlgError:
+                return x, it, float("nan"), "singular Jacobian"
+            x = x - step
+            res = float(np.abs(step).max())
+            if not math.isfinite(res):
+                break
+            if res <= 1e-11 * scale or (res <= 1e-6 * scale and res <= 0.1 * prev):
+                return x, it, res, ""
+            prev = res
+        return x, self.max_iterations, res, "Newton did not converge"
 
     def _stability(self, elo, ehi, x, u) -> StabilityVerdict:
         """The verdict on the zero proven in ``E = [elo, ehi]``, over a box ``x ± 1e-8 (1 +
@@ -167,7 +255,13 @@ class Tracker:
         return self.fk.hessian.verdicts(lo[None], hi[None], u)[0]
 
     def step(self, u, near: Pose | FKPose, half_width: float = 0.1) -> TrackResult:
-        """One step from ``near`` (a pose, an FK pose or pose parameters) for controls ``u``."""
+        """One step from ``near`` (a pose, an FK pose or pose parameters) for controls ``u``.
+
+        Newton from ``near``'s point, then Krawczyk's test on the box of every chosen
+        platform point within ``±half_width`` cm of the Newton point (then half and a
+        quarter of it): ``certified`` means that box holds exactly one equilibrium for
+        ``u``.  Tension limits are not checked here (:func:`certsolve.track_trajectory`
+        checks them)."""
         t0 = time.perf_counter()
         if not isinstance(near, FKPose):
             near = as_pose(self.robot.dof, near, "near_pose")
@@ -177,41 +271,11 @@ class Tracker:
         if not half_width > 0:
             raise ValueError("half_width must be positive")
         unknown = StabilityVerdict.unknown()
-        self.csys.set_parameters(self.fk.form.parameters_for(u))
-        x = self.initial_point(near)
-        it = 0
-        res = np.inf
-        csys = self.csys
-        for it in range(1, self.max_iterations + 1):
-            f, J = csys.fj_point_float(x)
-            try:
-                step = -np.linalg.solve(J, f)
-            except np.linalg.LinAlgError:
-                return TrackResult(
-                    False,
-                    None,
-                    it,
-                    float("nan"),
-                    half_width,
-                    time.perf_counter() - t0,
-                    "singular Jacobian",
-                )
-            x = x + step
-            res = float(np.max(np.abs(step)))
-            if not np.all(np.isfinite(x)):
-                break
-            if res <= 1e-11 * (1.0 + float(np.max(np.abs(x)))):
-                break
-        if not (res <= 1e-11 * (1.0 + float(np.max(np.abs(x))))):
-            return TrackResult(
-                False,
-                None,
-                it,
-                res,
-                half_width,
-                time.perf_counter() - t0,
-                "Newton did not converge",
-            )
+        self.set_controls(u)
+        x, it, res, msg = self.newton(self.initial_point(near))
+        if msg:
+            nan = float("nan") if msg == "singular Jacobian" else res
+            return TrackResult(False, None, it, nan, half_width, time.perf_counter() - t0, msg)
         for h in (half_width, 0.5 * half_width, 0.25 * half_width):
             lo, hi = self._box(x, h)
             ok, elo, ehi = self._prove(lo, hi, x)
@@ -239,8 +303,9 @@ class Tracker:
 
 
 def track(robot: Robot, u, near, half_width: float = 0.1, formulation: str = "auto") -> TrackResult:
-    """One certified tracking step, with its stability verdict (compiles the system: use
-    :class:`Tracker` in loops).
+    """One certified tracking step, with its stability verdict: the one-off form of
+    :class:`Tracker` (it compiles the system at every call, ~0.1-0.2 s: use
+    ``Tracker(robot).step`` in loops, :func:`certsolve.track_trajectory` for paths).
 
     ``near``: a :class:`~certsolve.robot.Pose`, an :class:`FKPose` or pose parameters
     (``[x, y, theta]``, ``[x, y, z, yaw, pitch, roll]``; cm, degrees).  The inputs are

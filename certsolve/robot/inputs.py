@@ -46,9 +46,11 @@ __all__ = [
     "IsotropicOptions",
     "PoseValues",
     "TrackOptions",
+    "TrajectoryOptions",
     "Wrench",
     "as_pose",
     "check_controls",
+    "check_trajectory",
 ]
 
 #: = certsolve.kinematics.fk_systems.FORMULATIONS (tested)
@@ -109,6 +111,29 @@ class TrackOptions(StrictModel):
     u: list[Coord] = Field(min_length=1, max_length=MAX_WIRES)
     near_pose: PoseValues = Field(description="see IkParams.pose")
     half_width: float = Field(default=0.1, gt=0, le=1e4)
+
+
+#: most rows of a trajectory (``certsolve track``, the ``trajectory`` job)
+MAX_TRAJECTORY_ROWS = 100_000
+
+
+class TrajectoryOptions(StrictModel):
+    """Options of :func:`certsolve.track_trajectory` (and of the ``trajectory`` job and
+    ``certsolve track``)."""
+
+    controls: list[Controls] = Field(
+        min_length=1,
+        max_length=MAX_TRAJECTORY_ROWS,
+        description="the path: one control vector u per row (cm), one value per wire",
+    )
+    start: PoseValues = Field(
+        description="a pose near the equilibrium at the first row (see IkParams.pose)"
+    )
+    half_width: float = Field(
+        default=0.1, gt=0, le=1e4, description="half-width (cm) of each step's box"
+    )
+    formulation: Formulation = Field(default="auto", description="the FK equations")
+    tau_max: float | None = Field(default=None, ge=0, le=MAX_FORCE, description="tension cap")
 
 
 #: the options each method of :func:`certsolve.inverse_kinematics` takes from
@@ -200,6 +225,12 @@ class IsotropicOptions(StrictModel):
 def check_controls(m: int, u: Sequence[float], field: str = "u") -> None:
     """One control per wire."""
     check_count(u, m, field, "values (one per wire)")
+
+
+def check_trajectory(m: int, controls: Sequence[Sequence[float]], field: str = "controls") -> None:
+    """One control per wire on every row (the first bad row named: ``controls.3``, from 0)."""
+    for i, row in enumerate(controls):
+        check_controls(m, row, f"{field}.{i}")
 
 
 def pose_values(pose: Any, field: str = "pose") -> list[float]:

@@ -38,6 +38,7 @@ from ..interval.linalg import (
     krawczyk_image,
     krawczyk_magnitude,
     mr_from_bounds,
+    mr_matmul,
     precondition,
 )
 from ..interval.reductions import all_last
@@ -144,15 +145,34 @@ class KrawczykPoint:
     """
 
     def __init__(self, c, flo, fhi, jlo, jhi):
+        # :func:`precondition` for one box, without the stack's masks, and with ``J`` and
+        # ``f(c)`` side by side as one ``n x (n + 1)`` matrix ``[J | f]``: one midpoint-
+        # radius conversion and one product ``Y [J | f]`` (a step of tracking pays numpy's
+        # per-call cost, not the arithmetic).  The bounds of each column are those of its
+        # own product (:func:`mr_matmul`'s error bound is per entry, over the inner size n)
         self.c = c
-        Jc, Jr = mr_from_bounds(jlo, jhi)
-        fc, fr = mr_from_bounds(flo, fhi)
-        pre = precondition(Jc[None], Jr[None], fc[None], fr[None])
-        self.ok = bool(pre.ok[0])
+        n = c.shape[-1]
+        both_c, both_r = mr_from_bounds(
+            np.concatenate((jlo, flo[:, None]), axis=1),
+            np.concatenate((jhi, fhi[:, None]), axis=1),
+            size=1,  # numpy's nextafter, one call (the same floats as the integer steps)
+        )
+        self.ok = False
+        if not np.isfinite(both_r).all():  # a NaN or inf midpoint makes its radius NaN
+            return
+        try:
+            Y = np.linalg.inv(both_c[:, :n])
+        except np.linalg.LinAlgError:
+            return
+        with np.errstate(all="ignore"):
+            pc, pr = mr_matmul(Y, None, both_c, both_r)
+        self.ok = bool(np.isfinite(pr).all())
+        #: the preconditioner ``Y ≈ mid(J)^-1`` (any ``Y`` is sound: tests at other centres)
+        self.Y = Y
         if self.ok:
-            self.mag = krawczyk_magnitude(pre.Mc[0], pre.Mr[0])
-            self.bc = pre.bc[0]
-            self.br = pre.br[0]
+            self.mag = krawczyk_magnitude(pc[:, :n], pr[:, :n])
+            self.bc = pc[:, n]
+            self.br = pr[:, n]
 
     def image(self, lo, hi):
         """``(klo, khi, proven)``: ``K(X)`` and whether ``K(X) ⊂ int X``."""

@@ -8,14 +8,14 @@ from typing import Annotated, Any, Union
 
 from pydantic import Field, TypeAdapter
 
-from . import design, fk, ik, ik_sweep, isotropic_map, sleep, solve, workspace
+from . import design, fk, ik, ik_sweep, isotropic_map, sleep, solve, trajectory, workspace
 from .base import Kind, QuickCall, deferred
 
 __all__ = ["KINDS", "QUICK_CALLS", "job_request_type", "public_kinds", "request_adapter"]
 
 KINDS: dict[str, Kind] = {
     module.KIND.name: module.KIND
-    for module in (solve, fk, ik, ik_sweep, isotropic_map, workspace, design, sleep)
+    for module in (solve, fk, ik, ik_sweep, isotropic_map, workspace, design, trajectory, sleep)
 }
 QUICK_CALLS: dict[str, QuickCall] = {
     module.QUICK.name: module.QUICK for module in (ik, isotropic_map, fk, sleep)
