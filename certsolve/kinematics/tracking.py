@@ -100,7 +100,7 @@ class Tracker:
         self.stability = stability
         if formulation == "auto":  # the paper's point system: cheapest per-box code
             formulation = papers_system(robot)
-        self.fk = FKSolver(robot, formulation)
+        self.fk = FKSolver(robot, formulation, prepare_search=False)  # no search here
         if not isinstance(self.fk.form, PointsFormulation):
             raise ValueError("tracking uses one of the paper's point formulations")
         #: the formulation (the paper's chosen points: ``Q``, ``L``, ``n_points``)
