@@ -176,8 +176,15 @@ class Tracker:
         # alone is already above 1, proven only after narrowing, so it always fails)
         self._wide_wait = 0
         self._wide_misses = 0
-        self.csys.scalar()  # generate the per-box code now, not in the first step
         self._jac, self._jac_flat = self._jacobian_program()
+        # the per-box code a step calls is compiled now, not in the first step: f and J
+        # over boxes, f and J in floats (Newton), the lengths over boxes
+        sf, sfj = self.csys.scalar()
+        sf.prepare(interval=True)
+        sfj.prepare(floats=True)
+        self._jac.prepare(interval=True)
+        if self._lengths is not None:
+            self._lengths.prepare(interval=True)
 
     def set_controls(self, u: np.ndarray | tuple[np.ndarray, np.ndarray]) -> None:
         """The compiled system's parameters: the controls ``u`` (floats), or their bounds
