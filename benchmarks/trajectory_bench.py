@@ -10,8 +10,12 @@ robot's reference pose, its controls from tension-first IK.  For each robot:
   previous certified pose, reused tracker;
 * ``track``: the one-off :func:`certsolve.track` (compiles the system: the cost of one
   call in a control loop that does not keep a tracker), median of 5 calls;
+* ``build``: constructing a :class:`Tracker` (the formulation, its compiled system and the
+  generated code), median of 5;
 * ``IK alg2``: :func:`certsolve.inverse_kinematics` ``method="alg2"`` at each pose of the
-  path (dof 6 with 7 wires), median over 200 calls;
+  path (dof 6 with 7 wires), median over 200 calls; ``alg2 core``: the same through
+  :func:`~certsolve.kinematics.ik_alg2.ik_algorithm2` (the pose a ``Pose``, no input
+  model to check);
 * ``path``: the whole :func:`certsolve.track_trajectory` call (validation, compile, every
   step certified and joined), with its counters.
 
@@ -33,6 +37,7 @@ from fk_bench import TRACK, R, trajectory
 
 import certsolve
 from certsolve.kinematics import Tracker, inverse_kinematics
+from certsolve.kinematics.ik_alg2 import ik_algorithm2
 from certsolve.robot import Pose, Robot
 
 
@@ -65,9 +70,17 @@ def bench_track(robot, start, us) -> tuple[float, float]:
     return medians(out)
 
 
+def bench_build(robot) -> tuple[float, float]:
+    return medians([timed(lambda: Tracker(robot))[1:] for _ in range(5)])
+
+
 def bench_alg2(robot, poses) -> tuple[float, float]:
     out = [timed(lambda p=p: inverse_kinematics(robot, p, method="alg2"))[1:] for p in poses[:200]]
     return medians(out)
+
+
+def bench_alg2_core(robot, poses) -> tuple[float, float]:
+    return medians([timed(lambda p=p: ik_algorithm2(robot, p))[1:] for p in poses[:200]])
 
 
 def main() -> None:
@@ -90,11 +103,15 @@ def main() -> None:
         w, c = medians(runs)
         ok = f"{runs[0][2]}/200 certified"
         print(f"{name:<12} {'step':<10} {1e3 * w:>8.3f}ms {1e3 * c:>8.3f}ms  {ok}")
+        w, c = medians([bench_build(robot) for _ in range(args.runs)])
+        print(f"{name:<12} {'build':<10} {1e3 * w:>8.1f}ms {1e3 * c:>8.1f}ms  Tracker(robot)")
         w, c = medians([bench_track(robot, start, us) for _ in range(args.runs)])
         print(f"{name:<12} {'track':<10} {1e3 * w:>8.1f}ms {1e3 * c:>8.1f}ms  one-off call")
         if robot.dof == 6 and robot.m == 7:
             w, c = medians([bench_alg2(robot, poses) for _ in range(args.runs)])
             print(f"{name:<12} {'IK alg2':<10} {1e3 * w:>8.3f}ms {1e3 * c:>8.3f}ms  per call")
+            w, c = medians([bench_alg2_core(robot, poses) for _ in range(args.runs)])
+            print(f"{name:<12} {'alg2 core':<10} {1e3 * w:>8.3f}ms {1e3 * c:>8.3f}ms  per call")
         samples = []
         for _ in range(args.runs):
             res, w, c = timed(

@@ -12,6 +12,7 @@ with ``exec`` once per system.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 
@@ -350,13 +351,40 @@ class ScalarProgram:
         flines.append(f"    return [{', '.join(f'f{o}' for o in outs)}]")
         namespace = dict(_HELPERS)
         namespace.update(nd=math.nextafter, NI=-_INF, PI=_INF, _Bail=_Bail)
-        exec(compile("\n".join(ilines), "<certsolve-scalar-interval>", "exec"), namespace)
-        exec(compile(self._fast_source, "<certsolve-scalar-fast>", "exec"), namespace)
-        exec(compile("\n".join(flines), "<certsolve-scalar-float>", "exec"), namespace)
-        self.interval_safe = namespace["interval_safe"]
-        self._interval_fast = namespace["interval_fast"]
-        self.floats = namespace["floats"]
+        # each variant is compiled at its first call (compile() is most of the cost of
+        # building a program, and most users call one or two of the three)
+        self._namespace = namespace
+        self._sources = {
+            "interval_safe": ("\n".join(ilines), "<certsolve-scalar-interval>"),
+            "interval_fast": (self._fast_source, "<certsolve-scalar-fast>"),
+            "floats": ("\n".join(flines), "<certsolve-scalar-float>"),
+        }
         self.n_nodes = len(order)
+
+    def prepare(self, *, interval: bool = False, floats: bool = False) -> None:
+        """Compile now what :meth:`interval` (its fast variant) or :attr:`floats` will call,
+        instead of at the first call (a real-time loop's first step)."""
+        if interval:
+            self._interval_fast  # noqa: B018  (the cached property compiles it)
+        if floats:
+            self.floats  # noqa: B018
+
+    def _compiled(self, name: str):
+        source, filename = self._sources[name]
+        exec(compile(source, filename, "exec"), self._namespace)
+        return self._namespace[name]
+
+    @functools.cached_property
+    def interval_safe(self):
+        return self._compiled("interval_safe")
+
+    @functools.cached_property
+    def _interval_fast(self):
+        return self._compiled("interval_fast")
+
+    @functools.cached_property
+    def floats(self):
+        return self._compiled("floats")
 
     def interval(self, xlo, xhi, plo, phi):
         try:

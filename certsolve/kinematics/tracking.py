@@ -30,6 +30,7 @@ import numpy as np
 from ..expr import esum, sqr, sqrt
 from ..expr.scalar import ScalarProgram
 from ..inputs import checked
+from ..interval.linalg import krawczyk_image, mr_from_bounds, mr_matmul
 from ..robot.geometry import Pose
 from ..robot.inputs import TrackOptions, as_pose, check_controls
 from ..robot.model import Robot
@@ -64,13 +65,61 @@ class TrackResult:
         }
 
 
+#: a held Jacobian is enclosed over the chosen points within ``±WIDEN·h`` of the step's
+#: Newton point and the controls within ``±WIDEN·h`` of its ``u`` (cm): the next steps of
+#: a path that moves less than ``(WIDEN - 1)·h`` reuse it
+WIDEN = 2.0
+
+
+@dataclass(kw_only=True)
+class HeldJacobian:
+    """A Krawczyk preconditioner ``Y`` and ``mag >= |I - Y J|`` for every Jacobian ``J`` of
+    the system over the box ``[lo, hi]`` of its variables and the controls ``[ulo, uhi]``.
+
+    Krawczyk's ``K(X) = c - Y f(c; u) + (I - Y J)(X - c)`` needs ``J`` to enclose the
+    Jacobian over the hull of ``X`` and ``c`` for the ``u`` of ``f(c; u)``; an enclosure
+    over a larger set is one over the smaller.  So for every box ``X`` and centre ``c``
+    inside ``[lo, hi]`` and every ``u`` in ``[ulo, uhi]`` the test needs only a rigorous
+    ``f(c; u)`` (:meth:`Tracker.step`: a path's next steps)."""
+
+    lo: np.ndarray
+    hi: np.ndarray
+    ulo: np.ndarray
+    uhi: np.ndarray
+    Y: np.ndarray
+    mag: np.ndarray
+
+    def covers(self, lo: np.ndarray, hi: np.ndarray, u: np.ndarray) -> bool:
+        """Whether ``[lo, hi]`` (with its centre inside it) and ``u`` are inside."""
+        return bool(
+            np.all(self.lo <= lo) and np.all(hi <= self.hi)
+            and np.all(self.ulo <= u) and np.all(u <= self.uhi)
+        )  # fmt: skip
+
+    def prove(self, lo, hi, c, flo, fhi, steps: int = 3):
+        """:meth:`Tracker._prove` with this ``Y`` and ``|I - Y J|`` (``[lo, hi]`` covered,
+        ``c`` in it, ``[flo, fhi]`` encloses ``f(c; u)``): ``(proven, lo, hi)``."""
+        fc, fr = mr_from_bounds(flo, fhi)
+        with np.errstate(all="ignore"):
+            bc, br = mr_matmul(self.Y, None, fc, fr)
+        for _ in range(steps):
+            klo, khi, ok = krawczyk_image(c, lo, hi, self.mag, bc, br)
+            nlo, nhi = np.fmax(klo, lo), np.fmin(khi, hi)
+            if ok:
+                return True, nlo, nhi
+            if np.any(nlo > nhi) or np.all(nhi - nlo > 0.9 * (hi - lo)):
+                break
+            lo, hi = nlo, nhi
+        return False, lo, hi
+
+
 class Tracker:
     """Newton + Krawczyk steps of forward kinematics near a known pose: the reusable form
     of :func:`track`, for control loops (``certsolve.Tracker(robot)``).
 
-    The formulation is built and compiled once, here (~0.1-0.2 s); then each
+    The formulation is built and compiled once, here (~0.05-0.1 s CPU); then each
     :meth:`step` costs a few float Newton iterations and one Krawczyk test on generated
-    straight-line code (about 0.3 ms for T-16 and 0.4 ms for general-19, see
+    straight-line code (about 0.2 ms for T-16 and 0.35 ms for general-19, see
     ``benchmarks/trajectory_bench.py``)::
 
         tracker = certsolve.Tracker(robot)
@@ -81,7 +130,16 @@ class Tracker:
                 break  # fall back to certsolve.forward_kinematics(robot, u)
             pose = res.pose
 
-    A step is stateless: its result depends on ``u``, ``near`` and ``half_width`` only.
+    A step holds its Jacobian enclosure (:class:`HeldJacobian`, over a box ``WIDEN``
+    times the step's and the controls ``±WIDEN·half_width``): the next steps whose box
+    and controls it covers need only ``f`` at their Newton point (T-16: 11 steps of 12 on
+    ``trajectory_bench``'s path; general-19 at ``half_width = 0.1``: none, its
+    ``|I - Y J|`` over the step's own box is above 1 until narrowed).  Where the held
+    one does not cover a step, or does not prove it, the step encloses a new one; where
+    that fails too, the step gets its own proof, as a tracker with nothing held.  So a
+    step that a fresh tracker certifies at ``half_width`` is certified there too; the
+    proven box may be a little narrower or wider (another ``Y``).
+
     Whole paths, with a proof that the platform stays on one equilibrium branch between
     the steps, are :func:`certsolve.track_trajectory`'s.
     """
@@ -100,7 +158,7 @@ class Tracker:
         self.stability = stability
         if formulation == "auto":  # the paper's point system: cheapest per-box code
             formulation = papers_system(robot)
-        self.fk = FKSolver(robot, formulation)
+        self.fk = FKSolver(robot, formulation, prepare_search=False)  # no search here
         if not isinstance(self.fk.form, PointsFormulation):
             raise ValueError("tracking uses one of the paper's point formulations")
         #: the formulation (the paper's chosen points: ``Q``, ``L``, ``n_points``)
@@ -111,7 +169,22 @@ class Tracker:
         names = self.fk.form.system.variables
         self._is_rho = np.array([v.startswith("rho") for v in names])
         self._lengths = self._length_program() if self._is_rho.any() else None
-        self.csys.scalar()  # generate the per-box code now, not in the first step
+        #: the Jacobian enclosure held from an earlier step (None: none yet)
+        self.held: HeldJacobian | None = None
+        # a wider enclosure that fails to prove its step is not tried again for the next
+        # 2, 4, ... 64 steps that need a new one (general-19 at h = 0.1: |I - Y J| over X
+        # alone is already above 1, proven only after narrowing, so it always fails)
+        self._wide_wait = 0
+        self._wide_misses = 0
+        self._jac, self._jac_flat = self._jacobian_program()
+        # the per-box code a step calls is compiled now, not in the first step: f and J
+        # over boxes, f and J in floats (Newton), the lengths over boxes
+        sf, sfj = self.csys.scalar()
+        sf.prepare(interval=True)
+        sfj.prepare(floats=True)
+        self._jac.prepare(interval=True)
+        if self._lengths is not None:
+            self._lengths.prepare(interval=True)
 
     def set_controls(self, u: np.ndarray | tuple[np.ndarray, np.ndarray]) -> None:
         """The compiled system's parameters: the controls ``u`` (floats), or their bounds
@@ -154,6 +227,28 @@ class Tracker:
             nodes.append(g.add_expr(sqrt(esum(sqr(B[c] - float(r.A[i, c])) for c in range(d)))))
         return ScalarProgram(g, nodes)
 
+    def _jacobian_program(self) -> tuple[ScalarProgram, np.ndarray]:
+        """Generated code for the Jacobian alone, and the flat ``(n, n)`` indices of its
+        outputs: the compiled system's ``fj_box`` without ``f`` over the box, which the
+        Krawczyk test never reads (general-19: 828 -> 642 nodes, T-16: 553 -> 397)."""
+        c = self.csys
+        outs = c.fj.global_ids[c.fj.outputs].tolist()[c.n :]
+        return ScalarProgram(c.graph, outs), np.flatnonzero(c.jac_structure.ravel())
+
+    def jacobian_box(self, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds ``(jlo, jhi)`` of the Jacobian over the box ``[lo, hi]`` for the current
+        parameter values (``(n, n)``, zeros where the system's structure has none)."""
+        c = self.csys
+        dlo, dhi = self._jac.interval(
+            lo.tolist(), hi.tolist(), c.param_lo.tolist(), c.param_hi.tolist()
+        )
+        n = c.n
+        jlo = np.zeros(n * n)
+        jhi = np.zeros(n * n)
+        jlo[self._jac_flat] = dlo
+        jhi[self._jac_flat] = dhi
+        return jlo.reshape(n, n), jhi.reshape(n, n)
+
     def box(self, plo: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The box whose chosen points are ``[plo, phi]`` (their wire-length components
         ignored) and whose lengths are the rigorous range of ``|A_i - B_i|`` over it."""
@@ -168,7 +263,7 @@ class Tracker:
         """Points within ±h of the Newton point; lengths: the exact range over that box."""
         return self.box(x - h, x + h)
 
-    def krawczyk(self, lo, hi, c, steps: int = 3, b=None, rounds: int = 2):
+    def krawczyk(self, lo, hi, c, steps: int = 3, b=None, rounds: int = 2, f=None):
         """:meth:`_prove`, with the :class:`KrawczykPoint` of the last test (None if none)
         and the box ``(jlo, jhi)`` its Jacobian was enclosed over: its ``Y`` and
         ``|I - Y J|`` hold for every box inside that one and every parameter value inside
@@ -177,9 +272,12 @@ class Tracker:
         of ``Y`` giving bounds ``bc ± br`` of ``Y f(c)`` for every parameter value of
         interest (tighter than ``Y`` times a box of ``f``).  ``rounds``: how many Jacobian
         enclosures at most (the second over the narrowed box, when the first stalls).
+        ``f``: the bounds ``(flo, fhi)`` of ``f(c)``, if the caller has them.
         Returns ``(proven, lo, hi, kp, (jlo, jhi))``."""
         csys = self.csys
-        if b is None:
+        if f is not None:
+            flo, fhi = f
+        elif b is None:
             flo, fhi = csys.f_point(c)
         else:  # K(X) needs Y f(c) only: the KrawczykPoint's own is replaced
             flo = fhi = np.zeros(csys.n)
@@ -187,7 +285,7 @@ class Tracker:
         jbox = (lo, hi)
         for _ in range(rounds):
             jbox = (np.minimum(lo, c), np.maximum(hi, c))
-            _, _, jlo, jhi = csys.fj_box(*jbox)
+            jlo, jhi = self.jacobian_box(*jbox)
             kp = KrawczykPoint(c, flo, fhi, jlo, jhi)
             if b is not None and kp.ok:
                 kp.bc, kp.br = b(kp.Y)
@@ -203,7 +301,7 @@ class Tracker:
                 lo, hi = nlo, nhi
         return False, lo, hi, kp, jbox
 
-    def _prove(self, lo, hi, c, steps: int = 3):
+    def _prove(self, lo, hi, c, steps: int = 3, f=None):
         """Exactly one zero in ``[lo, hi]``?  Krawczyk about the Newton point ``c``.
 
         ``K(X) = c - Y f(c) + (I - Y J)(X - c)`` with ``J`` enclosing the Jacobian over the
@@ -214,8 +312,39 @@ class Tracker:
         ``J`` (an enclosure over ``X`` is one over ``X' ⊂ X``): only matrix work, no new
         evaluation.  If that stalls, ``J`` is evaluated once more over the narrowed box.
         """
-        ok, lo, hi, _, _ = self.krawczyk(lo, hi, c, steps)
+        ok, lo, hi, _, _ = self.krawczyk(lo, hi, c, steps, f=f)
         return ok, lo, hi
+
+    def _prove_held(self, lo, hi, x, u, h: float):
+        """:meth:`_prove` of a step's box ``[lo, hi]`` about its Newton point ``x`` for the
+        current controls ``u``: with the held Jacobian if it covers them; else with a new
+        one over the wider box (held for the next steps if it proves this one); else alone.
+        """
+        flo, fhi = self.csys.f_point(x)
+        held = self.held
+        if held is not None and held.covers(lo, hi, u):
+            ok, elo, ehi = held.prove(lo, hi, x, flo, fhi)
+            if ok:
+                return ok, elo, ehi
+        if self._wide_wait > 0:
+            self._wide_wait -= 1
+            return self._prove(lo, hi, x, f=(flo, fhi))
+        wlo, whi = self._box(x, WIDEN * h)
+        du = WIDEN * h
+        if np.all(wlo <= lo) and np.all(hi <= whi):
+            self.set_controls((u - du, u + du))
+            jlo, jhi = self.jacobian_box(wlo, whi)
+            self.set_controls(u)
+            kp = KrawczykPoint(x, flo, fhi, jlo, jhi)
+            if kp.ok:
+                held = HeldJacobian(lo=wlo, hi=whi, ulo=u - du, uhi=u + du, Y=kp.Y, mag=kp.mag)
+                ok, elo, ehi = held.prove(lo, hi, x, flo, fhi)
+                if ok:
+                    self.held, self._wide_misses = held, 0
+                    return ok, elo, ehi
+        self._wide_misses = min(self._wide_misses + 1, 6)
+        self._wide_wait = 2**self._wide_misses
+        return self._prove(lo, hi, x, f=(flo, fhi))
 
     def newton(self, x: np.ndarray) -> tuple[np.ndarray, int, float, str]:
         """Float Newton from ``x`` for the current parameter values: ``(x, iterations,
@@ -278,7 +407,10 @@ class Tracker:
             return TrackResult(False, None, it, nan, half_width, time.perf_counter() - t0, msg)
         for h in (half_width, 0.5 * half_width, 0.25 * half_width):
             lo, hi = self._box(x, h)
-            ok, elo, ehi = self._prove(lo, hi, x)
+            if h == half_width:
+                ok, elo, ehi = self._prove_held(lo, hi, x, u, h)
+            else:
+                ok, elo, ehi = self._prove(lo, hi, x)
             if ok:
                 # the Newton point is the best estimate of the zero proven to be in E
                 inside = bool(np.all((elo <= x) & (x <= ehi)))
@@ -304,7 +436,7 @@ class Tracker:
 
 def track(robot: Robot, u, near, half_width: float = 0.1, formulation: str = "auto") -> TrackResult:
     """One certified tracking step, with its stability verdict: the one-off form of
-    :class:`Tracker` (it compiles the system at every call, ~0.1-0.2 s: use
+    :class:`Tracker` (it compiles the system at every call, ~0.1-0.2 s CPU: use
     ``Tracker(robot).step`` in loops, :func:`certsolve.track_trajectory` for paths).
 
     ``near``: a :class:`~certsolve.robot.Pose`, an :class:`FKPose` or pose parameters

@@ -210,8 +210,9 @@ class TrajectoryFollower:
         xs = np.array([p.x for p in pts])
         box_lo, box_hi = tr.box(xs.min(axis=0) - h, xs.max(axis=0) + h)
         us = np.array([p.u for p in pts])
-        c = pts[len(pts) // 2].x
-        bounds = self._b_along(c, us, pts[len(pts) // 2].u)
+        mid = len(pts) // 2  # >= 1: its f(x; u) is in fs
+        c = pts[mid].x
+        bounds = self._b_along(c, us, pts[mid].u, fs[mid])
         self._set_hull(us)
         ok, _, _, kp, (box_lo, box_hi) = tr.krawczyk(box_lo, box_hi, c, b=bounds)
         if not ok or kp is None:
@@ -247,8 +248,9 @@ class TrajectoryFollower:
                 lo, hi = np.where(keep[:, None], nlo, lo), np.where(keep[:, None], nhi, hi)
         return True
 
-    def _b_along(self, c: np.ndarray, us: np.ndarray, anchor: np.ndarray):
-        """A function of ``Y`` bounding ``Y f(c; u)`` for every ``u`` on the polyline ``us``.
+    def _b_along(self, c: np.ndarray, us: np.ndarray, anchor: np.ndarray, f_anchor):
+        """A function of ``Y`` bounding ``Y f(c; u)`` for every ``u`` on the polyline ``us``
+        (``f_anchor``: the bounds of ``f(c; anchor)``, the point's own, computed already).
 
         Mean value form in ``u`` about ``anchor`` (a vertex): for ``u`` on the link
         ``u_k -> u_{k+1}``, ``u - anchor ∈ d_k = (u_k - anchor) + [0, 1] (u_{k+1} - u_k)``
@@ -271,8 +273,7 @@ class TrajectoryFollower:
         fulo[self._fu_flat] = dlo
         fuhi[self._fu_flat] = dhi
         fu_c, fu_r = mr_from_bounds(fulo.reshape(n, m), fuhi.reshape(n, m))
-        self._set_u(anchor)
-        fc, fr = mr_from_bounds(*csys.f_point(c))
+        fc, fr = mr_from_bounds(*f_anchor)
         e = arith.sub(us[:-1], us[:-1], anchor, anchor)
         step = arith.sub(us[1:], us[1:], us[:-1], us[:-1])
         d = arith.add(*e, np.minimum(step[0], 0.0), np.maximum(step[1], 0.0))
