@@ -15,7 +15,7 @@ JSON Schema cannot state every rule the validation enforces; :func:`repair` make
 generated positive bodies obey those (and only those) rules, listed in
 ``docs/reliability.md``: ``lo <= hi`` of intervals, ``tau_max < k``, ``u`` with one value
 per wire, Minibex grammar, attachment points that span the FK frame, no zero-length wire
-at an IK pose, design parameter paths that exist in the robot, ``nx * ny`` of a grid,
+at an IK pose, design parameter and tolerance paths that exist in the robot, ``nx * ny`` of a grid,
 workspace angle ranges, the cost estimate of quick calls, and the sweep form of batches
 (whose params must be the params of its kind).  The app runs without workers (queued
 jobs stay queued).  The schema is loaded inside the tests, so collecting this module
@@ -49,6 +49,8 @@ def _pairs(values):
 
 def _repair_robot(robot: dict, kind: str | None) -> None:
     dim = 3 if robot.get("dof") == 6 else 2
+    if robot.get("tolerances"):  # a path this robot has, on no number twice
+        robot["tolerances"] = [dict(robot["tolerances"][0], path="wires[*].base[*]")]
     for i, w in enumerate(robot.get("wires", [])):
         w["tau"] = sorted(w["tau"])
         if w.get("u") is not None:
