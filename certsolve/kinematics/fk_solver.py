@@ -50,6 +50,9 @@ class FKPose:
     #: stable / unstable / undecided over ``box``, with an enclosure of the Hessian's
     #: smallest eigenvalue (:mod:`.stability`)
     stability: StabilityVerdict = field(default_factory=StabilityVerdict.unknown)
+    #: a robot with tolerances: bounds of the pose over the box for every robot of the set
+    #: (:class:`.fk_tolerance.PoseBounds`); None for an exact robot
+    bounds: Any = None
 
     @property
     def euler_deg(self) -> np.ndarray:
@@ -70,6 +73,7 @@ class FKPose:
             "box": self.box,
             "variables": list(self.variables),
             **self.stability.to_dict(),
+            **({} if self.bounds is None else self.bounds.to_dict()),
         }
 
 

@@ -1,0 +1,531 @@
+"""Forward kinematics of a robot known within tolerances: pose boxes for every robot of the set.
+
+A robot file with ``tolerances`` (:mod:`certsolve.robot.tolerance`) describes a *set* of
+robots.  The FK system of the set is the nominal formulation with every toleranced number
+written as its interval constant (:func:`.fk_equations.number`): an interval evaluation of
+an equation over a box of the variables then encloses that equation for every robot of
+the set at every point of the box.  Every contractor of the FK search stays sound (HC4,
+interval Newton: each robot's equilibria in a box stay in its contraction), and so does
+the Krawczyk proof: ``K(U) = c - Y f(c) + (I - Y J(U))(U - c)`` with ``f(c)`` and ``J(U)``
+enclosed over the numbers' intervals contains, for *every* robot of the set, that robot's
+Krawczyk image; so ``K(U) ⊂ int U`` proves that each robot of the set has exactly one
+equilibrium in ``U``, and it lies in ``K(U)``.
+
+**The search near a solution set.**  Each robot's equilibrium moves with its numbers, so
+the equilibria of the set fill a small region ``S`` of positive width.  A box that holds
+part of ``S`` can never be proven empty, and splitting it to ``eps`` would leave thousands
+of undecided boxes around every pose.  So the search is done in three steps:
+
+1. the nominal robot's FK (:class:`.FKSolver` without tolerances): its certified poses are
+   the seeds;
+2. around each seed ``x*``, unicity boxes ``U = x* ± f·s`` of decreasing sizes are tried
+   with the set's Krawczyk test (:meth:`.Certifier.expand`: the largest proven ``U``); the
+   existence box ``E`` is then tightened, ``E ← K(E) ∩ E``, until it stops shrinking:
+   every equilibrium of every robot of the set in ``U`` stays in ``E``;
+3. the rest of the search box -- the domain less the interiors of the proven ``U``
+   (:func:`.box_difference`, closed pieces that meet no ``int U``) -- is searched by the
+   set's own FK search (the same pipeline as the nominal one, on the interval system): it
+   proves its own pose boxes where a robot of the set has another equilibrium, and reports
+   what it cannot decide.  A pose box it proves whose ``E`` lies in a seed's ``U`` is that
+   seed's pose (``U`` holds one equilibrium per robot) and is not reported twice.
+
+**What ``complete`` means**: every equilibrium of every robot of the set inside the search
+box lies in a reported pose box (``certificate: unique``: exactly one per robot, proven) or
+in a reported undecided box.  A seed whose Krawczyk test fails at every size is not
+reported as a pose; its neighbourhood is searched in step 3 like the rest (undecided boxes
+there, if the set's equilibria cannot be separated).
+
+**What a pose box reports** (:class:`PoseBounds`): bounds of every platform point (the
+attachments are affine in the variables, eq. 8), of the platform frame's origin and of its
+rotation matrix, taken over ``E`` with outward rounding; the pose at ``E``'s midpoint as
+the nominal reading; the stability verdict over ``E`` with the interval numbers (the
+energy's Hessian, :mod:`.stability`, is written with the same constants).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..expr import System, var
+from ..expr.compiled import CompiledSystem
+from ..expr.node import Expr
+from ..inputs import InputError
+from ..interval import arith
+from ..interval.core import midpoint
+from ..interval.linalg import (
+    U,
+    gamma,
+    krawczyk_image,
+    krawczyk_magnitude,
+    mr_from_bounds,
+    mr_matmul,
+    precondition,
+)
+from ..interval.reductions import all_last
+from ..interval.rounding import down, up
+from ..robot.model import Robot
+from ..solver.certify import SolutionSet, box_difference
+from ..solver.result import Certificate, Solution, SolveResult
+from ..solver.search import SearchStatus
+from .fk_equations import tolerance_parameters
+from .fk_formulation import FKFormulation
+from .fk_solver import FKResult, FKSolver
+
+__all__ = [
+    "TOLERANT_KINDS",
+    "PoseBounds",
+    "SetKrawczyk",
+    "check_tolerances",
+    "check_tolerant_options",
+    "tolerant_forward_kinematics",
+]
+
+#: the coordinate kinds whose systems write every robot number through
+#: :func:`.fk_equations.number` (the pose formulation writes the attachments in its
+#: rotation: not yet)
+TOLERANT_KINDS = ("frame", "points")
+#: the tightening of ``E`` stops when no side shrank by more than this share of its width
+_TIGHT = 1e-3
+_MAX_TIGHTEN = 60
+_MAX_INFLATE = 12
+_MAX_GROW = 12
+
+
+@dataclass(kw_only=True, frozen=True)
+class PoseBounds:
+    """Bounds of a pose box over every robot of the set: ``platform_points`` ``(m, d)``,
+    ``position`` ``(d,)`` (the platform frame's origin) and ``rotation`` ``(d, d)``, each a
+    pair ``(lo, hi)`` rounded outward."""
+
+    platform_points: tuple[np.ndarray, np.ndarray]
+    position: tuple[np.ndarray, np.ndarray]
+    rotation: tuple[np.ndarray, np.ndarray]
+
+    def to_dict(self) -> dict:
+        out = {}
+        for name in ("platform_points", "position", "rotation"):
+            lo, hi = getattr(self, name)
+            out[f"{name}_lo"] = lo.tolist()
+            out[f"{name}_hi"] = hi.tolist()
+        return out
+
+
+def check_tolerances(robot: Robot, form: FKFormulation) -> None:
+    """Refuse, naming the field, what the FK of a set does not handle yet: tolerances on
+    the attachments or the centre of mass (they move the chosen points' geometry, eq. 8),
+    and formulations other than :data:`TOLERANT_KINDS`."""
+    check_tolerant_options(robot, "auto")
+    if form.kind not in TOLERANT_KINDS:
+        raise InputError(
+            "formulation",
+            f"{form.name} does not take tolerances; use one of the frame or points "
+            "formulations (auto chooses the frame)",
+        )
+
+
+def points_map(form: FKFormulation) -> np.ndarray:
+    """``T`` ``(m d, n)``: the attachments ``B_i`` (rows ``i d + c``) as a linear map of the
+    variables (eq. 8: ``B_i = Σ_j l_ij P_j``; in the frame ``P_j = P_1 + E_j``)."""
+    robot = form.robot
+    d, m, n = robot.dim, robot.m, form.system.n
+    L = form.platform.L  # type: ignore[attr-defined]
+    T = np.zeros((m * d, n))
+    for i in range(m):
+        for c in range(d):
+            for j in range(L.shape[1]):
+                T[i * d + c, j * d + c] += L[i, j]
+            if form.kind == "frame":  # P_1 carries the whole weight sum_j l_ij = 1
+                T[i * d + c, c] = 1.0
+    return T
+
+
+def pose_bounds(
+    form: FKFormulation, lo: np.ndarray, hi: np.ndarray, test: SetKrawczyk | None = None
+) -> PoseBounds:
+    """Bounds of the platform points, the frame's origin and the rotation over the variable
+    box ``[lo, hi]`` (:class:`PoseBounds`).
+
+    The chosen points ``P_j`` are read from the box (the frame's ``P_1 + E_j`` in interval
+    arithmetic), every attachment is ``Σ_j l_ij P_j`` (eq. 8, midpoint-radius products with
+    their rounding error).  The rotation: ``R (Q_j - Q_1) = P_j - P_1``; with the platform
+    frame's axes as combinations of the edges (a least-squares inverse of the edge matrix,
+    exact for a rigid pose up to its rounding, which the radius covers), and the third axis
+    as the cross product of the first two where the edges span a plane.  With the set's
+    ``test``, the attachments' bounds are also those of :meth:`SetKrawczyk.linear_image`
+    (the intersection of the two is kept)."""
+    robot = form.robot
+    d, m = robot.dim, robot.m
+    k = form.platform.Q.shape[0]  # type: ignore[attr-defined]
+    Plo = lo[: k * d].reshape(k, d).copy()
+    Phi = hi[: k * d].reshape(k, d).copy()
+    if form.kind == "frame":  # P_j = P_1 + E_j
+        Plo[1:] = down(Plo[0] + Plo[1:])
+        Phi[1:] = up(Phi[0] + Phi[1:])
+    Pc, Pr = mr_from_bounds(Plo, Phi)
+    L = form.platform.L  # type: ignore[attr-defined]
+    Bc, Br = mr_matmul(L, None, Pc, Pr)
+    Q = form.platform.Q  # type: ignore[attr-defined]
+    e = Q[1:] - Q[0]  # (k-1, d): R e_j = E_j
+    if form.kind == "frame":  # the edges are variables
+        Elo = lo[d : k * d].reshape(k - 1, d)
+        Ehi = hi[d : k * d].reshape(k - 1, d)
+    else:
+        Elo, Ehi = down(Plo[1:] - Phi[0]), up(Phi[1:] - Plo[0])
+    Ec, Er = mr_from_bounds(Elo, Ehi)
+    # pinv(e) E = pinv(e) e R^T = Π R^T, Π the projector on the edges' span
+    pinv = np.linalg.pinv(e)  # (d, k-1)
+    span = int(np.linalg.matrix_rank(e))
+    proj = np.diag([1.0] * span + [0.0] * (d - span))
+    if span < d and (d != 3 or span != 2 or np.max(np.abs(pinv @ e - proj)) > 1e-9):
+        raise ValueError("pose bounds: the chosen points must span the platform frame's xy plane")
+    Rc, Rr = mr_matmul(pinv, None, Ec, Er)  # (d, d): row a is R's column a
+    Rc, Rr = Rc.T.copy(), Rr.T.copy()
+    # pinv is a float inverse: |(pinv e - Π) R^T| <= its row sums, as |R| <= 1 entrywise
+    slack = float(up(np.max(np.sum(np.abs(pinv @ e - proj), axis=1))))
+    Rr = up(Rr + slack)
+    R_lo, R_hi = _cross_column(Rc, Rr) if span < d else (down(Rc - Rr), up(Rc + Rr))
+    R_lo, R_hi = np.maximum(R_lo, -1.0), np.minimum(R_hi, 1.0)
+    # the frame's origin: P_1 - R Q_1
+    Rmc, Rmr = mr_from_bounds(R_lo, R_hi)
+    oc, orr = mr_matmul(Rmc, Rmr, Q[0][:, None], None)
+    pos_lo, pos_hi = arith.sub(Plo[0], Phi[0], down(oc - orr)[:, 0], up(oc + orr)[:, 0])
+    Blo, Bhi = down(Bc - Br).reshape(m, d), up(Bc + Br).reshape(m, d)
+    if test is not None:
+        ilo, ihi = test.linear_image(lo[None], hi[None], points_map(form))
+        Blo, Bhi = np.fmax(Blo, ilo.reshape(m, d)), np.fmin(Bhi, ihi.reshape(m, d))
+    return PoseBounds(
+        platform_points=(Blo, Bhi),
+        position=(pos_lo, pos_hi),
+        rotation=(R_lo, R_hi),
+    )
+
+
+def _cross_column(Rc: np.ndarray, Rr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``R`` with its third column ``R_1 × R_2`` (the first two enclosed by ``Rc ± Rr``)."""
+    lo, hi = down(Rc - Rr), up(Rc + Rr)
+    a = (lo[:, 0], hi[:, 0])
+    b = (lo[:, 1], hi[:, 1])
+
+    def prod(i, j):
+        return arith.mul(a[0][i], a[1][i], b[0][j], b[1][j])
+
+    out_lo, out_hi = lo.copy(), hi.copy()
+    for c, (i, j) in enumerate(((1, 2), (2, 0), (0, 1))):
+        p = prod(i, j)
+        q = prod(j, i)
+        out_lo[c, 2], out_hi[c, 2] = arith.sub(p[0], p[1], q[0], q[1])
+    return out_lo, out_hi
+
+
+def check_tolerant_options(
+    robot: Robot,
+    formulation: str,
+    *,
+    seed_planar: bool = False,
+    stable_only: bool = False,
+    checkpoint: bool = False,
+) -> None:
+    """The cheap checks of an FK request on a robot with tolerances (no expression built):
+    :class:`~certsolve.inputs.InputError` naming ``robot.tolerances`` (toleranced
+    attachments or centre of mass), ``formulation`` (``pose``) or the option that the FK of
+    a set does not take (``seed_planar``, ``stable_only``, ``checkpoint``)."""
+    if not robot.toleranced:
+        return
+    b = robot.bounds()
+    for name, path in (("B", "platform"), ("com", "center_of_mass")):
+        if not np.all(b.exact(name)):
+            raise InputError(
+                "robot.tolerances",
+                f"forward kinematics within tolerances takes exact {path} coordinates "
+                "(anchors, k, K, V, L0 and the mass may be toleranced)",
+            )
+    if formulation == "pose":
+        raise InputError("formulation", "pose does not take tolerances; use auto or frame")
+    for name, on in (
+        ("seed_planar", seed_planar),
+        ("stable_only", stable_only),
+        ("checkpoint", checkpoint),
+    ):
+        if on:
+            raise InputError(name, "not available for a robot with tolerances")
+
+
+def _as_variables(e: Expr, names: set[str], memo: dict[int, Expr]) -> Expr:
+    """``e`` with the parameters ``names`` read as variables of the same names."""
+    got = memo.get(id(e))
+    if got is not None:
+        return got
+    if e.op == "param" and e.param in names:
+        out = var(e.param)
+    elif not e.args:
+        out = e
+    else:
+        out = Expr(e.op, tuple(_as_variables(a, names, memo) for a in e.args), e.param)
+    memo[id(e)] = out
+    return out
+
+
+class SetKrawczyk:
+    """The Krawczyk test of a robot set, with the numbers' intervals ``P`` apart:
+
+        K(X) = c - Y f(c, p0) - (Y J_p(c, P)) (P - p0) + (I - Y J_x(X, P)) (X - c).
+
+    For one robot ``p ∈ P`` the mean-value theorem in ``p`` gives ``f(c, p) ∈ f(c, p0) +
+    J_p(c, P)(p - p0)``, and ``J_x(X, p) ⊆ J_x(X, P)``, so that robot's own Krawczyk image
+    lies in ``K(X)``: ``K(X) ⊂ int X`` proves that *every* robot of the set has exactly one
+    equilibrium in ``X``, inside ``K(X)``.  Writing ``Y f(c, P)`` this way (first order in
+    the numbers, the product ``Y J_p`` taken before the radius) instead of enclosing
+    ``f(c, P)`` alone keeps the correlations between equations that share a number (a
+    wire's ``k`` enters every equilibrium equation): on T-16 at 10 N with ±0.05 cm anchors
+    and ±1 % on ``k`` the plain test fails at every size, this one proves a box a few
+    tenths of a cm wide.
+
+    The derivatives come from an auxiliary square system in ``(x, p)``: the FK equations
+    with the numbers' parameters read as variables, and ``p = p0`` (never solved: it only
+    makes the Jacobian's ``J_p`` columns available, :func:`_as_variables`).
+    """
+
+    def __init__(self, form: FKFormulation, u: np.ndarray):
+        system = form.system
+        tol = tolerance_parameters(form.robot)
+        names = list(tol)
+        self.n, self.q = system.n, len(names)
+        lo = np.array([tol[t][0] for t in names])
+        hi = np.array([tol[t][1] for t in names])
+        self.p_lo, self.p_hi = lo, hi
+        self.p0 = midpoint(lo, hi)
+        self.dp = np.maximum(up(hi - self.p0), up(self.p0 - lo))
+        memo: dict[int, Expr] = {}
+        keep = set(names)
+        eqs = [_as_variables(e, keep, memo) for e in system.equations]
+        eqs += [var(t) - float(c) for t, c in zip(names, self.p0, strict=True)]
+        dom = np.vstack([system.domain, np.stack([lo, hi], axis=1)])
+        params = {f"u{i + 1}": float(v) for i, v in enumerate(u)}
+        aug = System(list(system.variables) + names, dom, eqs, [], name="set", parameters=params)
+        self.csys = CompiledSystem(aug)
+
+    def _linearize(self, lo: np.ndarray, hi: np.ndarray):
+        """``c``, ``Y``, ``f(c, p0)``, ``J_x(X, P)`` and ``J_p(c, P)`` (midpoint-radius) and
+        the mask of boxes where they are usable."""
+        n, B = self.n, lo.shape[0]
+        c = midpoint(lo, hi)
+        P_lo, P_hi = np.tile(self.p_lo, (B, 1)), np.tile(self.p_hi, (B, 1))
+        _, _, jlo, jhi, ok = self.csys.eval_fj(
+            np.hstack([lo, P_lo]), np.hstack([hi, P_hi]), check_domain=True
+        )
+        _, _, plo, phi, ok_c = self.csys.eval_fj(
+            np.hstack([c, P_lo]), np.hstack([c, P_hi]), check_domain=True
+        )
+        flo, fhi = self.csys.eval_f_at(np.hstack([c, np.tile(self.p0, (B, 1))]))
+        Jc, Jr = mr_from_bounds(jlo[:, :n, :n], jhi[:, :n, :n])
+        fc, fr = mr_from_bounds(flo[:, :n], fhi[:, :n])
+        pre = precondition(Jc, Jr, fc, fr)
+        Pc, Pr = mr_from_bounds(plo[:, :n, n:], phi[:, :n, n:])
+        return c, pre, (Jc, Jr), (fc, fr), (Pc, Pr), pre.ok & ok & ok_c
+
+    def _parameter_radius(self, Mc, Mr) -> np.ndarray:
+        """Radius of ``M (P - p0)`` for ``M ∈ Mc ± Mr`` ``(B, k, q)``."""
+        B = Mc.shape[0]
+        with np.errstate(all="ignore"):
+            _, tr = mr_matmul(Mc, Mr, np.zeros((B, self.q, 1)), self.dp[None, :, None])
+        return tr[..., 0]
+
+    def __call__(self, lo: np.ndarray, hi: np.ndarray):
+        """``(klo, khi, proven)`` for boxes ``(B, n)`` of the FK variables."""
+        c, pre, _, _, (Pc, Pr), good = self._linearize(lo, hi)
+        Y = np.where(pre.ok[:, None, None], pre.Y, 0.0)
+        with np.errstate(all="ignore"):
+            YPc, YPr = mr_matmul(Y, None, Pc, Pr)
+            br = up(pre.br + self._parameter_radius(YPc, YPr))
+        mag = krawczyk_magnitude(pre.Mc, pre.Mr)
+        klo, khi, proven = krawczyk_image(c, lo, hi, mag, pre.bc, br)
+        return klo, khi, proven & good & all_last(np.isfinite(br))
+
+    def linear_image(self, lo: np.ndarray, hi: np.ndarray, T: np.ndarray):
+        """Bounds ``(B, k)`` of ``T x`` over the equilibria ``x`` in the boxes of every robot
+        of the set (``T`` ``(k, n)``; infinite where the linearisation is unusable).
+
+        For an equilibrium ``x ∈ X`` of robot ``p``, ``0 = f(x, p) = f(c, p) + J̃ (x - c)``
+        with ``J̃ ∈ J_x(X, P)`` (mean value), so ``x = c - Y f(c, p) + (I - Y J̃)(x - c)``
+        and ``T x ∈ T c - (T Y) f(c, p0) - (T Y J_p(c, P))(P - p0) + (T - T Y J_x(X, P))(X -
+        c)``: the first-order term keeps the correlation between the coordinates that a
+        product of ``T`` with the box ``K(X)`` loses (a platform point is the reference point
+        plus an edge vector, which move together)."""
+        c, pre, (Jc, Jr), (fc, fr), (Pc, Pr), good = self._linearize(lo, hi)
+        Y = np.where(pre.ok[:, None, None], pre.Y, 0.0)
+        with np.errstate(all="ignore"):
+            TYc, TYr = mr_matmul(T[None], None, Y, None)
+            t1c, t1r = mr_matmul(T[None], None, c[..., None], None)
+            t2c, t2r = mr_matmul(TYc, TYr, fc[..., None], fr[..., None])
+            t3r = self._parameter_radius(*mr_matmul(TYc, TYr, Pc, Pr))
+            Mc, Mr = mr_matmul(TYc, TYr, Jc, Jr)
+            rx = up(np.maximum(hi - c, c - lo))
+            D = np.abs(T[None] - Mc)
+            t4r = (D + up(Mr + 4.0 * U * D)) @ rx[..., None]
+            t4r = up(t4r[..., 0] * (1.0 + 2.0 * gamma(self.n + 2)))  # the product's rounding
+            center = t1c[..., 0] - t2c[..., 0]
+            rad = up(up(up(t1r[..., 0] + t2r[..., 0]) + t3r) + t4r)
+            rad = up(rad + 4.0 * U * np.abs(center))
+        rad = np.where(good[:, None] & np.isfinite(rad), rad, np.inf)
+        return down(center - rad), up(center + rad)
+
+
+def _prove_seeds(test: SetKrawczyk, seeds: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Unicity and existence boxes around the seed points (module docstring, step 2):
+    ``(proven mask, E_lo, E_hi, U_lo, U_hi)``.
+
+    Epsilon-inflation from the seed: ``X`` starts as ``x* ± (2 |Y f(x*, P)| + 0.1 max)`` and
+    becomes ``K(X)`` widened by half its radius until ``K(X) ⊂ int X``; the proven ``U`` is
+    then grown by factors of 2 while the test still passes (a larger ``U`` leaves less for
+    the search to exclude next to the set), and ``E ← K(E) ∩ E`` from the first proven box
+    until it stops shrinking."""
+    S, n = seeds.shape
+    lo, hi = seeds.copy(), seeds.copy()
+    klo, khi, _ = test(lo, hi)
+    r = 2.0 * np.maximum(khi - seeds, seeds - klo)
+    r = r + 0.1 * np.max(r, axis=1, keepdims=True) + 1e-9 * (1.0 + np.abs(seeds))
+    lo, hi = seeds - r, seeds + r
+    proven = np.zeros(S, dtype=bool)
+    elo, ehi = lo.copy(), hi.copy()
+    for _ in range(_MAX_INFLATE):
+        todo = np.flatnonzero(~proven)
+        if todo.size == 0:
+            break
+        klo, khi, ok = test(lo[todo], hi[todo])
+        done = todo[ok]
+        proven[done] = True
+        elo[done], ehi[done] = klo[ok], khi[ok]
+        kc, kr = 0.5 * klo + 0.5 * khi, 0.5 * (khi - klo)
+        grow = todo[~ok & all_last(np.isfinite(kr))]
+        keep = ~ok & all_last(np.isfinite(kr))
+        lo[grow] = np.minimum(kc[keep] - 1.5 * kr[keep], lo[grow])
+        hi[grow] = np.maximum(kc[keep] + 1.5 * kr[keep], hi[grow])
+    ulo, uhi = lo.copy(), hi.copy()
+    active = proven.copy()
+    for _ in range(_MAX_GROW):  # U twice as wide around its centre, while proven
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            break
+        mid, rad = 0.5 * ulo[idx] + 0.5 * uhi[idx], uhi[idx] - ulo[idx]
+        _, _, ok = test(mid - rad, mid + rad)
+        ulo[idx[ok]], uhi[idx[ok]] = (mid - rad)[ok], (mid + rad)[ok]
+        active[idx[~ok]] = False
+    elo, ehi = np.fmax(elo, lo), np.fmin(ehi, hi)
+    for _ in range(_MAX_TIGHTEN):
+        idx = np.flatnonzero(proven)
+        if idx.size == 0:
+            break
+        klo, khi, _ = test(elo[idx], ehi[idx])
+        nlo, nhi = np.fmax(elo[idx], klo), np.fmin(ehi[idx], khi)
+        gain = np.max((nlo - elo[idx] + ehi[idx] - nhi) / (ehi[idx] - elo[idx]), axis=1)
+        elo[idx], ehi[idx] = nlo, nhi
+        if not np.any(gain > _TIGHT):
+            break
+    return proven, elo, ehi, ulo, uhi
+
+
+def _outside(domain: np.ndarray, ulo: np.ndarray, uhi: np.ndarray):
+    """Closed boxes covering the domain less the interiors of the unicity boxes."""
+    pieces = [(domain[:, 0].copy(), domain[:, 1].copy())]
+    for a, b in zip(ulo, uhi, strict=True):
+        nxt = []
+        for lo, hi in pieces:
+            if np.any(hi <= a) or np.any(lo >= b):  # meets no interior point of U
+                nxt.append((lo, hi))
+            else:
+                nxt.extend(box_difference(lo, hi, a, b))
+        pieces = nxt
+    n = domain.shape[0]
+    return (
+        np.array([p[0] for p in pieces]).reshape(-1, n),
+        np.array([p[1] for p in pieces]).reshape(-1, n),
+    )
+
+
+def tolerant_forward_kinematics(
+    robot: Robot,
+    u,
+    *,
+    formulation: str = "auto",
+    eps: float = 1e-8,
+    timeout: float | None = None,
+    max_boxes: int | None = None,
+    max_solutions: int | None = None,
+    progress=None,
+    executor: Any = None,
+    verify: bool = False,
+    cancel: Any = None,
+) -> FKResult:
+    """Every equilibrium of every robot of ``robot``'s set for the control ``u``, as pose
+    boxes (module docstring).  The limits apply to the two searches together (the nominal
+    one first); ``executor``, ``verify``, ``progress`` and ``cancel`` as
+    :meth:`.FKSolver.solve`."""
+    t0 = time.perf_counter()
+    nominal = FKSolver(robot.nominal(), formulation, eps=eps)
+    fk = FKSolver(robot, formulation, eps=eps)
+    check_tolerances(robot, fk.form)
+    search = {"progress": progress, "executor": executor, "cancel": cancel}
+    first = nominal.solve(u, timeout=timeout, max_boxes=max_boxes, **search)
+    u = first.u
+    notes = [
+        f"nominal robot: {first.status}, {len(first.solutions)} pose(s), "
+        f"{first.stats.boxes} boxes (the stats are the set's search)"
+    ]
+    tsearch = fk.search(u)
+    if not tsearch.ok:
+        notes.append("no wire length satisfies the tension limits inside the domain")
+        res = SolveResult(list(fk.form.system.variables), SearchStatus.COMPLETE)
+        return FKResult(robot.name, fk.formulation, u, res.status, [], res, notes=notes)
+    solver = tsearch.solver
+    seeds = np.array([0.5 * s.lo + 0.5 * s.hi for s in first.solve.solutions]).reshape(-1, solver.n)
+    test = SetKrawczyk(fk.form, u)
+    proven, elo, ehi, ulo, uhi = _prove_seeds(test, seeds)
+    if not np.all(proven):
+        notes.append(
+            f"{int(np.sum(~proven))} nominal pose(s) not proven for the whole set: "
+            "their neighbourhood is searched"
+        )
+    kinds = solver.certifier.classify(elo[proven], ehi[proven]) if np.any(proven) else []
+    known = SolutionSet(solver.n)
+    for a, b, c, d, kind in zip(elo[proven], ehi[proven], ulo[proven], uhi[proven], kinds):
+        known.add(a, b, c, d, kind)
+    plo, phi = _outside(tsearch.domain, ulo[proven], uhi[proven])
+    left = None if timeout is None else max(timeout - (time.perf_counter() - t0), 0.0)
+    boxes_left = None if max_boxes is None else max(max_boxes - first.stats.boxes, 1)
+    rest = solver.solve(
+        boxes=(plo, phi),
+        timeout=left,
+        max_boxes=boxes_left,
+        max_solutions=max_solutions,
+        verify=verify,
+        **search,
+    )
+    # the set's pose boxes: the seeds', then the search's own that are not a seed's
+    sols = [
+        Solution(lo=a, hi=b, ulo=c, uhi=d)
+        for a, b, c, d, kind in zip(elo[proven], ehi[proven], ulo[proven], uhi[proven], kinds)
+        if kind == "ok"
+    ]
+    for kind in set(kinds) - {"ok"}:
+        notes.append(
+            f"a proven pose box is '{kind}' (outside the domain or a constraint): left out"
+        )
+    for s in rest.solutions:
+        if known.add(s.lo, s.hi, s.ulo, s.uhi, "ok"):
+            sols.append(s)
+    if verify and sols[: len(sols) - len(rest.solutions)]:
+        from ..solver.verify import verify_solutions
+
+        verify_solutions(solver.csys, sols)
+    rest.solutions = sols
+    poses = fk.decode_all(sols, u)
+    for pose, s in zip(poses, sols, strict=True):
+        pose.bounds = pose_bounds(fk.form, s.lo, s.hi, test)
+        pose.certificate = str(Certificate.UNIQUE)
+    notes.append(f"pieces searched outside the proven boxes: {plo.shape[0]}")
+    status = rest.status
+    return FKResult(robot.name, fk.formulation, u, status, poses, rest, notes=notes)
