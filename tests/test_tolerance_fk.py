@@ -160,3 +160,22 @@ def test_pose_box_against_the_extreme_robots_and_random_draws(t16_tol):
                    for c in range(3)], axis=-2)  # fmt: skip
     first_order = 2.0 * np.abs(SB) @ test.dp
     assert np.all(hi - lo <= 3.0 * first_order + 0.01)
+
+
+@pytest.mark.slow
+def test_a_set_too_wide_for_one_krawczyk_box_is_proven_by_regularity():
+    """At u4..7 = -2 the set's equilibria spread over a region where no single Krawczyk box
+    contracts: the pose box is proven by the regularity of J_x over U (at most one per
+    robot) and the search of the rest (no robot has an equilibrium on U's boundary), and
+    it holds the drawn robots' poses."""
+    robot = Robot.load(ROBOTS / "marionet-t-tol.json")
+    u = np.array([0, 0, 0, -2, -2, -2, -2.0])
+    res = forward_kinematics(robot, u)
+    assert res.status == "complete" and not res.undecided
+    (pose,) = res.solutions
+    assert pose.certificate == "unique"
+    assert any("regularity" in n and "1 with an equilibrium" in n for n in res.notes)
+    rng = np.random.default_rng(11)
+    for corner in (True, False, True):
+        (s,) = forward_kinematics(robot.draw(rng, corner=corner), u).solutions
+        assert _inside(pose, s)

@@ -18,10 +18,14 @@ of undecided boxes around every pose.  So the search is done in three steps:
 
 1. the nominal robot's FK (:class:`.FKSolver` without tolerances): its certified poses are
    the seeds;
-2. around each seed ``x*``, unicity boxes ``U = x* ± f·s`` of decreasing sizes are tried
-   with the set's Krawczyk test (:meth:`.Certifier.expand`: the largest proven ``U``); the
-   existence box ``E`` is then tightened, ``E ← K(E) ∩ E``, until it stops shrinking:
-   every equilibrium of every robot of the set in ``U`` stays in ``E``;
+2. around each seed ``x*``, a box ``U`` where every robot of the set has exactly one
+   equilibrium: by epsilon-inflation with the set's Krawczyk test (:class:`SetKrawczyk`,
+   :func:`_prove_seeds`), or, where the set spreads over a region too curved for one
+   Krawczyk box, by the regularity of ``J_x`` over ``U`` (at most one per robot) and the
+   degree argument of :func:`_regular_box` (existence, once step 3 has found no
+   equilibrium of any robot on ``∂U``); the existence box ``E`` is then tightened,
+   ``E ← K(E) ∩ E``, until it stops shrinking: every equilibrium of every robot of the set
+   in ``U`` stays in ``E``;
 3. the rest of the search box -- the domain less the interiors of the proven ``U``
    (:func:`.box_difference`, closed pieces that meet no ``int U``) -- is searched by the
    set's own FK search (the same pipeline as the nominal one, on the interval system): it
@@ -30,10 +34,12 @@ of undecided boxes around every pose.  So the search is done in three steps:
    seed's pose (``U`` holds one equilibrium per robot) and is not reported twice.
 
 **What ``complete`` means**: every equilibrium of every robot of the set inside the search
-box lies in a reported pose box (``certificate: unique``: exactly one per robot, proven) or
-in a reported undecided box.  A seed whose Krawczyk test fails at every size is not
-reported as a pose; its neighbourhood is searched in step 3 like the rest (undecided boxes
-there, if the set's equilibria cannot be separated).
+box lies in a reported pose box or in a reported undecided box.  A pose box's
+``certificate`` is ``unique`` when every robot of the set is proven to have exactly one
+equilibrium in its ``U`` (inside ``E``), ``undecided`` when at most one is proven (a
+regular ``U`` whose boundary the search of the rest could not clear).  A seed for which
+neither proof holds is not reported as a pose; its neighbourhood is searched in step 3
+like the rest (undecided boxes there, if the set's equilibria cannot be separated).
 
 **What a pose box reports** (:class:`PoseBounds`): bounds of every platform point (the
 attachments are affine in the variables, eq. 8), of the platform frame's origin and of its
@@ -69,7 +75,7 @@ from ..interval.reductions import all_last
 from ..interval.rounding import down, up
 from ..robot.model import Robot
 from ..solver.certify import SolutionSet, box_difference
-from ..solver.result import Certificate, Solution, SolveResult
+from ..solver.result import Solution, SolveResult
 from ..solver.search import SearchStatus
 from .fk_equations import tolerance_parameters
 from .fk_formulation import FKFormulation
@@ -308,42 +314,62 @@ class SetKrawczyk:
         aug = System(list(system.variables) + names, dom, eqs, [], name="set", parameters=params)
         self.csys = CompiledSystem(aug)
 
-    def _linearize(self, lo: np.ndarray, hi: np.ndarray):
-        """``c``, ``Y``, ``f(c, p0)``, ``J_x(X, P)`` and ``J_p(c, P)`` (midpoint-radius) and
-        the mask of boxes where they are usable."""
+    def pieces(self, plo: np.ndarray | None, phi: np.ndarray | None, B: int):
+        """The parameter boxes ``(B, q)`` of a batch: the whole set's, or the pieces given."""
+        if plo is None or phi is None:
+            return np.tile(self.p_lo, (B, 1)), np.tile(self.p_hi, (B, 1))
+        return plo, phi
+
+    def _linearize(self, lo, hi, plo=None, phi=None):
+        """``c``, ``Y``, ``f(c, p0)``, ``J_x(X, P)`` and ``J_p(c, P)`` (midpoint-radius), the
+        radius of ``P - p0`` and the mask of boxes where they are usable."""
         n, B = self.n, lo.shape[0]
         c = midpoint(lo, hi)
-        P_lo, P_hi = np.tile(self.p_lo, (B, 1)), np.tile(self.p_hi, (B, 1))
+        P_lo, P_hi = self.pieces(plo, phi, B)
+        p0 = midpoint(P_lo, P_hi)
+        dp = np.maximum(up(P_hi - p0), up(p0 - P_lo))
         _, _, jlo, jhi, ok = self.csys.eval_fj(
             np.hstack([lo, P_lo]), np.hstack([hi, P_hi]), check_domain=True
         )
-        _, _, plo, phi, ok_c = self.csys.eval_fj(
+        _, _, jplo, jphi, ok_c = self.csys.eval_fj(
             np.hstack([c, P_lo]), np.hstack([c, P_hi]), check_domain=True
         )
-        flo, fhi = self.csys.eval_f_at(np.hstack([c, np.tile(self.p0, (B, 1))]))
+        flo, fhi = self.csys.eval_f_at(np.hstack([c, p0]))
         Jc, Jr = mr_from_bounds(jlo[:, :n, :n], jhi[:, :n, :n])
         fc, fr = mr_from_bounds(flo[:, :n], fhi[:, :n])
         pre = precondition(Jc, Jr, fc, fr)
-        Pc, Pr = mr_from_bounds(plo[:, :n, n:], phi[:, :n, n:])
-        return c, pre, (Jc, Jr), (fc, fr), (Pc, Pr), pre.ok & ok & ok_c
+        Pc, Pr = mr_from_bounds(jplo[:, :n, n:], jphi[:, :n, n:])
+        return c, pre, (Jc, Jr), (fc, fr), (Pc, Pr), dp, pre.ok & ok & ok_c
 
-    def _parameter_radius(self, Mc, Mr) -> np.ndarray:
-        """Radius of ``M (P - p0)`` for ``M ∈ Mc ± Mr`` ``(B, k, q)``."""
+    def _parameter_radius(self, Mc, Mr, dp) -> np.ndarray:
+        """Radius of ``M (P - p0)`` for ``M ∈ Mc ± Mr`` ``(B, k, q)``, ``|P - p0| <= dp``."""
         B = Mc.shape[0]
         with np.errstate(all="ignore"):
-            _, tr = mr_matmul(Mc, Mr, np.zeros((B, self.q, 1)), self.dp[None, :, None])
+            _, tr = mr_matmul(Mc, Mr, np.zeros((B, self.q, 1)), dp[:, :, None])
         return tr[..., 0]
 
-    def __call__(self, lo: np.ndarray, hi: np.ndarray):
-        """``(klo, khi, proven)`` for boxes ``(B, n)`` of the FK variables."""
-        c, pre, _, _, (Pc, Pr), good = self._linearize(lo, hi)
+    def __call__(self, lo: np.ndarray, hi: np.ndarray, plo=None, phi=None):
+        """``(klo, khi, proven)`` for boxes ``(B, n)`` of the FK variables, over the whole
+        set or, row by row, over the robots of the parameter boxes ``[plo, phi]``."""
+        c, pre, _, _, (Pc, Pr), dp, good = self._linearize(lo, hi, plo, phi)
         Y = np.where(pre.ok[:, None, None], pre.Y, 0.0)
         with np.errstate(all="ignore"):
             YPc, YPr = mr_matmul(Y, None, Pc, Pr)
-            br = up(pre.br + self._parameter_radius(YPc, YPr))
+            br = up(pre.br + self._parameter_radius(YPc, YPr, dp))
         mag = krawczyk_magnitude(pre.Mc, pre.Mr)
         klo, khi, proven = krawczyk_image(c, lo, hi, mag, pre.bc, br)
         return klo, khi, proven & good & all_last(np.isfinite(br))
+
+    def regular(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """Mask of the boxes where every matrix of ``J_x(X, P)`` is nonsingular, proven by
+        ``|I - Y J_x(X, P)| w < w`` with ``w`` the box's widths (the spectral radius of the
+        bound is then below 1): each robot of the set has at most one equilibrium there."""
+        _, pre, _, _, _, _, good = self._linearize(lo, hi)
+        mag = krawczyk_magnitude(pre.Mc, pre.Mr)
+        w = hi - lo
+        with np.errstate(all="ignore"):
+            mw = up((mag @ w[..., None])[..., 0] * (1.0 + 2.0 * gamma(self.n + 2)))
+        return good & all_last(mw < w) & all_last(w > 0)
 
     def linear_image(self, lo: np.ndarray, hi: np.ndarray, T: np.ndarray):
         """Bounds ``(B, k)`` of ``T x`` over the equilibria ``x`` in the boxes of every robot
@@ -355,13 +381,14 @@ class SetKrawczyk:
         c)``: the first-order term keeps the correlation between the coordinates that a
         product of ``T`` with the box ``K(X)`` loses (a platform point is the reference point
         plus an edge vector, which move together)."""
-        c, pre, (Jc, Jr), (fc, fr), (Pc, Pr), good = self._linearize(lo, hi)
+        c, pre, (Jc, Jr), (fc, fr), (Pc, Pr), dp, good = self._linearize(lo, hi)
         Y = np.where(pre.ok[:, None, None], pre.Y, 0.0)
         with np.errstate(all="ignore"):
             TYc, TYr = mr_matmul(T[None], None, Y, None)
             t1c, t1r = mr_matmul(T[None], None, c[..., None], None)
             t2c, t2r = mr_matmul(TYc, TYr, fc[..., None], fr[..., None])
-            t3r = self._parameter_radius(*mr_matmul(TYc, TYr, Pc, Pr))
+            TPc, TPr = mr_matmul(TYc, TYr, Pc, Pr)
+            t3r = self._parameter_radius(TPc, TPr, dp)
             Mc, Mr = mr_matmul(TYc, TYr, Jc, Jr)
             rx = up(np.maximum(hi - c, c - lo))
             D = np.abs(T[None] - Mc)
@@ -399,7 +426,8 @@ def _prove_seeds(test: SetKrawczyk, seeds: np.ndarray) -> tuple[np.ndarray, ...]
         done = todo[ok]
         proven[done] = True
         elo[done], ehi[done] = klo[ok], khi[ok]
-        kc, kr = 0.5 * klo + 0.5 * khi, 0.5 * (khi - klo)
+        with np.errstate(invalid="ignore", over="ignore"):
+            kc, kr = 0.5 * klo + 0.5 * khi, 0.5 * (khi - klo)
         grow = todo[~ok & all_last(np.isfinite(kr))]
         keep = ~ok & all_last(np.isfinite(kr))
         lo[grow] = np.minimum(kc[keep] - 1.5 * kr[keep], lo[grow])
@@ -415,17 +443,53 @@ def _prove_seeds(test: SetKrawczyk, seeds: np.ndarray) -> tuple[np.ndarray, ...]
         ulo[idx[ok]], uhi[idx[ok]] = (mid - rad)[ok], (mid + rad)[ok]
         active[idx[~ok]] = False
     elo, ehi = np.fmax(elo, lo), np.fmin(ehi, hi)
+    elo[proven], ehi[proven] = _tighten(test, elo[proven], ehi[proven])
+    return proven, elo, ehi, ulo, uhi
+
+
+def _tighten(test: SetKrawczyk, elo: np.ndarray, ehi: np.ndarray):
+    """``E ← K(E) ∩ E`` until no side shrinks by more than :data:`_TIGHT` of its width: every
+    equilibrium of every robot of the set in ``E`` stays in ``K(E)`` (Krawczyk's operator
+    keeps the zeros of the box, proven or not)."""
+    elo, ehi = elo.copy(), ehi.copy()
     for _ in range(_MAX_TIGHTEN):
-        idx = np.flatnonzero(proven)
-        if idx.size == 0:
+        if elo.shape[0] == 0:
             break
-        klo, khi, _ = test(elo[idx], ehi[idx])
-        nlo, nhi = np.fmax(elo[idx], klo), np.fmin(ehi[idx], khi)
-        gain = np.max((nlo - elo[idx] + ehi[idx] - nhi) / (ehi[idx] - elo[idx]), axis=1)
-        elo[idx], ehi[idx] = nlo, nhi
+        klo, khi, _ = test(elo, ehi)
+        nlo, nhi = np.fmax(elo, klo), np.fmin(ehi, khi)
+        gain = np.max((nlo - elo + ehi - nhi) / (ehi - elo), axis=1)
+        elo, ehi = nlo, nhi
         if not np.any(gain > _TIGHT):
             break
-    return proven, elo, ehi, ulo, uhi
+    return elo, ehi
+
+
+def _regular_box(test: SetKrawczyk, seed: np.ndarray, elo: np.ndarray, ehi: np.ndarray):
+    """For a seed whose whole-set test failed: a box ``U`` around it where every robot of
+    the set has **at most one** equilibrium, and the nominal one's ``[elo, ehi]`` lies in
+    ``int U``; ``(U_lo, U_hi)`` or None.
+
+    ``|I - Y J_x(U, P)| w < w`` (:meth:`SetKrawczyk.regular`) proves every matrix of
+    ``J_x(U, P)`` nonsingular, so two equilibria of one robot in ``U`` are equal (mean
+    value).  *Existence* for every robot then follows from the search of the rest
+    (:func:`tolerant_forward_kinematics`): if no robot of the set has an equilibrium on
+    ``∂U``, the degree of ``f(·, p)`` on ``U`` is the same for every ``p`` of the (connected)
+    parameter box as for the nominal robot, ``±1`` (one regular zero).  ``U`` is
+    ``x* ± s r``, ``r`` twice the first-order spread ``|Y J_p| dp``, at the largest scale
+    ``s`` that passes."""
+    x = seed[None]
+    _, pre, _, _, (Pc, _), dp, good = test._linearize(x, x)
+    if not good[0]:
+        return None
+    spread = np.abs(pre.Y[0] @ Pc[0]) @ dp[0]
+    r = 2.0 * spread + 0.1 * spread.max() + 1e-9 * (1.0 + np.abs(seed))
+    scales = np.array([1.0, 0.9, 0.75, 0.6, 0.5])
+    ulo, uhi = seed - scales[:, None] * r, seed + scales[:, None] * r
+    ok = test.regular(ulo, uhi) & all_last((ulo < elo) & (uhi > ehi))
+    if not np.any(ok):
+        return None
+    k = int(np.argmax(ok))
+    return ulo[k], uhi[k]
 
 
 def _outside(domain: np.ndarray, ulo: np.ndarray, uhi: np.ndarray):
@@ -484,16 +548,25 @@ def tolerant_forward_kinematics(
     seeds = np.array([0.5 * s.lo + 0.5 * s.hi for s in first.solve.solutions]).reshape(-1, solver.n)
     test = SetKrawczyk(fk.form, u)
     proven, elo, ehi, ulo, uhi = _prove_seeds(test, seeds)
-    if not np.all(proven):
+    regular = np.zeros(len(seeds), dtype=bool)
+    for i in np.flatnonzero(~proven):  # at most one per robot in U; existence below
+        nom = first.solve.solutions[i]
+        got = _regular_box(test, seeds[i], nom.lo, nom.hi)
+        if got is not None:
+            ulo[i], uhi[i] = got
+            elo[i], ehi[i] = _tighten(test, ulo[i : i + 1], uhi[i : i + 1])
+            regular[i] = True
+    held = proven | regular
+    if not np.all(held):
         notes.append(
-            f"{int(np.sum(~proven))} nominal pose(s) not proven for the whole set: "
+            f"{int(np.sum(~held))} nominal pose(s) not proven for the whole set: "
             "their neighbourhood is searched"
         )
-    kinds = solver.certifier.classify(elo[proven], ehi[proven]) if np.any(proven) else []
+    kinds = solver.certifier.classify(elo[held], ehi[held]) if np.any(held) else []
     known = SolutionSet(solver.n)
-    for a, b, c, d, kind in zip(elo[proven], ehi[proven], ulo[proven], uhi[proven], kinds):
+    for a, b, c, d, kind in zip(elo[held], ehi[held], ulo[held], uhi[held], kinds):
         known.add(a, b, c, d, kind)
-    plo, phi = _outside(tsearch.domain, ulo[proven], uhi[proven])
+    plo, phi = _outside(tsearch.domain, ulo[held], uhi[held])
     left = None if timeout is None else max(timeout - (time.perf_counter() - t0), 0.0)
     boxes_left = None if max_boxes is None else max(max_boxes - first.stats.boxes, 1)
     rest = solver.solve(
@@ -504,12 +577,25 @@ def tolerant_forward_kinematics(
         verify=verify,
         **search,
     )
+    # a regular U holds an equilibrium of every robot when nothing of the rest meets it
+    # (:func:`_regular_box`: no robot has one on its boundary)
+    exists = proven.copy()
+    if np.any(regular):
+        clear = rest.status == SearchStatus.COMPLETE and not rest.undecided_dropped
+        others = [(b.lo, b.hi) for b in rest.undecided] + [(b.lo, b.hi) for b in rest.solutions]
+        for i in np.flatnonzero(regular):
+            meets = any(np.all((a <= uhi[i]) & (b >= ulo[i])) for a, b in others)
+            exists[i] = clear and not meets
+        notes.append(
+            f"{int(np.sum(regular))} pose box(es) proven by regularity and the boundary: "
+            f"{int(np.sum(exists & regular))} with an equilibrium of every robot"
+        )
     # the set's pose boxes: the seeds', then the search's own that are not a seed's
-    sols = [
-        Solution(lo=a, hi=b, ulo=c, uhi=d)
-        for a, b, c, d, kind in zip(elo[proven], ehi[proven], ulo[proven], uhi[proven], kinds)
-        if kind == "ok"
-    ]
+    sols, certs = [], []
+    for k, i in enumerate(np.flatnonzero(held)):
+        if kinds[k] == "ok":
+            sols.append(Solution(lo=elo[i], hi=ehi[i], ulo=ulo[i], uhi=uhi[i]))
+            certs.append("unique" if exists[i] else "undecided")
     for kind in set(kinds) - {"ok"}:
         notes.append(
             f"a proven pose box is '{kind}' (outside the domain or a constraint): left out"
@@ -517,15 +603,16 @@ def tolerant_forward_kinematics(
     for s in rest.solutions:
         if known.add(s.lo, s.hi, s.ulo, s.uhi, "ok"):
             sols.append(s)
+            certs.append("unique")
     if verify and sols[: len(sols) - len(rest.solutions)]:
         from ..solver.verify import verify_solutions
 
         verify_solutions(solver.csys, sols)
     rest.solutions = sols
     poses = fk.decode_all(sols, u)
-    for pose, s in zip(poses, sols, strict=True):
+    for pose, s, cert in zip(poses, sols, certs, strict=True):
         pose.bounds = pose_bounds(fk.form, s.lo, s.hi, test)
-        pose.certificate = str(Certificate.UNIQUE)
+        pose.certificate = cert
     notes.append(f"pieces searched outside the proven boxes: {plo.shape[0]}")
     status = rest.status
     return FKResult(robot.name, fk.formulation, u, status, poses, rest, notes=notes)
