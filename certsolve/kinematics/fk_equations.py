@@ -111,7 +111,7 @@ def tolerance_parameters(robot: Robot) -> dict[str, tuple[float, float]]:
     out: dict[str, tuple[float, float]] = {}
     for name in ("A", "k", "K", "V", "L0"):
         lo, hi = getattr(b, name)
-        for index in zip(*np.nonzero(lo != hi)):
+        for index in zip(*np.nonzero(~b.exact(name))):
             key = "_".join(["tol", name, *(str(int(i)) for i in index)])
             out[key] = (float(lo[index]), float(hi[index]))
     wlo, whi = robot.weight_bounds()

@@ -53,9 +53,10 @@ class RobotIntervals:
     mass: tuple[float, float]
 
     def exact(self, name: str) -> np.ndarray:
-        """Mask of the numbers of ``name`` (or ``mass``) known exactly."""
-        lo, hi = getattr(self, name)
-        return np.asarray(lo) == np.asarray(hi)
+        """Mask of the numbers of ``name`` (or ``mass``) known exactly (a number the file
+        does not give, NaN, has no tolerance)."""
+        lo, hi = (np.asarray(a) for a in getattr(self, name))
+        return (lo == hi) | (np.isnan(lo) & np.isnan(hi))
 
 
 #: file field (:mod:`.paths`) -> its array in :class:`Robot`
@@ -196,7 +197,7 @@ class Robot:
         values: dict[str, Any] = {}
         for name in (*RobotIntervals.FIELDS, "mass"):
             lo, hi = (np.asarray(t, dtype=float) for t in getattr(b, name))
-            if np.all(lo == hi):
+            if np.all(b.exact(name)):
                 continue
             t = rng.integers(0, 2, lo.shape) if corner else rng.random(lo.shape)
             values[name] = np.clip(lo + t * (hi - lo), lo, hi)

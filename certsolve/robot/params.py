@@ -111,6 +111,40 @@ class RobotBounds:
             dtau_min=np.zeros((0, m)), dtau_max=np.zeros((0, m)),
         )  # fmt: skip
 
+    @classmethod
+    def of_tolerances(cls, robot: Robot) -> RobotBounds:
+        """The robot set of a file with tolerances (:meth:`.Robot.bounds`) as a batch of one
+        box of parameters: one parameter per toleranced anchor or attachment coordinate,
+        ``A = A_c + Σ_l θ_l e_l`` (an affine map like the design's ``set`` parameters),
+        ``θ_l`` over its interval; the tension limits are exact.  A proof made with these
+        holds for every robot of the set (the numbers the force index reads: anchors,
+        attachments, tension limits)."""
+        b = robot.bounds()
+        base = cls.point(robot)
+        m, d = robot.A.shape
+        slopes: dict[str, list[np.ndarray]] = {"A": [], "B": []}
+        radius, pairs, mids = [], {}, {}
+        for name in ("A", "B"):
+            lo, hi = b.A if name == "A" else b.B
+            for i, c in zip(*np.nonzero(lo != hi), strict=True):
+                e = np.zeros((m, d))
+                e[i, c] = 1.0
+                for other in slopes:
+                    slopes[other].append(e if other == name else np.zeros((m, d)))
+                mid = 0.5 * lo[i, c] + 0.5 * hi[i, c]
+                radius.append(max(float(up(hi[i, c] - mid)), float(up(mid - lo[i, c]))))
+            mid = np.minimum(np.maximum(0.5 * lo + 0.5 * hi, lo), hi)
+            pairs[name] = (lo[..., None], hi[..., None])
+            mids[name] = (mid[..., None], mid[..., None])
+        k = len(radius)
+        return replace(
+            base,
+            A=pairs["A"], B=pairs["B"], A_mid=mids["A"], B_mid=mids["B"],
+            radius=np.array(radius).reshape(k, 1),
+            dA=np.array(slopes["A"]).reshape(k, m, d), dB=np.array(slopes["B"]).reshape(k, m, d),
+            dtau_min=np.zeros((k, m)), dtau_max=np.zeros((k, m)),
+        )  # fmt: skip
+
     def take(self, idx: np.ndarray | slice) -> RobotBounds:
         """The boxes ``idx`` of the batch (a batch of one is shared by every box)."""
         if self.radius.shape[-1] == 1:
