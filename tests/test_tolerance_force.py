@@ -55,3 +55,16 @@ def test_a_toleranced_mass_is_refused_by_name():
     with pytest.raises(InputError) as err:
         certified_workspace(Robot.load(data), 1.0, [100, 110, 50, 60, 100, 110], 5.0)
     assert err.value.field == "robot.tolerances"
+
+
+def test_isotropic_force_at_a_pose_holds_for_the_set():
+    robot = _krut3([{"path": "wires[*].base[*]", "plus_minus": 1.0}])
+    res = isotropic_force(robot, [5, -3])
+    nominal = isotropic_force(robot.nominal(), [5, -3]).isotropic_force
+    assert res.isotropic_force == nominal and res.set_force_lo is not None
+    rng = np.random.default_rng(2)
+    drawn = [isotropic_force(robot.draw(rng, corner=i % 2 == 0), [5, -3]) for i in range(12)]
+    least = min(r.isotropic_force for r in drawn)
+    assert 0.8 * least < res.set_force_lo <= least
+    assert res.to_dict()["set_force_lo"] == res.set_force_lo
+    assert isotropic_force(robot.nominal(), [5, -3]).set_force_lo is None
