@@ -179,3 +179,26 @@ def test_a_set_too_wide_for_one_krawczyk_box_is_proven_by_regularity():
     for corner in (True, False, True):
         (s,) = forward_kinematics(robot.draw(rng, corner=corner), u).solutions
         assert _inside(pose, s)
+
+
+def test_inline_tolerances_in_a_job_request(tmp_path):
+    """A robot given inline with its tolerances is accepted by ``POST /v1/jobs``; a bad one
+    is a 422 naming the entry, and an option the set's FK does not take is named too."""
+    from fastapi.testclient import TestClient
+
+    from certsolve.api.app import create_app
+    from certsolve.jobs import ServiceSettings
+
+    data = json.loads((ROBOTS / "marionet-t-tol.json").read_text())
+    app = create_app(ServiceSettings(data_dir=tmp_path, workers=0))
+    with TestClient(app, base_url="http://localhost") as c:
+        job = {"kind": "fk", "robot": data, "params": {"u": [0.0] * 7}}
+        assert c.post("/v1/jobs", json=job).status_code == 202
+        bad = json.loads(json.dumps(job))
+        bad["robot"]["tolerances"][1] = {"path": "wires[9].k", "relative": 0.01}
+        r = c.post("/v1/jobs", json=bad)
+        assert r.status_code == 422
+        assert r.json()["detail"][0]["field"] == "robot.tolerances.1.path"
+        job["params"]["stable_only"] = True
+        r = c.post("/v1/jobs", json=job)
+        assert r.status_code == 422 and "stable_only" in r.text
