@@ -71,7 +71,7 @@ from ..interval.linalg import (
     mr_matmul,
     precondition,
 )
-from ..interval.reductions import all_last
+from ..interval.reductions import all_last, any_last
 from ..interval.rounding import down, up
 from ..robot.model import Robot
 from ..solver.certify import SolutionSet, box_difference
@@ -227,6 +227,34 @@ def _cross_column(Rc: np.ndarray, Rr: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return out_lo, out_hi
 
 
+class SetNewton:
+    """The set's Krawczyk operator as a contractor of the search (the solver's protocol,
+    :mod:`certsolve.solver.batch`): ``X ← X ∩ K(X)`` keeps every equilibrium of every
+    robot of the set in ``X`` (each lies in its own Krawczyk image, inside ``K(X)``), and
+    ``X ∩ K(X) = ∅`` proves that none has one there.  Its image keeps the numbers apart
+    (:class:`SetKrawczyk`), where the interval Newton step of the pipeline reads each
+    occurrence of a number as independent."""
+
+    def __init__(self, test: SetKrawczyk):
+        self.test = test
+
+    def apply(self, batch) -> None:
+        idx = np.flatnonzero(~batch.empty)
+        if idx.size == 0:
+            return
+        lo, hi = batch.lo[idx], batch.hi[idx]
+        klo, khi, _, usable = self.test.image(lo, hi)
+        nlo = np.where(usable[:, None], np.fmax(lo, klo), lo)
+        nhi = np.where(usable[:, None], np.fmin(hi, khi), hi)
+        empty = any_last(nlo > nhi)
+        batch.lo[idx] = np.where(empty[:, None], lo, nlo)
+        batch.hi[idx] = np.where(empty[:, None], hi, nhi)
+        batch.empty[idx] |= empty
+
+    def describe(self) -> str:
+        return f"SetNewton(parameters={self.test.q})"
+
+
 def check_tolerant_options(
     robot: Robot,
     formulation: str,
@@ -351,6 +379,12 @@ class SetKrawczyk:
     def __call__(self, lo: np.ndarray, hi: np.ndarray, plo=None, phi=None):
         """``(klo, khi, proven)`` for boxes ``(B, n)`` of the FK variables, over the whole
         set or, row by row, over the robots of the parameter boxes ``[plo, phi]``."""
+        klo, khi, proven, usable = self.image(lo, hi, plo, phi)
+        return klo, khi, proven & usable
+
+    def image(self, lo: np.ndarray, hi: np.ndarray, plo=None, phi=None):
+        """``(klo, khi, proven, usable)``: ``K(X)``, ``K(X) ⊂ int X``, and where the
+        linearisation is usable (elsewhere ``K(X)`` is not an enclosure of anything)."""
         c, pre, _, _, (Pc, Pr), dp, good = self._linearize(lo, hi, plo, phi)
         Y = np.where(pre.ok[:, None, None], pre.Y, 0.0)
         with np.errstate(all="ignore"):
@@ -358,7 +392,8 @@ class SetKrawczyk:
             br = up(pre.br + self._parameter_radius(YPc, YPr, dp))
         mag = krawczyk_magnitude(pre.Mc, pre.Mr)
         klo, khi, proven = krawczyk_image(c, lo, hi, mag, pre.bc, br)
-        return klo, khi, proven & good & all_last(np.isfinite(br))
+        usable = good & all_last(np.isfinite(br) & np.isfinite(klo) & np.isfinite(khi))
+        return klo, khi, proven, usable
 
     def regular(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """Mask of the boxes where every matrix of ``J_x(X, P)`` is nonsingular, proven by
@@ -539,14 +574,14 @@ def tolerant_forward_kinematics(
         f"nominal robot: {first.status}, {len(first.solutions)} pose(s), "
         f"{first.stats.boxes} boxes (the stats are the set's search)"
     ]
-    tsearch = fk.search(u)
+    test = SetKrawczyk(fk.form, u)
+    tsearch = fk.search(u, extra=(SetNewton(test),))
     if not tsearch.ok:
         notes.append("no wire length satisfies the tension limits inside the domain")
         res = SolveResult(list(fk.form.system.variables), SearchStatus.COMPLETE)
         return FKResult(robot.name, fk.formulation, u, res.status, [], res, notes=notes)
     solver = tsearch.solver
     seeds = np.array([0.5 * s.lo + 0.5 * s.hi for s in first.solve.solutions]).reshape(-1, solver.n)
-    test = SetKrawczyk(fk.form, u)
     proven, elo, ehi, ulo, uhi = _prove_seeds(test, seeds)
     regular = np.zeros(len(seeds), dtype=bool)
     for i in np.flatnonzero(~proven):  # at most one per robot in U; existence below
