@@ -28,8 +28,9 @@ of undecided boxes around every pose.  So the search is done in three steps:
    in ``U`` stays in ``E``;
 3. the rest of the search box -- the domain less the interiors of the proven ``U``
    (:func:`.box_difference`, closed pieces that meet no ``int U``) -- is searched by the
-   set's own FK search (the same pipeline as the nominal one, on the interval system): it
-   proves its own pose boxes where a robot of the set has another equilibrium, and reports
+   set's own FK search (the nominal pipeline on the interval system, with the set's
+   Krawczyk operator as one more contractor, :class:`SetNewton`): it proves its own pose
+   boxes where a robot of the set has another equilibrium, and reports
    what it cannot decide.  A pose box it proves whose ``E`` lies in a seed's ``U`` is that
    seed's pose (``U`` holds one equilibrium per robot) and is not reported twice.
 
