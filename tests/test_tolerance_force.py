@@ -68,3 +68,14 @@ def test_isotropic_force_at_a_pose_holds_for_the_set():
     assert 0.8 * least < res.set_force_lo <= least
     assert res.to_dict()["set_force_lo"] == res.set_force_lo
     assert isotropic_force(robot.nominal(), [5, -3]).set_force_lo is None
+
+
+def test_ik_on_a_set_says_it_answers_for_the_nominal_robot():
+    from certsolve.kinematics import inverse_kinematics
+
+    robot = Robot.load(ROBOTS / "marionet-t-tol.json")
+    pose = [115, 60, 118, 0, 0, 0]
+    res = inverse_kinematics(robot, pose)
+    nominal = inverse_kinematics(robot.nominal(), pose)
+    assert np.array_equal(res.u, nominal.u)
+    assert any("nominal robot's controls" in m for m in res.messages)
