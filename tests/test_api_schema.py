@@ -15,7 +15,8 @@ JSON Schema cannot state every rule the validation enforces; :func:`repair` make
 generated positive bodies obey those (and only those) rules, listed in
 ``docs/reliability.md``: ``lo <= hi`` of intervals, ``tau_max < k``, ``u`` with one value
 per wire, Minibex grammar, attachment points that span the FK frame, no zero-length wire
-at an IK pose, design parameter paths that exist in the robot, ``nx * ny`` of a grid,
+at an IK pose, design parameter and tolerance paths that exist in the robot (and no
+seeding or stable-only FK of a robot with tolerances), ``nx * ny`` of a grid,
 workspace angle ranges, the cost estimate of quick calls, and the sweep form of batches
 (whose params must be the params of its kind).  The app runs without workers (queued
 jobs stay queued).  The schema is loaded inside the tests, so collecting this module
@@ -49,6 +50,8 @@ def _pairs(values):
 
 def _repair_robot(robot: dict, kind: str | None) -> None:
     dim = 3 if robot.get("dof") == 6 else 2
+    if robot.get("tolerances"):  # a path this robot has, on no number twice
+        robot["tolerances"] = [dict(robot["tolerances"][0], path="wires[*].base[*]")]
     for i, w in enumerate(robot.get("wires", [])):
         w["tau"] = sorted(w["tau"])
         if w.get("u") is not None:
@@ -82,6 +85,9 @@ def _repair_params(kind: str, robot: dict | None, params: dict) -> None:
     if kind in ("fk", "fk/track"):
         params["u"] = (list(params["u"]) + [0.0] * m)[:m]
         params.pop("formulation", None)  # which ones a robot admits depends on its geometry
+        if robot and robot.get("tolerances"):  # options the FK of a set does not take
+            for option in ("seed_planar", "seeded_only", "stable_only"):
+                params.pop(option, None)
     if kind == "ik":  # another method's options keep their defaults
         from certsolve.robot.inputs import IK_METHOD_OPTIONS
 

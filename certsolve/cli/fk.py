@@ -183,13 +183,33 @@ def _pose_lines(s: Mapping) -> list[str]:
         f"  position ({'x, y, z' if spatial else 'x, y'}) = ({pos}) cm",
         f"  orientation ({names}) = ({ang}) deg",
         _stability_line(s),
-        "  wire      rho (cm)    tau (N)    B_i (world, cm)",
     ]
+    if "position_lo" in s:  # a robot with tolerances: bounds over every robot of the set
+        return lines + _bounds_lines(s)
+    lines.append("  wire      rho (cm)    tau (N)    B_i (world, cm)")
     for i, (rho, tau, point) in enumerate(
         zip(s["rho"], s["tau"], s["platform_points"], strict=True)
     ):
         b = ", ".join(f"{v:9.4f}" for v in point)
         lines.append(f"  {i + 1:4d}  {rho:12.6f}  {tau:9.5f}    ({b})")
+    return lines
+
+
+def _bounds_lines(s: Mapping) -> list[str]:
+    """The bounds of a pose box of a robot with tolerances (docs/tolerances.md): the frame's
+    origin, and each attachment's interval per axis."""
+
+    def ivl(lo, hi):
+        return ", ".join(f"[{a:.4f}, {b:.4f}]" for a, b in zip(lo, hi, strict=True))
+
+    lines = [
+        f"  position bounds: ({ivl(s['position_lo'], s['position_hi'])}) cm",
+        "  wire   B_i bounds (world, cm)",
+    ]
+    for i, (lo, hi) in enumerate(
+        zip(s["platform_points_lo"], s["platform_points_hi"], strict=True)
+    ):
+        lines.append(f"  {i + 1:4d}   ({ivl(lo, hi)})")
     return lines
 
 

@@ -33,7 +33,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..inputs import InputError
 from ..robot import Robot
+from ..robot.params import RobotBounds
 from ..solver.buffer import BoxStack
 from ..solver.executors import resolve_executor
 from ..solver.search import Limits, Progress, SearchStats, SearchStatus, Tally, run_search
@@ -245,8 +247,11 @@ class PavingStep:
         scale: np.ndarray,
         total: float,
         batch: int,
+        params: RobotBounds | None = None,
     ) -> None:
         self.robot = robot
+        #: a robot with tolerances: its set's interval arrays (every robot must pass)
+        self.params = params
         self.min_force = float(min_force)
         self.external = external
         self.d = d
@@ -277,6 +282,7 @@ class PavingStep:
             self.external,
             alo=lo[:, d:].T if self.use_rot else None,
             ahi=hi[:, d:].T if self.use_rot else None,
+            params=self.params,
         )
         ins = np.all(glo >= 0.0, axis=0) & full_rank & wires_ok
         out = np.any(ghi < 0.0, axis=0) & wires_ok & ~ins
@@ -322,6 +328,22 @@ class PavingStep:
             getattr(state, key).extend(parts)
             state.counts[key] += sum(len(p) for p in parts)
         state.inside_measure += measure
+
+
+def set_bounds(robot: Robot) -> RobotBounds | None:
+    """The interval arrays of a robot with tolerances (:meth:`.RobotBounds.of_tolerances`),
+    None for an exact robot.  The force index reads the anchors, the attachments and the
+    tension limits; a toleranced mass or centre of mass (the weight's wrench) is refused
+    by name, ``k``, ``K``, ``V``, ``L0`` do not enter it."""
+    if not robot.toleranced:
+        return None
+    b = robot.bounds()
+    if b.mass[0] != b.mass[1] or not np.all(b.exact("com")):
+        raise InputError(
+            "robot.tolerances",
+            "the force index within tolerances takes an exact mass and centre of mass",
+        )
+    return RobotBounds.of_tolerances(robot)
 
 
 def certified_workspace(
@@ -382,7 +404,9 @@ def certified_workspace(
     nd = full.shape[0]
     scale = np.concatenate([np.full(d, float(eps)), np.full(len(angles), float(eps_angle))])
     total = CertifiedWorkspace._measure(full[None])
-    step = PavingStep(robot, min_force, external, d, use_rot, scale, total, batch)
+    step = PavingStep(
+        robot, min_force, external, d, use_rot, scale, total, batch, params=set_bounds(robot)
+    )
     run = run_search(
         step,
         full[None, :, 0].copy(),

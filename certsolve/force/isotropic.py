@@ -80,6 +80,7 @@ __all__ = [
     "isotropic_force",
     "isotropic_values",
     "section_index",
+    "set_force_bound",
     "INSIDE",
     "OUTSIDE",
     "DEGENERATE",
@@ -332,6 +333,9 @@ class IsotropicForceResult:
     ellipse: CentredEllipsoid | None = None  # largest centred ellipse (section IV-C)
     time: float = 0.0
     notes: list[str] = field(default_factory=list)
+    #: a robot with tolerances: a certified lower bound of the isotropic force of every
+    #: robot of the set (:func:`set_force_bound`); ``isotropic_force`` is the nominal one's
+    set_force_lo: float | None = None
 
     @property
     def inside(self) -> bool:
@@ -368,6 +372,7 @@ class IsotropicForceResult:
             ),
             "time": self.time,
             "notes": list(self.notes),
+            **({} if self.set_force_lo is None else {"set_force_lo": self.set_force_lo}),
         }
 
 
@@ -446,7 +451,15 @@ def isotropic_force(
     if value is not None and not np.isfinite(value):
         notes.append("the required moment is out of reach: the section is empty")
         value = None
+    set_lo: float | None = None
+    if robot.toleranced:
+        set_lo = set_force_bound(robot, pos, rot, value or 0.0, external)
+        notes.append(
+            "robot with tolerances: isotropic_force is the nominal robot's; every robot of "
+            + (f"the set has at least {set_lo:.6g} N" if set_lo else "the set: not proven > 0")
+        )
     return IsotropicForceResult(
+        set_force_lo=set_lo,
         robot=robot.name,
         dof=robot.dof,
         pose=pose.params(robot.dof),
@@ -465,3 +478,38 @@ def isotropic_force(
         time=time.perf_counter() - t0,
         notes=notes,
     )
+
+
+def set_force_bound(
+    robot: Robot,
+    position: np.ndarray,
+    rotation: np.ndarray,
+    upper: float,
+    external: ArrayLike | None = None,
+    steps: int = 30,
+) -> float:
+    """A certified lower bound of the isotropic force at one pose over every robot of a
+    robot's set (:mod:`certsolve.robot.tolerance`): the largest ``F`` of a bisection on
+    ``(0, upper]`` for which the slack enclosures with the set's interval arrays
+    (:func:`.certified.set_bounds`, :func:`.enclosure.slack_enclosures`: the certified
+    workspace's test at a point) prove ``f_min >= F`` for all of them; 0 when none is proven.
+    ``upper``: the nominal robot's force (the set's least force is at most that)."""
+    from .certified import set_bounds
+    from .enclosure import slack_enclosures
+
+    params = set_bounds(robot)
+    p = np.asarray(position, dtype=float)[:, None]
+
+    def proven(F: float) -> bool:
+        glo, _, full_rank, wires_ok = slack_enclosures(
+            robot, p, p, F, external, rotation=rotation, params=params
+        )
+        return bool(np.all(glo >= 0.0) and full_rank[0] and wires_ok[0])
+
+    lo, hi = 0.0, float(upper)
+    if not (hi > 0 and proven(1e-9 * hi)):
+        return 0.0
+    for _ in range(steps):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if proven(mid) else (lo, mid)
+    return lo

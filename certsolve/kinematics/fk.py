@@ -15,6 +15,7 @@ from ..robot.inputs import FkOptions, check_controls
 from ..robot.model import Robot
 from ..solver import resolve_executor
 from .fk_solver import FKPose, FKResult, FKSolver, with_tau_max
+from .fk_tolerance import check_tolerant_options, tolerant_forward_kinematics
 from .seeding import seeded_forward_kinematics
 
 __all__ = ["FKPose", "FKResult", "FKSolver", "forward_kinematics", "with_tau_max"]
@@ -62,6 +63,11 @@ def forward_kinematics(
     either search (see :meth:`.Solver.solve`); ``checkpoint``
     (:class:`~certsolve.solver.checkpoint.Checkpoint`) to the one-phase search only (not
     ``seed_planar``).
+
+    A robot with tolerances (:mod:`certsolve.robot.tolerance`) is a set of robots: the
+    result's poses are then pose boxes that hold every equilibrium of every robot of the set
+    (:func:`.fk_tolerance.tolerant_forward_kinematics`; ``seed_planar``, ``stable_only`` and
+    ``checkpoint`` are refused there, naming the field).
     """
     opts = checked(
         FkOptions,
@@ -86,6 +92,16 @@ def forward_kinematics(
         raise InputError("checkpoint", "not available with seed_planar (a search in two phases)")
     executor = resolve_executor(executor, workers=workers)
     robot = with_tau_max(robot, tau_max)
+    if robot.toleranced:  # a set of robots: pose boxes (:mod:`.fk_tolerance`)
+        check_tolerant_options(
+            robot, formulation, seed_planar=seed_planar, stable_only=stable_only,
+            checkpoint=checkpoint is not None,
+        )  # fmt: skip
+        return tolerant_forward_kinematics(
+            robot, u, formulation=formulation, eps=eps, timeout=timeout, max_boxes=max_boxes,
+            max_solutions=max_solutions, progress=progress, executor=executor, verify=verify,
+            cancel=cancel,
+        )  # fmt: skip
     search = {
         "timeout": timeout,
         "max_boxes": max_boxes,

@@ -39,35 +39,93 @@ __all__ = [
     "fourth_point_constraints",
     "lin",
     "mul0",
+    "number",
     "rho_domain",
+    "tolerance_parameters",
     "sub0",
     "wire_groups",
+    "weight",
     "wire_weights",
 ]
 
 
 def rho_domain(robot: Robot, u: np.ndarray, domain: np.ndarray):
-    """Per-wire [ρ_min, ρ_max]: tension limits through eq. (7), intersected with geometry."""
-    c = robot.V + robot.K * u
-    lo_t = robot.k * robot.L0 / (robot.k - robot.tau_min) - c
-    hi_t = robot.k * robot.L0 / (robot.k - robot.tau_max) - c
-    near = np.clip(robot.A, domain[:, 0], domain[:, 1])
-    dmin = np.linalg.norm(robot.A - near, axis=1)
-    far = np.where(
-        np.abs(robot.A - domain[:, 0]) > np.abs(robot.A - domain[:, 1]), domain[:, 0], domain[:, 1]
+    """Per-wire [ρ_min, ρ_max]: tension limits through eq. (7), intersected with geometry,
+    over every robot of the set (:meth:`.Robot.bounds`; the nominal numbers without
+    tolerances).
+
+    ``ρ(τ) = k L0 / (k - τ) - V - K u`` is monotone in each number (increasing in ``L0``,
+    decreasing in ``V``, in ``K`` as ``-u``, in ``k`` as ``-τ``), so its range over the set
+    is at the corners chosen by those signs; the distance from the anchor box to the domain
+    box is bounded per axis.
+    """
+    b = robot.bounds()
+
+    def length(tau, low: bool):
+        """ρ at the corner where it is lowest (``low``) or highest."""
+
+        def pick(pair, lower_when):  # the end of ``pair`` that lowers ρ where the mask says
+            return np.where(lower_when == low, pair[0], pair[1])
+
+        k = pick(b.k, tau < 0)
+        L0 = pick(b.L0, True)
+        V = pick(b.V, False)
+        K = pick(b.K, u < 0)
+        return k * L0 / (k - tau) - (V + K * u)
+
+    lo_t = length(robot.tau_min, True)
+    hi_t = length(robot.tau_max, False)
+    (alo, ahi), dlo, dhi = b.A, domain[:, 0], domain[:, 1]
+    dmin = np.linalg.norm(np.maximum(np.maximum(dlo - ahi, alo - dhi), 0.0), axis=1)
+    far = np.maximum(
+        np.maximum(np.abs(alo - dlo), np.abs(alo - dhi)),
+        np.maximum(np.abs(ahi - dlo), np.abs(ahi - dhi)),
     )
-    dmax = np.linalg.norm(robot.A - far, axis=1)
+    dmax = np.linalg.norm(far, axis=1)
     lo = np.maximum(np.maximum(lo_t, dmin), 0.0)
     hi = np.minimum(hi_t, dmax)
     return lo, hi
+
+
+def number(robot: Robot, name: str, index: tuple[int, ...]) -> float | Expr:
+    """A number of the robot as the FK systems write it: the float where it is exact, the
+    parameter ``tol_<name>_<index>`` where it is known within a tolerance
+    (:meth:`.Robot.bounds`; its interval is the parameter's value,
+    :func:`tolerance_parameters`), so a robot without tolerances gives the same graph as
+    its floats, and a proof can treat the toleranced numbers apart (:mod:`.fk_tolerance`)."""
+    lo, hi = (float(a[index]) for a in getattr(robot.bounds(), name))
+    return lo if lo == hi else param("_".join(["tol", name, *map(str, index)]))
+
+
+def weight(robot: Robot) -> list[float | Expr]:
+    """The weight ``m g`` (N) per axis, as :func:`number` writes numbers (an exact 0 on an
+    axis without gravity; the parameter ``tol_W_<axis>`` where the mass is toleranced)."""
+    lo, hi = robot.weight_bounds()
+    return [float(a) if a == b else param(f"tol_W_{c}") for c, (a, b) in enumerate(zip(lo, hi))]
+
+
+def tolerance_parameters(robot: Robot) -> dict[str, tuple[float, float]]:
+    """The interval of every parameter :func:`number` and :func:`weight` write, by name
+    (empty for a robot without tolerances)."""
+    b = robot.bounds()
+    out: dict[str, tuple[float, float]] = {}
+    for name in ("A", "k", "K", "V", "L0"):
+        lo, hi = getattr(b, name)
+        for index in zip(*np.nonzero(~b.exact(name))):
+            key = "_".join(["tol", name, *(str(int(i)) for i in index)])
+            out[key] = (float(lo[index]), float(hi[index]))
+    wlo, whi = robot.weight_bounds()
+    for c in np.flatnonzero(wlo != whi):
+        out[f"tol_W_{c}"] = (float(wlo[c]), float(whi[c]))
+    return out
 
 
 def wire_weights(robot: Robot, rho: list[Expr]) -> list[Expr]:
     """``w_i = τ_i / ρ_i`` with ``τ_i = k (1 - L0 / (ρ_i + V + K u_i))`` (eqs. 1, 2)."""
     out = []
     for i in range(robot.m):
-        c = robot.V[i] + robot.K[i] * param(f"u{i + 1}")
-        tau = robot.k[i] * (1.0 - robot.L0[i] / (rho[i] + c))
+        c = number(robot, "V", (i,)) + number(robot, "K", (i,)) * param(f"u{i + 1}")
+        tau = number(robot, "k", (i,)) * (1.0 - number(robot, "L0", (i,)) / (rho[i] + c))
         out.append(tau / rho[i])
     return out
 
@@ -142,7 +200,7 @@ def eliminating_moments(robot, B, G, L, w, P, d):
     equations much sharper for HC4 than the six equilibrium equations alone.
     Returns a list of expressions (each = 0 at every equilibrium).
     """
-    W = [float(v) for v in robot.weight]
+    W = weight(robot)
     groups = wire_groups(L)
     keys = list(groups)
     out = []
@@ -153,7 +211,7 @@ def eliminating_moments(robot, B, G, L, w, P, d):
             if i in skip:
                 continue
             r = [B[i][c] - pt[c] for c in range(d)]
-            a = [float(robot.A[i, c]) - pt[c] for c in range(d)]
+            a = [number(robot, "A", (i, c)) - pt[c] for c in range(d)]
             if d == 3:
                 m = cross(r, a)
                 for c in range(3):
@@ -193,31 +251,28 @@ def absolute_forces_and_moments(robot: Robot, B, G, w, O) -> list[Expr]:
     × m g`` (one component in the plane).  Shared by the point and pose parameterisations.
     """
     d = robot.dim
-    W = robot.weight
+    W = weight(robot)
     eqs: list[Expr] = []
     for c in range(d):  # forces
-        terms = [w[i] * (float(robot.A[i, c]) - B[i][c]) for i in range(robot.m)]
+        terms = [w[i] * (number(robot, "A", (i, c)) - B[i][c]) for i in range(robot.m)]
         if W[c] != 0.0:
-            terms.append(const(float(W[c])))
+            terms.append(Expr.wrap(W[c]))
         eqs.append(esum(terms))
     rel = [[B[i][c] - float(O[c]) for c in range(d)] for i in range(robot.m)]
-    arel = robot.A - O
+    arel = [[number(robot, "A", (i, c)) - float(O[c]) for c in range(d)] for i in range(robot.m)]
     if d == 3:
         mom_terms: list[list[Expr]] = [[] for _ in range(3)]
         for i in range(robot.m):
-            m_i = cross(rel[i], [float(v) for v in arel[i]])
+            m_i = cross(rel[i], arel[i])
             for c in range(3):
                 mom_terms[c].append(w[i] * m_i[c])
-        if np.any(W != 0.0):
-            mg = cross([G[c] - float(O[c]) for c in range(3)], [float(v) for v in W])
+        if any(v != 0.0 for v in W):
+            mg = cross([G[c] - float(O[c]) for c in range(3)], W)
             for c in range(3):
                 mom_terms[c].append(mg[c])
         eqs.extend(esum(t) for t in mom_terms)
     else:
-        terms = [
-            w[i] * (rel[i][0] * float(arel[i, 1]) - rel[i][1] * float(arel[i, 0]))
-            for i in range(robot.m)
-        ]
+        terms = [w[i] * (rel[i][0] * arel[i][1] - rel[i][1] * arel[i][0]) for i in range(robot.m)]
         eqs.append(esum(terms))
     return eqs
 

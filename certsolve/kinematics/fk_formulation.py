@@ -24,7 +24,7 @@ from ..expr import System
 from ..expr.node import Expr
 from ..robot.model import Robot
 from ..solver.bisectors import SmearSumRelative
-from .fk_equations import rho_domain
+from .fk_equations import rho_domain, tolerance_parameters
 
 __all__ = ["FKFormulation"]
 
@@ -50,10 +50,11 @@ class FKFormulation(ABC):
     determined: tuple[int, ...] = ()
 
     # -- the control u ------------------------------------------------------------------------
-    def parameters_for(self, u) -> dict[str, float]:
-        """The system's parameter values for control ``u``."""
+    def parameters_for(self, u) -> dict[str, float | tuple[float, float]]:
+        """The system's parameter values for control ``u`` (and the intervals of a robot's
+        toleranced numbers, :func:`.fk_equations.tolerance_parameters`)."""
         u = np.asarray(u, dtype=float)
-        return {f"u{i + 1}": float(v) for i, v in enumerate(u)}
+        return {f"u{i + 1}": float(v) for i, v in enumerate(u)} | tolerance_parameters(self.robot)
 
     def search_domain(self, u) -> tuple[np.ndarray, bool]:
         """The search box for control ``u`` and whether it is non-empty: the system's

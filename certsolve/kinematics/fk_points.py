@@ -65,8 +65,11 @@ from .fk_equations import (
     eliminating_moments,
     fourth_point_constraints,
     lin,
+    number,
     rho_domain,
     sub0,
+    tolerance_parameters,
+    weight,
     wire_groups,
     wire_weights,
 )
@@ -114,7 +117,7 @@ class _Points:
 
     def offset(self, i: int, c: int) -> Expr:
         """Component ``c`` of ``B_i - A_i``."""
-        return self.B[i][c] - float(self.robot.A[i, c])
+        return self.B[i][c] - number(self.robot, "A", (i, c))
 
     def edge_sq(self, a: int, b: int) -> Expr:
         d = self.robot.dim
@@ -189,7 +192,7 @@ class _Frame:
 
     def offset(self, i: int, c: int) -> Expr:
         """Component ``c`` of ``B_i - A_i = (P_1 - A_i) + b_i``."""
-        return add0(self.C[c] - float(self.robot.A[i, c]), self.b[i][c])
+        return add0(self.C[c] - number(self.robot, "A", (i, c)), self.b[i][c])
 
     def edge_sq(self, a: int, b: int) -> Expr:
         d, E = self.robot.dim, self.E
@@ -208,20 +211,20 @@ class _Frame:
         """Moment of all forces about ``P_1 + rel(pref)``, wires in ``skip`` left out."""
         robot, C, b = self.robot, self.C, self.b
         d = robot.dim
-        W = [float(v) for v in robot.weight]
+        W = weight(robot)
         p = self.rel(pref)
         comps: list[list[Expr]] = [[] for _ in range(3 if d == 3 else 1)]
         for i in range(robot.m):
             if i in skip:
                 continue
             lever = [sub0(b[i][c], p[c]) for c in range(d)]
-            arm = [sub0(float(robot.A[i, c]) - C[c], p[c]) for c in range(d)]
+            arm = [sub0(number(robot, "A", (i, c)) - C[c], p[c]) for c in range(d)]
             for c, mc in enumerate(cross0(lever, arm)):
                 if mc is not None:
                     comps[c].append(w[i] * mc)
         if any(v != 0.0 for v in W):
             gl = [sub0(self.g[c], p[c]) for c in range(d)]
-            for c, mc in enumerate(cross0(gl, [const(v) for v in W])):
+            for c, mc in enumerate(cross0(gl, [Expr.wrap(v) for v in W])):
                 if mc is not None:
                     comps[c].append(mc)
         return comps
@@ -229,12 +232,14 @@ class _Frame:
     def equilibrium(self, w) -> list[Expr]:
         """Forces ``Σ w_i ((A_i - P_1) - b_i) + m g``, moments about ``P_1``."""
         robot, C, b = self.robot, self.C, self.b
-        W = [float(v) for v in robot.weight]
+        W = weight(robot)
         eqs: list[Expr] = []
         for c in range(robot.dim):
-            terms = [w[i] * sub0(float(robot.A[i, c]) - C[c], b[i][c]) for i in range(robot.m)]
+            terms = [
+                w[i] * sub0(number(robot, "A", (i, c)) - C[c], b[i][c]) for i in range(robot.m)
+            ]
             if W[c] != 0.0:
-                terms.append(const(W[c]))
+                terms.append(Expr.wrap(W[c]))
             eqs.append(esum(terms))
         k = self.Q.shape[0]
         ref_wires = set(wire_groups(self.L).get(tuple(np.eye(k)[0]), []))
@@ -296,6 +301,7 @@ def _platform_system(
     k = Q.shape[0]
     co = coordinates(robot, Q, L, lG)
     A = robot.A
+    exact_anchors = np.all(robot.bounds().exact("A"), axis=1)
     dom = robot.domain
 
     rho = [var(f"rho{i + 1}") for i in range(robot.m)]
@@ -342,8 +348,14 @@ def _platform_system(
         # wires sharing an attachment: the difference of their length equations is linear
         for a, b in zip(members, members[1:]):
             Aa, Ab = A[a], A[b]
-            lhs = esum(2.0 * float(Aa[c] - Ab[c]) * co.B[a][c] for c in range(d))
-            const_term = float(np.sum(Aa * Aa) - np.sum(Ab * Ab))
+            if exact_anchors[a] and exact_anchors[b]:
+                lhs = esum(2.0 * float(Aa[c] - Ab[c]) * co.B[a][c] for c in range(d))
+                const_term: float | Expr = float(np.sum(Aa * Aa) - np.sum(Ab * Ab))
+            else:  # anchors within tolerances: the same terms, their numbers as intervals
+                na = [number(robot, "A", (a, c)) for c in range(d)]
+                nb = [number(robot, "A", (b, c)) for c in range(d)]
+                lhs = esum(2.0 * (na[c] - nb[c]) * co.B[a][c] for c in range(d))
+                const_term = esum(sqr(na[c]) for c in range(d)) - esum(sqr(nb[c]) for c in range(d))
             constraints.append(
                 Constraint(sqr(rho[a]) - sqr(rho[b]) + lhs - const_term, 0.0, 0.0, redundant=True)
             )
@@ -353,7 +365,7 @@ def _platform_system(
     lo, hi = rho_domain(robot, np.zeros(robot.m), robot.domain)  # u = 0; per u: search_domain
     domain[k * d :, 0] = lo
     domain[k * d :, 1] = np.maximum(hi, lo)
-    params = {f"u{i + 1}": 0.0 for i in range(robot.m)}
+    params: dict = {f"u{i + 1}": 0.0 for i in range(robot.m)} | tolerance_parameters(robot)
     system = System(names, domain, eqs, constraints, name=name, parameters=params)
     return system, bool(fourth)
 

@@ -56,6 +56,9 @@ class FKPose:
     #: stable / unstable / undecided over ``box``, with an enclosure of the Hessian's
     #: smallest eigenvalue (:mod:`.stability`)
     stability: StabilityVerdict = field(default_factory=StabilityVerdict.unknown)
+    #: a robot with tolerances: bounds of the pose over the box for every robot of the set
+    #: (:class:`.fk_tolerance.PoseBounds`); None for an exact robot
+    bounds: Any = None
 
     @property
     def euler_deg(self) -> np.ndarray:
@@ -76,6 +79,7 @@ class FKPose:
             "box": self.box,
             "variables": list(self.variables),
             **self.stability.to_dict(),
+            **({} if self.bounds is None else self.bounds.to_dict()),
         }
 
 
@@ -210,14 +214,15 @@ class FKSolver:
         the tension limits; the system's own domain is left as it is)."""
         return self.form.search_domain(np.asarray(u, dtype=float).ravel())[0]
 
-    def search(self, u) -> FKSearch:
+    def search(self, u, extra: tuple = ()) -> FKSearch:
         """The search for control ``u``: ``u`` checked, its search box, and the solver.
 
         The solver is assembled from the formulation's parts: the pipeline without the
         relaxation (fewer boxes, more CPU: see :meth:`.Solver.default`'s ``relax``) and
         without CID -- HC4, partial Newton on the formulation's sub-systems, Newton with
         its mixed Jacobian, in a fixpoint, then inflated proofs -- on the compiled system
-        with ``u`` as its parameter values (:meth:`.CompiledSystem.with_parameters`), the
+        with ``u`` as its parameter values (``extra`` contractors go before the full Newton
+        step) (:meth:`.CompiledSystem.with_parameters`), the
         formulation's bisector for the box and its bisection mask.
         """
         u = np.asarray(u, dtype=float).ravel()
@@ -236,6 +241,7 @@ class FKSolver:
         )
         if self.stable_only:
             newton.insert(-1, StableOnly(self.hessian, csys, self.robot, form.rho_columns()))
+        newton[-1:-1] = list(extra)  # e.g. the set's Krawczyk (:mod:`.fk_tolerance`)
         solver = Solver(
             csys,
             Sequence(FixPoint(Sequence(*newton)), Inflate()),

@@ -116,6 +116,8 @@ class Pose:
 
     def check(self, robot: Robot) -> None:
         robot.require_elastic("forward kinematics")
+        if robot.toleranced:  # its rotation writes the anchors as floats
+            raise ValueError("pose does not take tolerances; use auto or frame")
 
     def build(self, robot: Robot) -> PoseFormulation:
         self.check(robot)

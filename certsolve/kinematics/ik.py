@@ -101,6 +101,13 @@ def inverse_kinematics(robot, pose, method: str = "tension", **options) -> IKRes
     robot = as_robot(robot)
     pose = as_pose(robot.dof, pose)
     checked(IkOptions, {"pose": pose.params(robot.dof), "method": method})
+    if robot.toleranced:  # not yet over the set: say so, and answer for the nominal robot
+        res = inverse_kinematics(robot.nominal(), pose, method, **options)
+        res.messages.append(
+            "robot with tolerances: these are the nominal robot's controls (IK over the set "
+            "is not done yet); forward kinematics with them gives the pose box of the set"
+        )
+        return res
     if method == "tension":
         return ik_tension_first(robot, pose, **options)
     if method == "alg1":

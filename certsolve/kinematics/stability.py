@@ -67,7 +67,7 @@ from ..expr import Expr, Graph, Program, esum, param, sqr, var
 from ..interval import arith
 from ..interval.linalg import gamma, mr_from_bounds, mr_matmul
 from ..interval.rounding import down, up
-from .fk_equations import cross
+from .fk_equations import cross, number, tolerance_parameters
 from .fk_formulation import FKFormulation
 
 __all__ = [
@@ -136,12 +136,13 @@ def _energy(form: FKFormulation, dp: list[Expr], dw: list[Expr]) -> Expr:
     terms: list[Expr] = []
     for i in range(robot.m):
         rho = var(f"rho{i + 1}")
-        L = rho + float(robot.V[i]) + float(robot.K[i]) * param(f"u{i + 1}")
-        w = float(robot.k[i]) * (1.0 - float(robot.L0[i]) / L) / rho  # τ_i / ρ_i
-        dtau = float(robot.k[i]) * (float(robot.L0[i]) / sqr(L))  # dτ_i / dρ_i
+        k, L0 = number(robot, "k", (i,)), number(robot, "L0", (i,))
+        L = rho + number(robot, "V", (i,)) + number(robot, "K", (i,)) * param(f"u{i + 1}")
+        w = k * (1.0 - L0 / L) / rho  # τ_i / ρ_i (each number over its tolerance)
+        dtau = k * (L0 / sqr(L))  # dτ_i / dρ_i
         t = _turn(r[i], dw)
         move = [dp[c] + t[c] for c in range(d)]  # B_i(δ) - B_i
-        arm = [G[c] + r[i][c] - float(robot.A[i, c]) for c in range(d)]  # B_i - A_i
+        arm = [G[c] + r[i][c] - number(robot, "A", (i, c)) for c in range(d)]  # B_i - A_i
         q = esum(2.0 * arm[c] * move[c] + sqr(move[c]) for c in range(d))
         terms.append(0.5 * w * q + (dtau - w) / (8.0 * sqr(rho)) * sqr(q))
     return esum(terms)
@@ -163,6 +164,11 @@ class EnergyHessian:
         self.n_vars = n = len(names)
         #: the parameters, in the order :meth:`enclose` takes them
         self.parameters = [f"u{i + 1}" for i in range(robot.m)]
+        #: the intervals of a robot's toleranced numbers, parameters after ``u``
+        tol = tolerance_parameters(robot)
+        self.parameters += list(tol)
+        self._tol_lo = np.array([v[0] for v in tol.values()])
+        self._tol_hi = np.array([v[1] for v in tol.values()])
         graph = Graph(names + chart, self.parameters)
         # gravity, -W·(G + δp), is linear in δ: no part of the Hessian
         U = graph.add_expr(_energy(form, [var(c) for c in chart[:d]], [var(c) for c in chart[d:]]))
@@ -185,6 +191,8 @@ class EnergyHessian:
         z = np.zeros((N, self.size))
         ulo = np.asarray(u, dtype=float).ravel()
         uhi = ulo if u_hi is None else np.asarray(u_hi, dtype=float).ravel()
+        if ulo.size + self._tol_lo.size == len(self.parameters):  # the numbers' intervals
+            ulo, uhi = np.r_[ulo, self._tol_lo], np.r_[uhi, self._tol_hi]
         LO, HI = self.program.eval_interval(np.hstack([lo, z]), np.hstack([hi, z]), ulo, uhi)
         out = self.program.outputs
         s = self.size

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from .schema import RobotFileError, RobotSource, RobotSpec, load_robot_spec
 
-__all__ = ["Robot", "default_domain"]
+__all__ = ["Robot", "RobotIntervals", "default_domain"]
 
 
 def default_domain(A: np.ndarray) -> np.ndarray:
@@ -31,6 +31,39 @@ def default_domain(A: np.ndarray) -> np.ndarray:
     lo = np.where(flat, mid - 0.1 * big, lo)
     hi = np.where(flat, mid + 0.1 * big, hi)
     return np.stack([lo, hi], axis=1)
+
+
+@dataclass(frozen=True, kw_only=True)
+class RobotIntervals:
+    """The interval of every number of a robot with tolerances (:mod:`.tolerance`): for each
+    array of :class:`Robot` among :attr:`FIELDS`, a pair ``(lo, hi)`` of arrays of its
+    shape (``lo == hi`` for an exact number); ``mass`` is a pair of floats.  Every robot of
+    the set has its numbers inside these bounds (outward rounded)."""
+
+    #: the arrays that may carry a tolerance, by their name in :class:`Robot`
+    FIELDS: ClassVar[tuple[str, ...]] = ("A", "B", "k", "K", "V", "L0", "com")
+
+    A: tuple[np.ndarray, np.ndarray]
+    B: tuple[np.ndarray, np.ndarray]
+    k: tuple[np.ndarray, np.ndarray]
+    K: tuple[np.ndarray, np.ndarray]
+    V: tuple[np.ndarray, np.ndarray]
+    L0: tuple[np.ndarray, np.ndarray]
+    com: tuple[np.ndarray, np.ndarray]
+    mass: tuple[float, float]
+
+    def exact(self, name: str) -> np.ndarray:
+        """Mask of the numbers of ``name`` (or ``mass``) known exactly (a number the file
+        does not give, NaN, has no tolerance)."""
+        lo, hi = (np.asarray(a) for a in getattr(self, name))
+        return (lo == hi) | (np.isnan(lo) & np.isnan(hi))
+
+
+#: file field (:mod:`.paths`) -> its array in :class:`Robot`
+_ARRAY_OF = {
+    "base": "A", "platform": "B", "k": "k", "K": "K", "V": "V", "L0": "L0",
+    "center_of_mass": "com", "mass": "mass",
+}  # fmt: skip
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,6 +125,83 @@ class Robot:
     def load(cls, source: RobotSource) -> Robot:
         """From a path, JSON text, dict or :class:`RobotSpec` (raises :class:`RobotFileError`)."""
         return cls.from_spec(load_robot_spec(source))
+
+    # -- tolerances ---------------------------------------------------------------------------
+    @property
+    def toleranced(self) -> bool:
+        """Whether some number is known only within a (non-zero) interval."""
+        return any(lo != hi for lo, hi in self.spec.tolerance_intervals().values())
+
+    @functools.cached_property
+    def _intervals(self) -> RobotIntervals:
+        pairs: dict[str, Any] = {
+            f: (getattr(self, f).copy(), getattr(self, f).copy()) for f in RobotIntervals.FIELDS
+        }
+        mass = [self.mass, self.mass]
+        for (field, entry), (lo, hi) in self.spec.tolerance_intervals().items():
+            name = _ARRAY_OF[field]
+            if name == "mass":
+                mass = [lo, hi]
+                continue
+            pairs[name][0][entry] = lo
+            pairs[name][1][entry] = hi
+        for a, b in pairs.values():
+            a.flags.writeable = b.flags.writeable = False
+        return RobotIntervals(**pairs, mass=(mass[0], mass[1]))
+
+    def bounds(self) -> RobotIntervals:
+        """The interval of every number (the nominal arrays of this object are unchanged;
+        without tolerances every interval is a point)."""
+        return self._intervals
+
+    def weight_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds of the weight ``mass × gravity`` (N) over the set, rounded outward where
+        the mass is toleranced (the nominal :attr:`weight` otherwise)."""
+        lo, hi = self.bounds().mass
+        if lo == hi:
+            return self.weight, self.weight
+        from ..interval import arith
+
+        g = self.gravity
+        wlo, whi = arith.scale(np.full_like(g, lo), np.full_like(g, hi), g)
+        return np.where(g == 0, 0.0, wlo), np.where(g == 0, 0.0, whi)
+
+    def nominal(self) -> Robot:
+        """The robot of the file's numbers, without its tolerances."""
+        if not self.spec.tolerances:
+            return self
+        return Robot.from_spec(self.spec.model_copy(update={"tolerances": []}))
+
+    def realization(self, values: dict[str, Any]) -> Robot:
+        """The robot of the set whose numbers are ``values`` (``{"A": (m, d) array, "k": ...,
+        "mass": float}``, any of :attr:`RobotIntervals.FIELDS` and ``mass``; the others
+        nominal), without tolerances; it is validated as a robot file."""
+        data = self.spec.model_dump(mode="json", exclude_none=True)
+        data["tolerances"] = []
+        key = {v: k for k, v in _ARRAY_OF.items()}
+        for name, arr in values.items():
+            field = key[name]
+            if name == "mass":
+                data["platform"]["mass"] = float(arr)
+            elif name == "com":
+                data["platform"]["center_of_mass"] = np.asarray(arr, float).tolist()
+            else:
+                for i, w in enumerate(data["wires"]):
+                    w[field] = np.asarray(arr, float)[i].tolist()
+        return Robot.load(data)
+
+    def draw(self, rng: np.random.Generator, *, corner: bool = False) -> Robot:
+        """A robot of the set: every toleranced number uniform in its interval (``corner``:
+        at one of its two ends, each chosen at random)."""
+        b = self.bounds()
+        values: dict[str, Any] = {}
+        for name in (*RobotIntervals.FIELDS, "mass"):
+            lo, hi = (np.asarray(t, dtype=float) for t in getattr(b, name))
+            if np.all(b.exact(name)):
+                continue
+            t = rng.integers(0, 2, lo.shape) if corner else rng.random(lo.shape)
+            values[name] = np.clip(lo + t * (hi - lo), lo, hi)
+        return self.realization(values)
 
     # -- facts --------------------------------------------------------------------------------
     @property

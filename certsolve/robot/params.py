@@ -35,7 +35,6 @@ fields do not enter the force index.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, replace
 from itertools import product
 
@@ -44,6 +43,7 @@ from numpy.typing import ArrayLike
 
 from ..interval import arith
 from ..interval.rounding import up
+from . import paths
 from .model import Robot
 from .schema import RobotFileError, RobotSource, load_robot_spec
 
@@ -51,7 +51,6 @@ __all__ = ["ParameterDef", "RobotBounds", "AffineRobot", "parse_path", "MODES"]
 
 MODES = ("set", "half-width")
 _FIELDS = {"base": "A", "platform": "B", "tau": "tau"}
-_PATH = re.compile(r"^wires\[([^\]]+)\]\.(base|platform|tau)\[([^\]]+)\]$")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -112,6 +111,40 @@ class RobotBounds:
             dtau_min=np.zeros((0, m)), dtau_max=np.zeros((0, m)),
         )  # fmt: skip
 
+    @classmethod
+    def of_tolerances(cls, robot: Robot) -> RobotBounds:
+        """The robot set of a file with tolerances (:meth:`.Robot.bounds`) as a batch of one
+        box of parameters: one parameter per toleranced anchor or attachment coordinate,
+        ``A = A_c + Σ_l θ_l e_l`` (an affine map like the design's ``set`` parameters),
+        ``θ_l`` over its interval; the tension limits are exact.  A proof made with these
+        holds for every robot of the set (the numbers the force index reads: anchors,
+        attachments, tension limits)."""
+        b = robot.bounds()
+        base = cls.point(robot)
+        m, d = robot.A.shape
+        slopes: dict[str, list[np.ndarray]] = {"A": [], "B": []}
+        radius, pairs, mids = [], {}, {}
+        for name in ("A", "B"):
+            lo, hi = b.A if name == "A" else b.B
+            for i, c in zip(*np.nonzero(lo != hi), strict=True):
+                e = np.zeros((m, d))
+                e[i, c] = 1.0
+                for other in slopes:
+                    slopes[other].append(e if other == name else np.zeros((m, d)))
+                mid = 0.5 * lo[i, c] + 0.5 * hi[i, c]
+                radius.append(max(float(up(hi[i, c] - mid)), float(up(mid - lo[i, c]))))
+            mid = np.minimum(np.maximum(0.5 * lo + 0.5 * hi, lo), hi)
+            pairs[name] = (lo[..., None], hi[..., None])
+            mids[name] = (mid[..., None], mid[..., None])
+        k = len(radius)
+        return replace(
+            base,
+            A=pairs["A"], B=pairs["B"], A_mid=mids["A"], B_mid=mids["B"],
+            radius=np.array(radius).reshape(k, 1),
+            dA=np.array(slopes["A"]).reshape(k, m, d), dB=np.array(slopes["B"]).reshape(k, m, d),
+            dtau_min=np.zeros((k, m)), dtau_max=np.zeros((k, m)),
+        )  # fmt: skip
+
     def take(self, idx: np.ndarray | slice) -> RobotBounds:
         """The boxes ``idx`` of the batch (a batch of one is shared by every box)."""
         if self.radius.shape[-1] == 1:
@@ -130,41 +163,20 @@ class RobotBounds:
 _PAIRS = ("A", "B", "tau_min", "tau_max", "A_mid", "B_mid", "tau_min_mid", "tau_max_mid")
 
 
-def _indices(text: str, n: int, what: str) -> list[int]:
-    text = text.replace(" ", "")
-    if text == "*":
-        return list(range(n))
-    try:
-        idx = [int(t) for t in text.split(",")]
-    except ValueError:
-        raise ValueError(f"{what} index {text!r}: expected *, an integer or a comma list") from None
-    for i in idx:
-        if not 0 <= i < n:
-            raise ValueError(f"{what} index {i}: expected 0..{n - 1}")
-    if len(set(idx)) != len(idx):
-        raise ValueError(f"{what} indices must be distinct")
-    return idx
-
-
 def parse_path(path: str, robot: Robot) -> tuple[str, list[tuple]]:
     """``wires[W].FIELD[C]`` -> ``(field, [array index, ...])`` with field ``A``/``B``/``tau``.
 
-    Array indices are ``(wire, coordinate)`` for ``A`` and ``B`` and ``(wire, 0|1)`` for
-    ``tau`` (0: ``τ_min``, 1: ``τ_max``).
+    The grammar is :mod:`.paths`' (shared with the tolerances); a design parameter may set
+    only anchors, attachments and tension limits.  Array indices are ``(wire, coordinate)``
+    for ``A`` and ``B`` and ``(wire, 0|1)`` for ``tau`` (0: ``τ_min``, 1: ``τ_max``).
     """
-    mt = _PATH.match(path.replace(" ", ""))
-    if mt is None:
+    field, entries = paths.parse_path(path, m=robot.m, dof=robot.dof)
+    if field not in _FIELDS:
         raise ValueError(
-            f"path {path!r}: expected wires[W].base[C], wires[W].platform[C] or "
-            "wires[W].tau[0|1] with W, C = *, an index or a comma list"
+            f"path {path!r}: a design parameter sets wires[W].base[C], wires[W].platform[C] "
+            "or wires[W].tau[0|1] (the other fields do not enter the force index)"
         )
-    wires = _indices(mt.group(1), robot.m, "wire")
-    field = _FIELDS[mt.group(2)]
-    if field == "B" and robot.dof == 2:
-        raise ValueError(f"path {path!r}: a point platform (dof 2) has no attachment coordinates")
-    n_comp = 2 if field == "tau" else robot.dim
-    comps = _indices(mt.group(3), n_comp, "tau" if field == "tau" else "coordinate")
-    return field, [(w, c) for w in wires for c in comps]
+    return _FIELDS[field], entries
 
 
 class AffineRobot:
@@ -336,5 +348,4 @@ class AffineRobot:
 
 
 def field_name(field: str, entry: tuple) -> str:
-    key = {"A": "base", "B": "platform", "tau": "tau"}[field]
-    return f"wires[{entry[0]}].{key}[{entry[1]}]"
+    return paths.entry_name({"A": "base", "B": "platform", "tau": "tau"}[field], entry)

@@ -223,11 +223,24 @@ def random_marionet(kind: str = "general", seed: int = 0, spread: float = 15.0) 
     return _calibrate(spec, middle, np.eye(3))
 
 
+def marionet_t_tolerances() -> dict:
+    """The T-platform robot known within tolerances (docs/tolerances.md): anchors measured
+    to ±0.05 cm (±0.5 mm) and every wire's ``k`` within ±1 %."""
+    spec = marionet_t()
+    spec["name"] = "marionet-t-tol"
+    spec["tolerances"] = [
+        {"path": "wires[*].base[*]", "plus_minus": 0.05},
+        {"path": "wires[*].k", "relative": 0.01},
+    ]
+    return spec
+
+
 def all_presets() -> dict[str, dict]:
     """File name -> robot dict, for ``examples/robots``."""
     out = {
         "marionet.json": marionet(),
         "marionet-t.json": marionet_t(),
+        "marionet-t-tol.json": marionet_t_tolerances(),
         "almost-planar.json": almost_planar(),
         "planar.json": planar(),
     }

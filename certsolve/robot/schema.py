@@ -38,10 +38,13 @@ from pydantic import (
 from pydantic.json_schema import JsonSchemaValue
 from pydantic_core import CoreSchema
 
+from . import tolerance
+
 __all__ = [
     "WireSpec",
     "PlatformSpec",
     "DomainSpec",
+    "ToleranceSpec",
     "RobotSpec",
     "RobotFileError",
     "RobotSource",
@@ -58,6 +61,11 @@ _MAX_COORD = 1e6  # cm: anything larger is a unit mistake
 _MAX_TENSION = 1e9  # N
 _MAX_CONSTANT = 1e12  # k, K, V, L0
 _MIN_CONSTANT = 1e-9  # k, K, L0: smaller is a unit mistake (and overflows eqs. 1-2's controls)
+#: the shape of a tolerance's path (:mod:`.paths`; which indices exist is the robot's)
+_TOLERANCE_PATH = (
+    r"^wires\[[^\]]+\]\.((base|platform)\[[^\]]+\]|k|K|V|L0)$"
+    r"|^platform\.(mass|center_of_mass\[[^\]]+\])$"
+)
 
 Coordinate = Annotated[float, Field(ge=-_MAX_COORD, le=_MAX_COORD)]
 Tension = Annotated[float, Field(gt=-_MAX_TENSION, lt=_MAX_TENSION)]
@@ -141,6 +149,26 @@ class DomainSpec(_Strict):
         return v
 
 
+class ToleranceSpec(_Strict):
+    """How well some numbers of the file are known (:mod:`.tolerance`): every number the
+    ``path`` selects lies in ``[x - plus_minus, x + plus_minus]`` or in
+    ``[x - relative |x|, x + relative |x|]`` (exactly one of the two)."""
+
+    path: str = Field(max_length=200, description="numbers it applies to: wires[W].base[C] ...")
+    plus_minus: float | None = Field(
+        default=None, ge=0, le=_MAX_COORD, description="absolute half-width (the field's unit)"
+    )
+    relative: float | None = Field(
+        default=None, ge=0, lt=1, description="half-width as a fraction of the value"
+    )
+
+    @model_validator(mode="after")
+    def _one(self):
+        if (self.plus_minus is None) == (self.relative is None):
+            raise ValueError("give exactly one of plus_minus and relative")
+        return self
+
+
 class RobotSpec(_Strict):
     name: str = Field(default="robot", max_length=200)
     dof: Literal[2, 3, 6]
@@ -150,6 +178,11 @@ class RobotSpec(_Strict):
     platform: PlatformSpec = Field(default_factory=PlatformSpec)
     wires: list[WireSpec] = Field(min_length=1, max_length=MAX_WIRES)
     domain: DomainSpec | None = None
+    tolerances: list[ToleranceSpec] = Field(
+        default_factory=list,
+        max_length=64,
+        description="numbers known only within intervals (docs/tolerances.md)",
+    )
 
     @classmethod
     def __get_pydantic_json_schema__(
@@ -192,6 +225,33 @@ class RobotSpec(_Strict):
         if errors:
             raise ValueError("; ".join(errors))
         return self
+
+    @model_validator(mode="after")
+    def _tolerances(self):
+        if self.tolerances:
+            self.tolerance_intervals()
+        return self
+
+    def number(self, field: str, entry: tuple[int, ...]) -> float | None:
+        """The file's number at a path entry (:mod:`.paths`); None where not given (a
+        missing ``platform`` or centre of mass is 0)."""
+        if field == "mass":
+            return self.platform.mass
+        if field == "center_of_mass":
+            com = self.platform.center_of_mass
+            return 0.0 if com is None else com[entry[0]]
+        wire = self.wires[entry[0]]
+        v = getattr(wire, field)
+        if field == "platform" and v is None:
+            return 0.0
+        return v if len(entry) == 1 or v is None else v[entry[1]]
+
+    def tolerance_intervals(self) -> dict[tolerance.Entry, tuple[float, float]]:
+        """``{(field, entry): (lo, hi)}`` for every toleranced number (checked:
+        :func:`.tolerance.check`)."""
+        return tolerance.check(
+            self.tolerances, len(self.wires), self.dof, self.number, [w.tau[1] for w in self.wires]
+        )
 
 
 class RobotFileError(ValueError):
@@ -309,6 +369,14 @@ def robot_dof_schema(
     gravity = _field_schema(RobotSpec, "gravity")
     wire_list = _field_schema(RobotSpec, "wires") | {"items": wire}
     wire_list.pop("$defs", None)
+    tolerance = ToleranceSpec.model_json_schema()
+    tolerance["oneOf"] = [  # exactly one of the two half-widths
+        {"required": [a], "properties": {a: {"type": "number"}, b: {"type": "null"}}}
+        for a, b in (("plus_minus", "relative"), ("relative", "plus_minus"))
+    ]
+    tolerance["properties"]["path"]["pattern"] = _TOLERANCE_PATH
+    tolerances = _field_schema(RobotSpec, "tolerances") | {"items": tolerance}
+    tolerances.pop("$defs", None)
     wire_list["minItems"] = max(wire_list.get("minItems", 1), min_wires)
     if wires is not None:
         wire_list["minItems"] = wire_list["maxItems"] = wires
@@ -324,6 +392,7 @@ def robot_dof_schema(
             "platform": platform,
             "wires": wire_list,
             "domain": {"anyOf": [domain, {"type": "null"}], "default": None},
+            "tolerances": tolerances,
         },
     }
 

@@ -66,6 +66,13 @@ class FkParams(FkOptions, Params):  # the library's options as job params
     def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_wires(robot, self.u, "u")
         check_fk_geometry(robot, self.formulation, memo)
+        if robot.tolerances:  # a set of robots (docs/tolerances.md)
+            from ...kinematics.fk_tolerance import check_tolerant_options
+
+            check_tolerant_options(
+                robot_model(robot), self.formulation,
+                seed_planar=self.seed_planar, stable_only=self.stable_only,
+            )  # fmt: skip
 
 
 def fk_robot_schema(dof: int) -> dict:
