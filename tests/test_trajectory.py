@@ -247,3 +247,23 @@ def test_the_tension_enclosure_holds_every_tension_of_the_lengths():
         # and it is tight: its ends are the tensions at the ends
         ta = robot.k * (1.0 - robot.L0 / (a + robot.V + robot.K * u))
         assert np.allclose(lo, ta, rtol=1e-12, atol=1e-9)
+
+
+def test_a_robot_with_tolerances_is_refused_by_name():
+    """Tracking follows one robot's branch: a set of robots is refused, naming the field,
+    in Python, on the command line and at a job's submission (not tracked as nominal)."""
+    from certsolve.cli import main
+    from certsolve.inputs import InputError
+    from certsolve.jobs.kinds.trajectory import TrajectoryParams
+    from certsolve.kinematics.tracking import Tracker
+    from certsolve.robot.model import Robot
+    from certsolve.robot.schema import load_robot_spec
+
+    path = "examples/robots/marionet-t-tol.json"
+    with pytest.raises(InputError) as e:
+        Tracker(Robot.load(path))
+    assert e.value.field == "robot.tolerances"
+    assert main(["fk", path, "--u", "0,0,0,0,0,0,0", "--near", "115,60,118"]) == 2
+    params = TrajectoryParams(controls=[[0.0] * 7], start=[115, 60, 118])
+    with pytest.raises(ValueError, match="robot.tolerances"):
+        params.check_robot(load_robot_spec(path))

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..expr import esum, sqr, sqrt
 from ..expr.scalar import ScalarProgram
-from ..inputs import checked
+from ..inputs import InputError, checked
 from ..interval.linalg import krawczyk_image, mr_from_bounds, mr_matmul
 from ..robot.geometry import Pose
 from ..robot.inputs import TrackOptions, as_pose, check_controls
@@ -40,7 +40,14 @@ from .fk_points import PointsFormulation
 from .fk_solver import FKPose, FKSolver
 from .stability import StabilityVerdict
 
-__all__ = ["Tracker", "TrackResult", "track"]
+#: why tracking refuses a robot with tolerances (one message for Python, CLI and jobs)
+TOLERANCES_REFUSED = (
+    "tracking follows one robot's equilibrium branch; a robot with tolerances is a set of "
+    "robots: track the nominal robot (drop the tolerances) or run the set's forward "
+    "kinematics (docs/tolerances.md)"
+)
+
+__all__ = ["TOLERANCES_REFUSED", "Tracker", "TrackResult", "track"]
 
 
 @dataclass
@@ -156,6 +163,8 @@ class Tracker:
         # in loops: it costs ~1.5 ms a step (T-16 0.36 -> 1.85 ms, general-19 0.47 -> 2.26
         # ms), four times a step's own cost; :func:`track` and the CLI turn it on
         self.stability = stability
+        if robot.toleranced:
+            raise InputError("robot.tolerances", TOLERANCES_REFUSED)
         if formulation == "auto":  # the paper's point system: cheapest per-box code
             formulation = papers_system(robot)
         self.fk = FKSolver(robot, formulation, prepare_search=False)  # no search here

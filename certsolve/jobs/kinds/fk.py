@@ -182,6 +182,10 @@ class TrackParams(TrackOptions, Params):  # the library's options as params
 
     def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_wires(robot, self.u, "u")
+        if robot.tolerances:
+            from ...kinematics.tracking import TOLERANCES_REFUSED
+
+            raise ValueError(f"robot.tolerances: {TOLERANCES_REFUSED}")
         check_pose(robot, self.near_pose, "near_pose")
         check_fk_geometry(robot, "auto", memo)
 
