@@ -426,9 +426,9 @@ def markdown(rows: list[Row], args: argparse.Namespace, command: str) -> str:
         "## Summary",
         "",
         f"* **{parsed} of {len(rows)} files parse**: {square} square systems, and "
-        f"{parsed - square} with more or fewer equations than variables, which the parser reads "
-        "and certsolve's solver refuses (`the system is not square: m equations for n "
-        "variables`).",
+        f"{parsed - square} with more or fewer equations than variables (certsolve solves an "
+        "over-determined one through a square subsystem and paves an under-determined one, "
+        "`docs/minibex.md`: their counts are not ibexsolve's kind of solution).",
     ]
     if len(rows) > parsed:
         lines.append("* Refused by the parser: " + "; ".join(
