@@ -2,7 +2,8 @@
 
 * a compile past its deadline raises :class:`CompileTimeout` naming its stage, and
   :func:`certsolve.solver.solve` reports it as a search stopped by time: status
-  ``timeout``, no solution, nothing undecided, the whole domain pending;
+  ``timeout``, no solution, nothing undecided, the whole domain pending; a build is given
+  at least ``MIN_BUILD_SECONDS`` however short the limit;
 * a compile within its deadline builds the same system as one without a deadline;
 * past :data:`~certsolve.solver.pipeline.MIXED_NODES`, ``newton_groups="variables"``
   falls back to the plain Jacobian (no stacked program is built), and the search still
@@ -19,7 +20,7 @@ import pytest
 
 from certsolve.expr.compiled import CompiledSystem, CompileTimeout
 from certsolve.expr.minibex import load_minibex
-from certsolve.solver import pipeline, solve
+from certsolve.solver import branch_and_prune, pipeline, solve
 from certsolve.solver.contractors import HC4, IntervalNewton
 
 SYSTEMS = Path(__file__).resolve().parents[1] / "examples" / "systems"
@@ -41,7 +42,8 @@ def test_a_compile_within_its_deadline_is_the_same_system():
     assert np.array_equal(timed.jac_structure, plain.jac_structure)
 
 
-def test_a_limit_passed_while_compiling_is_a_timeout_with_the_domain_pending():
+def test_a_limit_passed_while_compiling_is_a_timeout_with_the_domain_pending(monkeypatch):
+    monkeypatch.setattr(branch_and_prune, "MIN_BUILD_SECONDS", 0.0)
     system = load_minibex(SYSTEMS / "katsura-5.mbx")
     result = solve(system, timeout=1e-9)  # passed before the first row of the Jacobian
     assert result.status == "timeout"
@@ -51,6 +53,23 @@ def test_a_limit_passed_while_compiling_is_a_timeout_with_the_domain_pending():
     assert result.pending == [system.domain.tolist()]
     data = result.to_dict()
     assert data["status"] == "timeout" and data["pending_boxes"] == [1]
+
+
+def test_a_short_limit_still_gives_the_build_its_minimum(monkeypatch):
+    seen = []
+    default = branch_and_prune.Solver.default
+
+    def recording(system, **options):
+        seen.append(options["deadline"])
+        return default(system, **options)
+
+    monkeypatch.setattr(branch_and_prune.Solver, "default", recording)
+    before = time.monotonic()
+    result = solve(load_minibex(SYSTEMS / "katsura-5.mbx"), timeout=0.5, max_boxes=10)
+    assert seen[0] >= before + branch_and_prune.MIN_BUILD_SECONDS
+    assert result.stats.boxes > 0  # built: the search ran
+    assert solve(load_minibex(SYSTEMS / "circle-line.mbx")).status == "complete"
+    assert seen[-1] is None  # no limit, no deadline
 
 
 def test_past_the_mixed_bound_newton_uses_the_plain_jacobian(monkeypatch):

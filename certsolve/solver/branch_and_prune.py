@@ -560,6 +560,11 @@ class Solver:
 #: shape the square solver's pipeline)
 _PAVER_OPTIONS = ("batch_size", "hc4_passes", "max_undecided", "max_pending")
 
+#: seconds a build is always given, however short the time limit: a short limit still
+#: builds a small system and runs its first round (a checkpointed search moves on; the
+#: command line's backstop is 0.01 s), while a build longer than both stops at the limit
+MIN_BUILD_SECONDS = 1.0
+
 #: the kinds of the solution set reported as solutions, and their certificates
 _PROVEN = {"ok": Certificate.UNIQUE, "subsystem": Certificate.SQUARE_SUBSYSTEM}
 
@@ -640,7 +645,7 @@ def solve(
             cancel=cancel,
         )
     started, cpu0 = time.monotonic(), time.process_time()
-    deadline = None if timeout is None else started + timeout
+    deadline = None if timeout is None else started + max(timeout, MIN_BUILD_SECONDS)
     try:
         solver = Solver.default(system, eps=eps, deadline=deadline, **options)
     except CompileTimeout:  # the limit passed before the first box: all of it pending
@@ -652,8 +657,8 @@ def solve(
             time=time.monotonic() - started,
             cpu=time.process_time() - cpu0,
         )
-    if timeout is not None:  # the build's time counts against the limit
-        timeout = max(timeout - (time.monotonic() - started), 0.0)
+    # the search then has its own ``timeout``, as before, and always runs a first round (the
+    # command line's deadline counts the build and the search together)
     return solver.solve(
         timeout=timeout,
         max_boxes=max_boxes,
