@@ -115,6 +115,7 @@ import datetime
 import json
 import os
 import re
+import resource
 import statistics
 import struct
 import subprocess
@@ -158,6 +159,7 @@ class Run:
     undecided: int = 0
     boxes: int = 0
     message: str = ""
+    cpu: float = 0.0  # CPU seconds of the subprocess and its children (user + system)
     runs: int = 1  # in a summary: the number of runs whose median ``wall`` is
 
 
@@ -186,27 +188,34 @@ def parse_file(path: Path) -> Parsed:
     return Parsed(n=len(model.variables), m=len(model.equations))
 
 
+def children_cpu() -> float:
+    """CPU seconds (user + system) of the finished subprocesses of this process so far."""
+    use = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return use.ru_utime + use.ru_stime
+
+
 # -- certsolve --------------------------------------------------------------------------------
 def run_certsolve(path: Path, args: argparse.Namespace, square: bool = True) -> Run:
     cmd = [sys.executable, "-m", "certsolve", "solve", str(path), "--json", "--timeout",
            str(args.timeout), "--eps", str(args.eps), "--cid-vars", args.cid_vars]  # fmt: skip
     if args.workers is not None:
         cmd += ["--workers", args.workers]
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), children_cpu()
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout * 3 + 60)
     except subprocess.TimeoutExpired:
-        return Run(status="error", wall=time.perf_counter() - t0, message="killed: no answer")
-    wall = time.perf_counter() - t0
+        return Run(status="error", wall=time.perf_counter() - t0, message="killed: no answer",
+                   cpu=children_cpu() - c0)  # fmt: skip
+    wall, cpu = time.perf_counter() - t0, children_cpu() - c0
     if proc.returncode != 0:
         lines = proc.stderr.strip().splitlines()
         message = lines[-1] if lines else f"exit {proc.returncode}"
         status = "refused" if message.startswith("error:") else "error"
-        return Run(status=status, wall=wall, message=message.removeprefix("error: "))
+        return Run(status=status, wall=wall, message=message.removeprefix("error: "), cpu=cpu)
     out = json.loads(proc.stdout)
     return Run(status=out["status"], wall=wall, solutions=len(out["solutions"]),
                raw_solutions=len(out["solutions"]), undecided=out["undecided_total"],
-               boxes=out["stats"]["boxes"])  # fmt: skip
+               boxes=out["stats"]["boxes"], cpu=cpu)  # fmt: skip
 
 
 # -- ibexsolve --------------------------------------------------------------------------------
@@ -303,7 +312,7 @@ def run_ibexsolve(path: Path, args: argparse.Namespace, square: bool = True) -> 
         cov = Path(tmp) / "out.cov"
         cmd = ["stdbuf", "-oL", str(args.ibexsolve), f"--timeout={args.timeout:g}",
                f"--eps-min={args.eps:g}", "--trace", "-o", str(cov), str(path)]  # fmt: skip
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), children_cpu()
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                 text=True, cwd=tmp)  # fmt: skip
         try:
@@ -313,27 +322,28 @@ def run_ibexsolve(path: Path, args: argparse.Namespace, square: bool = True) -> 
             proc.kill()
             out, _ = proc.communicate()
             killed = True
-        wall = time.perf_counter() - t0
+        wall, cpu = time.perf_counter() - t0, children_cpu() - c0
         text = re.sub(r"\x1b\[[0-9;]*m", "", out)
         if killed:
             sols = traced_solutions(text)
             count = distinct(sols) if square else len(sols)
             return Run(status="timeout", wall=wall, solutions=count,
                        raw_solutions=len(sols), undecided=-1, boxes=-1,
-                       message=WALL_STOP)  # fmt: skip
+                       message=WALL_STOP, cpu=cpu)  # fmt: skip
         if proc.returncode != 0 or not cov.exists():
             errors = [ln.strip() for ln in text.splitlines() if "rror" in ln or "xception" in ln]
             message = errors[-1] if errors else f"exit {proc.returncode}"
             return Run(status="refused" if "rror" in message else "error", wall=wall,
-                       message=message)  # fmt: skip
+                       message=message, cpu=cpu)  # fmt: skip
         try:
             sols, status, square = read_cov(cov.read_bytes())
         except (struct.error, ValueError) as exc:
-            return Run(status="error", wall=wall, message=f"unreadable COV file: {exc}")
+            return Run(status="error", wall=wall, message=f"unreadable COV file: {exc}",
+                       cpu=cpu)  # fmt: skip
     return Run(status=IBEX_STATUS.get(status, f"status {status}"), wall=wall,
                solutions=distinct(sols) if square else len(sols), raw_solutions=len(sols),
                undecided=_ibex_figure(text, "unknown boxes"),
-               boxes=_ibex_figure(text, "cells"))  # fmt: skip
+               boxes=_ibex_figure(text, "cells"), cpu=cpu)  # fmt: skip
 
 
 RUNNERS = {"certsolve": run_certsolve, "ibexsolve": run_ibexsolve}
@@ -355,18 +365,19 @@ def save_store(path: Path, store: dict[str, list[dict]]) -> None:
 
 
 def summary_of(runs: list[Run]) -> Run:
-    """The last run's counts with the median wall time of all."""
+    """The last run's counts with the median wall and CPU times of all."""
     last = runs[-1]
     wall = statistics.median(r.wall for r in runs)
-    return Run(**{**asdict(last), "wall": wall, "runs": len(runs)})
+    cpu = statistics.median(r.cpu for r in runs)
+    return Run(**{**asdict(last), "wall": wall, "cpu": cpu, "runs": len(runs)})
 
 
 # -- the table ----------------------------------------------------------------------------------
 def _cell(run: Run | None) -> list[str]:
     if run is None:
-        return ["", "", "", "", ""]
+        return ["", "", "", "", "", ""]
     if run.status in ("refused", "error"):
-        return [f"{run.status}: {run.message}"[:90].replace("|", "\\|"), "", "", "", ""]
+        return [f"{run.status}: {run.message}"[:90].replace("|", "\\|"), "", "", "", "", ""]
     sols = str(run.solutions)
     if run.raw_solutions > run.solutions:  # de-duplicated
         sols += f" ({run.raw_solutions})"
@@ -374,7 +385,8 @@ def _cell(run: Run | None) -> list[str]:
         str(k) if k >= 0 and run.message != WALL_STOP else "?" for k in (run.undecided, run.boxes)
     ]
     wall = f"{run.wall:.2f}" if run.runs == 1 else f"{run.wall:.2f} ({run.runs})"
-    return [run.status, sols, *known, wall]
+    cpu = f"{run.cpu:.2f}" if run.cpu else ""
+    return [run.status, sols, *known, wall, cpu]
 
 
 def markdown(rows: list[Row], args: argparse.Namespace, command: str) -> str:
@@ -385,6 +397,8 @@ def markdown(rows: list[Row], args: argparse.Namespace, command: str) -> str:
     done = {s: {p for p, run in summ[s].items() if run.status == "complete"} for s in SOLVERS}
     both = sorted(done["certsolve"] & done["ibexsolve"])
     ratios = [summ["certsolve"][p].wall / summ["ibexsolve"][p].wall for p in both]
+    cpu_ratios = [summ["certsolve"][p].cpu / summ["ibexsolve"][p].cpu for p in both
+                  if summ["certsolve"][p].cpu and summ["ibexsolve"][p].cpu]  # fmt: skip
     ran = {s: len(summ[s]) for s in SOLVERS}
     differ = [p for p in both if summ["certsolve"][p].solutions != summ["ibexsolve"][p].solutions]
     only = {s: sorted(done[s] - done[t]) for s, t in (SOLVERS, SOLVERS[::-1])}
@@ -399,18 +413,22 @@ def markdown(rows: list[Row], args: argparse.Namespace, command: str) -> str:
         f"Written {date} from runs on the project's shared 2-core machine (other work beside),",
         f"wall-time limit {args.timeout:g} s per run for both solvers, `--eps` / `--eps-min`",
         f"{args.eps:g}; the time is the median wall time of the runs (their number in parentheses",
-        "when more than one) of the whole subprocess, start-up included.  ibexsolve is 2.9.1",
-        "(filib, no LP); its own `--timeout` counts CPU time, so it is also stopped at the wall",
-        "limit, and its solutions are then those it printed (`--trace`; its unknown boxes and",
-        "cells are then not known: `?`).  Its solutions are de-duplicated (boxes that overlap or",
-        "lie within 1e-6 counted once; its raw count in parentheses when it differs).",
+        "when more than one) of the whole subprocess, start-up included, and `cpu` its median CPU",
+        "time (user + system, children included): the machine is shared by other work, so wall",
+        f"times there carry its load; CPU times less so.  A file is run again (up to {args.runs}",
+        "runs) only while its runs complete under `--repeat-below` seconds (default 5).",
+        "ibexsolve is 2.9.1 (filib, no LP); its own `--timeout` counts CPU time, so it is also",
+        "stopped at the wall limit, and its solutions are then those it printed (`--trace`; its",
+        "unknown boxes and cells are then not known: `?`).  Its solutions are de-duplicated",
+        "(boxes that overlap or lie within 1e-6 counted once; its raw count in parentheses when",
+        "it differs).",
         "",
         "## Summary",
         "",
         f"* **{parsed} of {len(rows)} files parse**: {square} square systems, and "
-        f"{parsed - square} with more or fewer equations than variables, which the parser reads "
-        "and certsolve's solver refuses (`the system is not square: m equations for n "
-        "variables`).",
+        f"{parsed - square} with more or fewer equations than variables (certsolve solves an "
+        "over-determined one through a square subsystem and paves an under-determined one, "
+        "`docs/minibex.md`: their counts are not ibexsolve's kind of solution).",
     ]
     if len(rows) > parsed:
         lines.append("* Refused by the parser: " + "; ".join(
@@ -419,10 +437,12 @@ def markdown(rows: list[Row], args: argparse.Namespace, command: str) -> str:
         lines.append(f"* **{s}** completes {len(done[s])} of the {ran[s]} files it ran"
                      f" ({len(only[s])} that the other does not).")  # fmt: skip
     if ratios:
+        cpu_median = f"{statistics.median(cpu_ratios):.1f}x" if cpu_ratios else "not measured"
         lines.append(
-            f"* On the {len(both)} files both complete: certsolve's time over ibexsolve's has "
+            f"* On the {len(both)} files both complete: certsolve's wall time over ibexsolve's has "
             f"median **{statistics.median(ratios):.1f}x** (min {min(ratios):.2f}x, max "
-            f"{max(ratios):.0f}x); the solution counts agree on {len(both) - len(differ)} of them"
+            f"{max(ratios):.0f}x), target 2x; its CPU time over ibexsolve's **{cpu_median}**; "
+            f"the solution counts agree on {len(both) - len(differ)} of them"
             + (": not on " + ", ".join(f"`{p}`" for p in differ) if differ else "")
             + "."
         )
@@ -437,12 +457,12 @@ def markdown(rows: list[Row], args: argparse.Namespace, command: str) -> str:
         lines.append(
             f"* On the {len(neither)} files neither completes, solutions found by the limit: "
             f"certsolve {found['certsolve']}, ibexsolve {found['ibexsolve']}; certsolve found "
-            f"at least as many on {ahead} of them."
+            f"at least as many on {ahead} of them (target: all of them)."
         )
     lines += ["", "## Per file", "",
-              "| file | n | m | certsolve | sols | undec | boxes | s | ibexsolve | sols | unknown "
-              "| cells | s | ratio |",
-              "|---|--:|--:|---|--:|--:|--:|--:|---|--:|--:|--:|--:|--:|"]  # fmt: skip
+              "| file | n | m | certsolve | sols | undec | boxes | s | cpu | ibexsolve | sols "
+              "| unknown | cells | s | cpu | ratio |",
+              "|---|--:|--:|---|--:|--:|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|"]  # fmt: skip
     for r in rows:
         c, i = summ["certsolve"].get(r.path), summ["ibexsolve"].get(r.path)
         ratio = f"{c.wall / i.wall:.1f}" if r.path in both and c and i else ""
@@ -458,6 +478,8 @@ def main() -> None:
     ap.add_argument("dir", type=Path)
     ap.add_argument("--timeout", type=float, default=30.0, help="per run (default 30 s)")
     ap.add_argument("--runs", type=int, default=3, help="runs per file (median wall time)")
+    ap.add_argument("--repeat-below", type=float, default=5.0,
+                    help="run a file again only while its runs complete in less (s)")  # fmt: skip
     ap.add_argument("--eps", type=float, default=1e-8, help="certsolve --eps, ibexsolve --eps-min")
     ap.add_argument("--solvers", default="certsolve,ibexsolve", help="which to run, or 'none'")
     ap.add_argument("--ibexsolve", type=Path, default=IBEXSOLVE, help="the ibexsolve binary")
@@ -486,7 +508,9 @@ def main() -> None:
             if not only.search(rel):
                 continue
             runs = [Run(**r) for r in stores[s].get(rel, [])]
-            while len(runs) < args.runs:
+            while len(runs) < args.runs and all(
+                r.status == "complete" and r.wall < args.repeat_below for r in runs
+            ):
                 square = row.parsed.n == row.parsed.m or bool(row.parsed.error)
                 runs.append(RUNNERS[s](path, args, square))
                 stores[s][rel] = [asdict(r) for r in runs]
@@ -513,13 +537,13 @@ def main() -> None:
         with args.csv.open("w", newline="") as f:
             w = csv.writer(f)
             w.writerow(["file", "n", "m", "solver", "status", "solutions", "raw_solutions",
-                        "undecided", "boxes", "wall_s", "message"])  # fmt: skip
+                        "undecided", "boxes", "wall_s", "cpu_s", "message"])  # fmt: skip
             for r in rows:
                 for s, runs in r.runs.items():
                     u = summary_of(runs)
                     w.writerow([r.path, r.parsed.n, r.parsed.m, s, u.status, u.solutions,
                                 u.raw_solutions, u.undecided, u.boxes, f"{u.wall:.3f}",
-                                u.message])  # fmt: skip
+                                f"{u.cpu:.3f}", u.message])  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -18,12 +18,12 @@ import math
 
 import numpy as np
 
-from .graph import Graph
+from .graph import CompileTimeout, Graph, check_deadline
 from .program import Program
 from .stacked import StackedColumns
 from .system import System
 
-__all__ = ["CompiledSystem"]
+__all__ = ["CompileTimeout", "CompiledSystem"]
 
 #: largest batch x nodes for which the mixed Jacobian is evaluated as one stacked program
 #: (8 MB per bound array); above, one program per group costs few calls per element anyway
@@ -31,14 +31,17 @@ STACK_ELEMENTS = 1 << 20
 
 
 class CompiledSystem:
-    def __init__(self, system: System):
+    def __init__(self, system: System, *, deadline: float | None = None):
+        """``deadline`` (a :func:`time.monotonic` value): compiling past it raises
+        :class:`~.graph.CompileTimeout` (checked per row of the Jacobian and per program)."""
         self.system = system
         self.n = n = system.n
         self.param_names = list(system.parameters)
         g = Graph(system.variables, self.param_names)
         self.eq_roots = [g.add_expr(e) for e in system.equations]
         self.cons_roots = [g.add_expr(c.expr) for c in system.constraints]
-        jac = g.jacobian(self.eq_roots)
+        jac = g.jacobian(self.eq_roots, deadline)
+        check_deadline(deadline, "building the programs")
         self.graph = g
         self.jac_structure = np.array([[d is not None for d in row] for row in jac])
 
@@ -56,8 +59,10 @@ class CompiledSystem:
         self.hc4_target_lo = self.hc4_target_lo[:, None]
         self.hc4_target_hi = self.hc4_target_hi[:, None]
 
+        check_deadline(deadline, "building the programs")
         self.f = Program(g, self.eq_roots)
         jac_nodes = [d for row in jac for d in row if d is not None]
+        check_deadline(deadline, "building the programs")
         self.fj = Program(g, self.eq_roots + jac_nodes)
         self._fj_f = self.fj.outputs[:n]
         self._fj_jac = self.fj.outputs[n:]

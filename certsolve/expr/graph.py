@@ -20,6 +20,7 @@ Boxes containing such a non-smooth point are not certified anyway
 
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
 from typing import cast
 
@@ -28,7 +29,25 @@ import numpy as np
 from .node import OPS, Expr
 from .ops import FORWARD
 
-__all__ = ["Graph"]
+__all__ = ["CompileTimeout", "Graph", "check_deadline"]
+
+
+class CompileTimeout(TimeoutError):
+    """Compiling a system passed its ``deadline`` (a :func:`time.monotonic` value):
+    ``stage`` names the step it was in.  Raised between units of work (a row of the
+    Jacobian, a program), so a system too large for its time limit stops within about one
+    unit of the limit instead of after the whole compile."""
+
+    def __init__(self, stage: str):
+        super().__init__(f"the time limit passed while {stage}")
+        self.stage = stage
+
+
+def check_deadline(deadline: float | None, stage: str) -> None:
+    """Raise :class:`CompileTimeout` naming ``stage`` if ``deadline`` has passed."""
+    if deadline is not None and time.monotonic() > deadline:
+        raise CompileTimeout(stage)
+
 
 _COMMUTATIVE = {"add", "mul", "min", "max", "hull"}
 
@@ -377,6 +396,16 @@ class Graph:
                 stack.extend(self.args[x])
         return sorted(needed)  # ids are topologically ordered
 
-    def jacobian(self, roots: Sequence[int]) -> list[list[int | None]]:
-        """``J[i][k] = ∂roots[i]/∂x_k`` as node ids (``None`` for structural zeros)."""
-        return [[self.derivative(r, k) for k in range(len(self.variables))] for r in roots]
+    def jacobian(
+        self, roots: Sequence[int], deadline: float | None = None
+    ) -> list[list[int | None]]:
+        """``J[i][k] = ∂roots[i]/∂x_k`` as node ids (``None`` for structural zeros).
+
+        ``deadline`` (:func:`time.monotonic`): checked before each row
+        (:class:`CompileTimeout`); a dense system's rows cost ``n`` times its equation's DAG.
+        """
+        rows = []
+        for r in roots:
+            check_deadline(deadline, "differentiating the equations")
+            rows.append([self.derivative(r, k) for k in range(len(self.variables))])
+        return rows

@@ -268,12 +268,17 @@ def gauss_seidel(c, lo, hi, Mc, Mr, bc, br, ok):
         plo = down(piv_c - piv_r, size=B)
         phi = up(piv_c + piv_r, size=B)
         usable = ok[:, None] & ((plo > 0.0) | (phi < 0.0))
+        # a component no box can narrow (its pivot holds 0 everywhere) changes nothing:
+        # its bounds, and so its d_i, stay as they are; skipping it gives the same floats
+        narrowed = usable.any(axis=0)
+        if not narrowed.any():
+            return lo, hi, ~np.all(lo <= hi, axis=1)
         dlo = down(lo - c)
         dhi = up(hi - c)
         dc, dr = mr_from_bounds(dlo, dhi)  # column i is updated after step i
         adc = np.abs(dc)
         adr = adc + dr
-        for i in range(n):
+        for i in np.flatnonzero(narrowed):
             # S = Σ_{j≠i} M_ij d_j, midpoint-radius with a priori rounding bound
             mc, amc, mr = off_c[:, i, :], off_abs[:, i, :], off_r[:, i, :]
             sc = np.einsum("bj,bj->b", mc, dc)

@@ -108,12 +108,26 @@ def up_inplace(x: np.ndarray, exact_tiny: bool = False) -> np.ndarray:
     ``exact_tiny=True`` is for results of ``+`` and ``-`` only: a sum or difference of
     floats that rounds to zero or to a subnormal is exact (gradual underflow), so it is
     left as it is.
+
+    A small array is ``nextafter`` (which leaves ``+inf`` and NaN as they are), written
+    only where :func:`_kept` would not keep: everywhere, or with ``exact_tiny`` where
+    ``|x|`` is normal (NaN is not): two or four numpy calls where the mask took nine.
     """
+    if x.size < _SMALL:
+        if not exact_tiny:
+            return np.nextafter(x, _POS_INF, out=x)
+        np.copyto(x, np.nextafter(x, _POS_INF), where=np.abs(x) >= _MIN_NORMAL)
+        return x
     return _step_up(x, _kept(x, exact_tiny))
 
 
 def down_inplace(x: np.ndarray, exact_tiny: bool = False) -> np.ndarray:
     """:func:`down` written into ``x`` (see :func:`up_inplace`)."""
+    if x.size < _SMALL:
+        if not exact_tiny:
+            return np.nextafter(x, _NEG_INF, out=x)
+        np.copyto(x, np.nextafter(x, _NEG_INF), where=np.abs(x) >= _MIN_NORMAL)
+        return x
     np.negative(x, out=x)
     _step_up(x, _kept(x, exact_tiny))
     return np.negative(x, out=x)

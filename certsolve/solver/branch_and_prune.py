@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import copy
 import pickle
+import time
 from collections.abc import Callable
 from collections.abc import Sequence as Seq
 from dataclasses import dataclass
@@ -50,7 +51,8 @@ from typing import Any
 
 import numpy as np
 
-from ..expr.compiled import CompiledSystem
+from ..expr.compiled import CompiledSystem, CompileTimeout
+from ..expr.graph import check_deadline
 from ..expr.minibex import load_system
 from ..expr.node import to_string
 from ..expr.polynomial import reduce_degree as lower_degree
@@ -66,7 +68,7 @@ from .nonsquare import ManifoldPaver, overdetermined
 from .options import SolveOptions
 from .pipeline import default_pipeline, parts_of
 from .result import Certificate, Solution, SolveResult, Stats, Undecided
-from .search import Limits, Progress, SearchRun, Tally, run_search
+from .search import Limits, Progress, SearchRun, SearchStatus, Tally, run_search
 from .shaving import AdaptiveCount
 from .summary import MAX_LISTED
 
@@ -183,6 +185,7 @@ class Solver:
         max_pending: int = MAX_LISTED,
         relax: bool = True,
         reduce_degree: bool = True,
+        deadline: float | None = None,
     ) -> Solver:
         """The solver with the default pipeline (:func:`.pipeline.default_pipeline`).
 
@@ -216,6 +219,10 @@ class Solver:
         changes Dietmaier (two linear equations: 459,140 -> 271,252 boxes, 137 -> 83 CPU s
         on one worker) and ExtendedFreud-0010 (97 -> 67 boxes); no forward-kinematics
         system.
+
+        ``deadline`` (a :func:`time.monotonic` value): building past it (degree reduction,
+        compile, the pipeline's programs) raises :class:`~certsolve.expr.compiled.
+        CompileTimeout`; :func:`solve` reports it as a search stopped by its time limit.
         """
         limits = SolverLimits(
             eps=eps,
@@ -229,7 +236,7 @@ class Solver:
             csys = system
         elif len(system.equations) > system.n:  # over-determined: a square subsystem
             square, surplus = overdetermined(system)
-            csys = CompiledSystem(square)
+            csys = CompiledSystem(square, deadline=deadline)
         elif len(system.equations) < system.n:
             raise ValueError(
                 f"{len(system.equations)} equations for {system.n} variables: an "
@@ -238,7 +245,8 @@ class Solver:
             )
         else:
             solved = lower_degree(system) if reduce_degree and not subsystems else system
-            csys = CompiledSystem(solved)
+            check_deadline(deadline, "reducing the degree")
+            csys = CompiledSystem(solved, deadline=deadline)
         contractor = default_pipeline(
             csys,
             hc4_passes=hc4_passes,
@@ -248,6 +256,7 @@ class Solver:
             cid_slices=cid_slices,
             cid_vars=cid_vars,
         )
+        check_deadline(deadline, "building the contractors")
         return cls(
             system,
             contractor,
@@ -551,6 +560,11 @@ class Solver:
 #: shape the square solver's pipeline)
 _PAVER_OPTIONS = ("batch_size", "hc4_passes", "max_undecided", "max_pending")
 
+#: seconds a build is always given, however short the time limit: a short limit still
+#: builds a small system and runs its first round (a checkpointed search moves on; the
+#: command line's backstop is 0.01 s), while a build longer than both stops at the limit
+MIN_BUILD_SECONDS = 1.0
+
 #: the kinds of the solution set reported as solutions, and their certificates
 _PROVEN = {"ok": Certificate.UNIQUE, "subsystem": Certificate.SQUARE_SUBSYSTEM}
 
@@ -630,7 +644,21 @@ def solve(
             progress=progress,
             cancel=cancel,
         )
-    solver = Solver.default(system, eps=eps, **options)
+    started, cpu0 = time.monotonic(), time.process_time()
+    deadline = None if timeout is None else started + max(timeout, MIN_BUILD_SECONDS)
+    try:
+        solver = Solver.default(system, eps=eps, deadline=deadline, **options)
+    except CompileTimeout:  # the limit passed before the first box: all of it pending
+        return SolveResult.unexplored(
+            variables=system.variables,
+            domain=system.domain,
+            status=SearchStatus.TIMEOUT,
+            eps=eps,
+            time=time.monotonic() - started,
+            cpu=time.process_time() - cpu0,
+        )
+    # the search then has its own ``timeout``, as before, and always runs a first round (the
+    # command line's deadline counts the build and the search together)
     return solver.solve(
         timeout=timeout,
         max_boxes=max_boxes,

@@ -39,10 +39,8 @@ from __future__ import annotations
 import os
 import pickle
 from collections import deque
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from concurrent.futures.process import BrokenProcessPool
-from multiprocessing import get_context
-from typing import Any
+from concurrent.futures import FIRST_COMPLETED, wait
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -55,6 +53,9 @@ from .search import (
     run_task,
 )
 from .workers import TaskExecutor, TaskPool
+
+if TYPE_CHECKING:
+    from concurrent.futures import ProcessPoolExecutor
 
 __all__ = [
     "ProcessExecutor",
@@ -94,7 +95,11 @@ def _run_pickled(step_bytes: bytes, lo, hi, known, limits: Limits) -> TaskResult
 
 class _ProcessPool(TaskPool):
     """A ``ProcessPoolExecutor``; when a worker process dies the pool is broken (every
-    running task fails with ``BrokenProcessPool``): a new pool runs the next tasks."""
+    running task fails with ``BrokenProcessPool``): a new pool runs the next tasks.
+
+    ``concurrent.futures.process`` and ``multiprocessing`` are imported when a pool is
+    made, not with this module: a one-process solve (and the CLI's start-up) does not pay
+    for them."""
 
     def __init__(self, step: Step, workers: int, max_restarts: int = 8):
         self.workers = workers
@@ -109,6 +114,9 @@ class _ProcessPool(TaskPool):
         self._start()
 
     def _start(self) -> None:
+        from concurrent.futures import ProcessPoolExecutor
+        from multiprocessing import get_context
+
         self._pool = ProcessPoolExecutor(
             self.workers, mp_context=get_context("spawn"), initializer=_ignore_interrupt
         )
@@ -116,6 +124,8 @@ class _ProcessPool(TaskPool):
             self._pool.submit(_load, self._step)
 
     def submit(self, lo, hi, known, limits):
+        from concurrent.futures.process import BrokenProcessPool
+
         if self._pool is None:
             self._start()
         try:
@@ -136,6 +146,8 @@ class _ProcessPool(TaskPool):
         self._start()
 
     def next_done(self):
+        from concurrent.futures.process import BrokenProcessPool
+
         if not self._ready:
             done, _ = wait(list(self._running), return_when=FIRST_COMPLETED)
             self._ready.extend(done)
@@ -151,6 +163,8 @@ class _ProcessPool(TaskPool):
             return fut, None, exc
 
     def lost(self, error):
+        from concurrent.futures.process import BrokenProcessPool
+
         return isinstance(error, BrokenProcessPool) and self._restarts <= self._max_restarts
 
     def cancel(self, handles):

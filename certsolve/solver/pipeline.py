@@ -54,6 +54,14 @@ __all__ = ["FixPoint", "Inflate", "Sequence", "core", "default_pipeline", "find"
 
 _LOG_HALF = float(np.log(0.5))
 
+#: Hansen's mixed Jacobian with one variable per group is one stacked program of ``n``
+#: copies of ``f`` and ``J`` (:mod:`certsolve.expr.stacked`): ``n`` times the nodes of the
+#: system's ``f, J`` program.  Its construction grows with that size times the DAG's depth
+#: (Yamamura1-0040: 86,520 nodes, 0.4 s; -0080: 601,840, 4 s; -0400 and the 1,000-variable
+#: files: minutes, and memory as ``n^3`` for a dense system).  Past this many nodes
+#: ``newton_groups="variables"`` uses the plain interval Jacobian.
+MIXED_NODES = 250_000
+
 
 class Sequence:
     """The parts one after the other (IBEX ``CtcCompo``); empty rows dropped after each."""
@@ -182,11 +190,14 @@ def core(
 ) -> list[Contractor]:
     """The contractors of a round before any LP: HC4, partial Newton on each sub-system,
     interval Newton (Hansen's mixed Jacobian over ``newton_groups``: ``"variables"``, one
-    variable per group; ``None``: the plain Jacobian; or a list of boolean masks)."""
+    variable per group, unless its stacked program would exceed :data:`MIXED_NODES`
+    nodes, then the plain Jacobian; ``None``: the plain Jacobian; or a list of boolean
+    masks)."""
     if isinstance(newton_groups, str):
         if newton_groups != "variables":
             raise ValueError("newton_groups: 'variables', None or a list of masks")
-        newton_groups = list(np.eye(csys.n, dtype=bool))
+        small = csys.n * csys.fj.n_nodes <= MIXED_NODES
+        newton_groups = list(np.eye(csys.n, dtype=bool)) if small else None
     partial = [PartialNewton(csys, e, v) for e, v in subsystems]
     return [hc4, *partial, IntervalNewton(csys, newton_groups)]
 

@@ -202,6 +202,32 @@ class SolveResult:
             pending_total=summ.pending_total,
         )
 
+    @classmethod
+    def unexplored(
+        cls,
+        *,
+        variables: list[str],
+        domain: np.ndarray,
+        status: SearchStatus,
+        eps: float,
+        time: float,
+        cpu: float,
+    ) -> SolveResult:
+        """The result of a search stopped before its first box (a time limit passed while
+        the system was being compiled): no solution, nothing undecided, the whole
+        ``domain`` ``(n, 2)`` pending -- all that is known, as a stopped search reports it;
+        ``time`` and ``cpu``: the seconds spent."""
+        return cls(
+            variables=list(variables),
+            status=status,
+            pending_lo=domain[None, :, 0].copy(),
+            pending_hi=domain[None, :, 1].copy(),
+            stats=Stats(time=time, cpu=cpu, stopped_by=str(status)),
+            eps=eps,
+            pending_boxes=np.array([1]),
+            pending_total=1,
+        )
+
     @property
     def pending(self) -> list[list[list[float]]]:
         if self.pending_lo is None or self.pending_hi is None:
