@@ -250,7 +250,16 @@ def test_health_kinds_docs(client):
     h = client.get("/healthz").json()
     assert h["status"] == "ok" and h["workers"]["configured"] == 0
     kinds = {k["kind"]: k for k in client.get("/v1/kinds").json()["kinds"]}
-    assert set(kinds) == {"solve", "fk", "ik", "ik-sweep", "isotropic-map", "workspace", "design"}
+    assert set(kinds) == {
+        "solve",
+        "fk",
+        "ik",
+        "ik-sweep",
+        "isotropic-map",
+        "workspace",
+        "design",
+        "trajectory",
+    }
     assert kinds["solve"]["available"] and kinds["solve"]["input"] == "system"
     assert "eps" in kinds["solve"]["params"]["properties"]
     assert client.get("/docs").status_code == 200
