@@ -11,7 +11,9 @@ boxes and bisections beside them.  Cases marked ``target`` are the targets of is
 (../shared/TARGETS.md); ``u~S(seed)`` is u drawn uniformly in the strokes with that seed,
 ``random-general-N`` / ``random-T-N`` the perturbed designs of
 :func:`certsolve.robot.presets.random_marionet`; ``u=IK(P)`` the control vector of IK
-Algorithm 2 at ``REAL_POSE``; ``stable-only`` cases search for stable equilibria only.
+Algorithm 2 at ``REAL_POSE``, ``u=IK(~,lo-hi)`` IK at a random pose near the middle with
+tensions in ``[lo, hi]`` N (:func:`control`); ``stable-only`` cases search for stable
+equilibria only.
 
 ``--curve``: how time and boxes grow with tau_max (10, 20, 40, 60 N) and with the stroke
 range (u drawn in 1/4, 1/2 and all of the strokes, seed 1), for T-16 and general-19, one
