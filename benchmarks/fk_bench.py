@@ -11,7 +11,9 @@ boxes and bisections beside them.  Cases marked ``target`` are the targets of is
 (../shared/TARGETS.md); ``u~S(seed)`` is u drawn uniformly in the strokes with that seed,
 ``random-general-N`` / ``random-T-N`` the perturbed designs of
 :func:`certsolve.robot.presets.random_marionet`; ``u=IK(P)`` the control vector of IK
-Algorithm 2 at ``REAL_POSE``; ``stable-only`` cases search for stable equilibria only.
+Algorithm 2 at ``REAL_POSE``, ``u=IK(~,lo-hi)`` IK at a random pose near the middle with
+tensions in ``[lo, hi]`` N (:func:`control`); ``stable-only`` cases search for stable
+equilibria only.
 
 ``--curve``: how time and boxes grow with tau_max (10, 20, 40, 60 N) and with the stroke
 range (u drawn in 1/4, 1/2 and all of the strokes, seed 1), for T-16 and general-19, one
@@ -35,14 +37,17 @@ import numpy as np
 
 from certsolve.kinematics import FKSolver, Tracker, inverse_kinematics, with_tau_max
 from certsolve.robot import Pose, Robot
-from certsolve.robot.presets import random_marionet
+from certsolve.robot.presets import MARIONET_MIDDLE, MARIONET_T_MIDDLE, random_marionet
 
 R = "examples/robots"
 ZERO4, ZERO7 = [0.0] * 4, [0.0] * 7
 #: a real pose: ``u = IK(P)`` is computed by IK Algorithm 2 on the robot file (its own
 #: tension limits), so the robot is at P (issue 29)
 REAL_POSE = (111.0, 58.0, 107.0, 0.0, 0.0, 0.0)
-#: name -> (robot, tau_max, u: a list, or ("S", seed, fraction) drawn in the strokes)
+#: a random real pose near the middle of the workspace: up to this many cm and degrees off it
+NEAR = (10.0, 10.0)
+#: name -> (robot, tau_max, u: a list, ("S", seed, fraction) drawn in the strokes, ("IK",
+#: pose) or ("IK~", seed, (tau_lo, tau_hi)): IK at a random pose near the middle)
 CASES = {
     "planar-10 tau<=10": ("planar", 10.0, [0.5, 0.5, 0.5, 0.5]),
     "planar-10 tau<=60": ("planar", 60.0, [0.8, 1.8, -2.5, -3.6]),
@@ -66,6 +71,16 @@ CASES = {
     "T-16 tau<=60 u=IK(P) stable-only (target)": ("marionet-t", 60.0, ("IK", REAL_POSE)),
     "general-19 tau<=60 u=IK(P)": ("marionet", 60.0, ("IK", REAL_POSE)),
     "general-19 tau<=60 u=IK(P) stable-only (target)": ("marionet", 60.0, ("IK", REAL_POSE)),
+    "random-general-0 tau<=60 u=IK(~,1-9)": ("random-general-0", 60.0, ("IK~", 0, (1.0, 9.0))),
+    "random-general-1 tau<=60 u=IK(~,5-40)": ("random-general-1", 60.0, ("IK~", 1, (5.0, 40.0))),
+    "random-general-2 tau<=60 u=IK(~,1-9)": ("random-general-2", 60.0, ("IK~", 2, (1.0, 9.0))),
+    "random-general-2 tau<=60 u=IK(~,1-9) stable-only": (
+        "random-general-2",
+        60.0,
+        ("IK~", 2, (1.0, 9.0)),
+    ),
+    "random-T-1 tau<=60 u=IK(~,1-9)": ("random-T-1", 60.0, ("IK~", 1, (1.0, 9.0))),
+    "random-T-1 tau<=60 u=IK(~,1-9) stable-only": ("random-T-1", 60.0, ("IK~", 1, (1.0, 9.0))),
 }
 CURVE_TAUS = (10.0, 20.0, 40.0, 60.0)
 CURVE_STROKES = (0.25, 0.5, 1.0)
@@ -84,12 +99,39 @@ def load(name: str) -> Robot:
     return Robot.load(f"{R}/{name}.json")
 
 
+def near_pose(robot: Robot, seed: int) -> list[float]:
+    """A random pose within :data:`NEAR` of the middle of the workspace (the pose the
+    robot's strokes are centred on: :func:`random_marionet`)."""
+    middle = MARIONET_T_MIDDLE if len({tuple(b) for b in robot.B}) == 3 else MARIONET_MIDDLE
+    rng = np.random.default_rng(seed)
+    cm, deg = NEAR
+    pose = np.concatenate([np.array(middle) + rng.uniform(-cm, cm, 3), rng.uniform(-deg, deg, 3)])
+    return [float(v) for v in pose]
+
+
+def with_tensions(robot: Robot, lo: float, hi: float) -> Robot:
+    """The robot with every wire's tension limits set to ``[lo, hi]``."""
+    data = robot.spec.model_dump()
+    for w in data["wires"]:
+        w["tau"] = [lo, hi]
+    return Robot.load(data)
+
+
 def control(robot: Robot, u, base: Robot | None = None) -> np.ndarray:
     """A control vector: given, ``("IK", pose)``: IK Algorithm 2 at ``pose`` on ``base``
-    (the robot file, before ``tau_max``), or ``("S", seed, fraction)``: uniform in that
-    share of the strokes around their middle."""
+    (the robot file, before ``tau_max``), ``("IK~", seed, (lo, hi))``: IK at a random pose
+    near the middle (:func:`near_pose`) with the max-margin tensions in ``[lo, hi]``
+    (:func:`inverse_kinematics`'s default method), or ``("S", seed, fraction)``: uniform in
+    that share of the strokes around their middle."""
     if isinstance(u, tuple) and u[0] == "IK":
         return inverse_kinematics(base or robot, list(u[1]), method="alg2").u
+    if isinstance(u, tuple) and u[0] == "IK~":
+        _, seed, (lo, hi) = u
+        base = base or robot
+        res = inverse_kinematics(with_tensions(base, lo, hi), near_pose(base, seed))
+        if res.u is None:
+            raise RuntimeError(f"no control vector at the pose of seed {seed}: {res.status}")
+        return np.asarray(res.u, dtype=float)
     if isinstance(u, tuple):
         _, seed, frac = u
         mid = 0.5 * (robot.u_min + robot.u_max)
