@@ -112,8 +112,8 @@ def test_batch_sizer_grows_while_the_per_box_time_falls_then_stays():
 
 def test_batch_sizer_cuts_a_round_to_the_time_left_and_caps_growth():
     sizer = BatchSizer(cap=64, start=8, rounds=1)
-    sizer.record(8, 0.008, None)  # 1 ms a box: 16 next, then 2 ms left fit 2 boxes
-    assert sizer.next(None) == 16 and sizer.next(0.0025) == 2 and sizer.next(0.0) == 1
+    sizer.record(8, 0.008, None)  # 1 ms a box, 2 ms with the margin: 16 next, 4.5 ms fit 2
+    assert sizer.next(None) == 16 and sizer.next(0.0045) == 2 and sizer.next(0.0) == 1
     fixed = BatchSizer(cap=64, start=8, rounds=1, share=0.05)
     fixed.record(8, 0.008, 0.1)  # a 16-box round (16 ms) is over 5 % of 0.1 s: no growth
     assert fixed.size == 8

@@ -12,16 +12,24 @@ trades the two:
 * after ``rounds`` full rounds at a size it **doubles** the size (up to ``cap``) while the
   per-box time ``t/k`` fell by at least ``gain`` since the previous size and the next
   round, predicted at ``2 k`` times the per-box time, stays within ``share`` of the
-  remaining time limit.  With the model above, doubling saves ``o / 2k`` a box, at least
-  ``gain`` of ``o/k + c`` while ``k < o / c`` (for ``gain = 1/4``): the size settles where
-  the round's fixed cost is about the cost of its boxes, at most twice the best per-box
-  time; once the gain fails, the size stays;
-* **each round** is cut to the boxes the remaining time fits at the last per-box time
-  (at least one box), so a round does not overrun the limit by its size.
+  remaining time limit.  With the model above, doubling from ``k/2`` to ``k`` cuts the
+  per-box time from ``2o/k + c`` to ``o/k + c``, by at least ``gain = 1/4`` while
+  ``k <= 2 o / c``: the size settles where the round's fixed cost is about half the cost
+  of its boxes, at most 1.5 times the best per-box time; once the gain fails, the size
+  stays;
+* **each round** is cut to the boxes the remaining time fits at ``margin`` times the last
+  per-box time (at least one box), so a round does not overrun the limit by its size.  The
+  margin (2) is there because the per-box time grows with the batch on large systems
+  (Yamamura1-0040, 40 variables: 3.6 ms a box in a round of 256, 7.1 ms in 512, 12 ms in
+  494 of larger boxes; a 10 s limit ended after 17.6 s of search, 14.3 s at the last
+  per-box time, ~10 s with the margin).
 
 Only the grouping of the boxes changes: every box popped is processed as before, so the
 set of certified solutions of a complete search is the same (box counts may differ
-slightly, through solutions proven earlier or later and the learnt CID count).
+slightly, through solutions proven earlier or later and the learnt CID count).  On IBEX's
+files certsolve is behind on, small first rounds did not bring solutions earlier
+(docs/solver.md), so :meth:`~.branch_and_prune.Solver.default` starts at ``batch_size``
+and only the cut to the time left applies.
 """
 
 from __future__ import annotations
@@ -39,7 +47,8 @@ class BatchSizer:
     ``cap``: the largest size (the step's ``batch_size``); ``start``: the first size;
     ``rounds``: full rounds timed at a size before deciding; ``gain``: the relative fall of
     the per-box time that makes a doubling pay; ``share``: the largest share of the remaining
-    time a round may be predicted to take after a doubling.
+    time a round may be predicted to take after a doubling; ``margin``: the factor on the
+    last per-box time when a round is cut to the time left.
     """
 
     cap: int
@@ -47,6 +56,7 @@ class BatchSizer:
     rounds: int = 2
     gain: float = 0.25
     share: float = 0.05
+    margin: float = 2.0
     size: int = field(init=False)
     per_box: float | None = field(init=False, default=None)  # seconds a box, last round
     _settled: bool = field(init=False, default=False)
@@ -58,17 +68,18 @@ class BatchSizer:
     def __post_init__(self) -> None:
         if not (int(self.cap) >= 1 and int(self.start) >= 1 and int(self.rounds) >= 1):
             raise ValueError("cap, start and rounds must be >= 1")
-        if not (0 <= self.gain < 1 and 0 < self.share <= 1):
-            raise ValueError("gain must be in [0, 1) and share in (0, 1]")
+        if not (0 <= self.gain < 1 and 0 < self.share <= 1 and self.margin >= 1):
+            raise ValueError("gain must be in [0, 1), share in (0, 1] and margin >= 1")
         self.size = min(int(self.start), int(self.cap))
         self._settled = self.size >= self.cap
 
     def next(self, remaining: float | None) -> int:
         """The size of the next round with ``remaining`` seconds left (``None``: no limit):
-        the current size, cut to what the remaining time fits at the last per-box time."""
+        the current size, cut to what the remaining time fits at ``margin`` times the last
+        per-box time."""
         if remaining is None or not self.per_box:
             return self.size
-        fits = math.floor(remaining / self.per_box)
+        fits = math.floor(remaining / (self.margin * self.per_box))
         return max(1, min(self.size, fits))
 
     def record(self, boxes: int, seconds: float, remaining: float | None) -> None:

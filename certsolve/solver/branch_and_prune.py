@@ -91,7 +91,7 @@ class SolverLimits:
     equal on every file.  ``batch_start``: the first rounds' size (:class:`~.batching.
     BatchSizer`: it grows to ``batch_size`` while the per-box time falls); ``None`` (the
     default): ``batch_size`` from the first round.  Either way a round under a time limit is
-    cut to the boxes the time left fits at the last round's per-box time, so a search
+    cut to the boxes the time left fits at twice the last round's per-box time, so a search
     without a time limit groups its boxes as with a fixed size.  ``max_undecided``,
     ``max_pending``: caps on the undecided and pending hulls listed in the result
     (:mod:`.summary`).
