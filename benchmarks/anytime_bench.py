@@ -7,8 +7,8 @@ grow while the per-box time falls, :class:`~certsolve.solver.batching.BatchSizer
 at the limit, the boxes processed, the boxes processed when the first solution was
 certified, the wall and CPU seconds of the search (medians over the runs).  ``--max-boxes``
 (with ``--timeout 0``) compares the orders at equal work, whatever the machine's load.  ``--ibex``
-also runs ``ibexsolve --timeout=T --eps-min=1e-8`` once per file beside (its raw count of
-solutions).
+also runs ``ibexsolve --timeout=T --eps-min=1e-8`` once per file beside, as
+``benchmarks/ibex_bench.py`` does (solutions de-duplicated, the raw count, CPU seconds).
 
     python benchmarks/anytime_bench.py --timeout 10 --runs 3 FILE...
 """
@@ -16,15 +16,14 @@ solutions).
 from __future__ import annotations
 
 import argparse
-import re
 import statistics
-import subprocess
 import time
+from pathlib import Path
+
+from ibex_bench import IBEXSOLVE, run_ibexsolve
 
 from certsolve import solve
 from certsolve.expr.minibex import load_system
-
-IBEXSOLVE = "/work/shared/tools/ibexsolve"
 
 
 def one(path: str, timeout: float | None, label: str, max_boxes: int | None) -> dict:
@@ -56,15 +55,11 @@ def one(path: str, timeout: float | None, label: str, max_boxes: int | None) -> 
 
 
 def ibex(path: str, timeout: float) -> str:
-    """ibexsolve's raw count of solutions at the limit (and its status line's time)."""
-    out = subprocess.run(
-        [IBEXSOLVE, f"--timeout={timeout:g}", "--eps-min=1e-8", path],
-        capture_output=True,
-        text=True,
-        check=False,
-    ).stdout
-    m = re.search(r"number of solution boxes:\s*(\d+)", out)
-    return m.group(1) if m else "?"
+    """ibexsolve's solutions at the limit, de-duplicated (raw count), and its CPU seconds
+    (:func:`ibex_bench.run_ibexsolve`)."""
+    opts = argparse.Namespace(ibexsolve=IBEXSOLVE, timeout=timeout, eps=1e-8)
+    run = run_ibexsolve(Path(path), opts)
+    return f"{run.solutions} ({run.raw_solutions}), {run.cpu:.1f} s"
 
 
 def median(values: list) -> float | None:
