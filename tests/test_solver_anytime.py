@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from certsolve.cli import main as cli_main
 from certsolve.expr.compiled import CompiledSystem
@@ -13,6 +14,7 @@ from certsolve.expr.minibex import load_minibex
 from certsolve.expr.node import var
 from certsolve.expr.system import System
 from certsolve.solver import Solver, solve
+from certsolve.solver.batching import BatchSizer
 from certsolve.solver.bisectors import LargestFirst
 from certsolve.solver.certify import Certifier
 from certsolve.solver.pipeline import FixPoint
@@ -93,3 +95,64 @@ def test_a_stopped_search_stores_the_solutions_found_so_far():
     data = stored_result(result, max_items=1000)
     assert data["status"] == "max_boxes"
     assert sorted(s["box"] for s in data["solutions"]) == sorted(s.box for s in streamed)
+
+
+def test_batch_sizer_grows_while_the_per_box_time_falls_then_stays():
+    """A round of ``k`` boxes costing ``10 + k`` ms: doubling to ``k`` pays while ``k <= 20``
+    (per-box time down by a quarter or more), so the size grows 2 -> 4 -> 8 -> 16 -> 32 and stays
+    (32 -> 64 would cut the per-box time by less than a quarter)."""
+    sizer = BatchSizer(cap=1024, start=2, rounds=1)
+    sizes = []
+    for _ in range(12):
+        k = sizer.next(None)
+        sizes.append(k)
+        sizer.record(k, 0.010 + 0.001 * k, None)
+    assert sizes[:6] == [2, 4, 8, 16, 32, 32] and set(sizes[6:]) == {32}
+
+
+def test_batch_sizer_cuts_a_round_to_the_time_left_and_caps_growth():
+    sizer = BatchSizer(cap=64, start=8, rounds=1)
+    sizer.record(8, 0.008, None)  # 1 ms a box, 2 ms with the margin: 16 next, 4.5 ms fit 2
+    assert sizer.next(None) == 16 and sizer.next(0.0045) == 2 and sizer.next(0.0) == 1
+    fixed = BatchSizer(cap=64, start=8, rounds=1, share=0.05)
+    fixed.record(8, 0.008, 0.1)  # a 16-box round (16 ms) is over 5 % of 0.1 s: no growth
+    assert fixed.size == 8
+    capped = BatchSizer(cap=12, start=8, rounds=1)
+    capped.record(8, 0.008, None)
+    assert capped.size == 12
+
+
+def test_batch_sizer_refuses_bad_settings():
+    with pytest.raises(ValueError, match="start"):
+        BatchSizer(cap=8, start=0)
+    with pytest.raises(ValueError, match="share"):
+        BatchSizer(cap=8, share=0.0)
+
+
+def test_adaptive_and_fixed_batches_certify_the_same_solutions():
+    """Only the grouping of the boxes changes: a complete search proves the same set."""
+    system = load_minibex(SYSTEMS / "katsura-5.mbx")
+    runs = [Solver.default(system, batch_start=s).solve() for s in (None, 4)]
+    assert all(r.status == "complete" and len(r.solutions) == 16 for r in runs)
+    fixed, adaptive = ([s.box for s in sorted(r.solutions, key=_mid)] for r in runs)
+    for a, b in zip(fixed, adaptive, strict=True):  # each box of one meets the other's
+        assert all(x0 <= y1 and y0 <= x1 for (x0, x1), (y0, y1) in zip(a, b, strict=True))
+
+
+def test_first_rounds_are_small():
+    """From 4 boxes the size at most doubles every two rounds: the first 7 rounds take at
+    most 16 boxes, where a fixed size takes every box the stack holds (64 by the 7th)."""
+    system = load_minibex(SYSTEMS / "katsura-5.mbx")
+    steps = {}
+    for start in (4, None):
+        seen: list = []
+        Solver.default(system, batch_start=start).solve(
+            max_boxes=300, progress=lambda p, seen=seen: seen.append(p.boxes)
+        )
+        steps[start] = np.diff([0, *seen])
+    assert steps[4][:7].max() <= 16 < steps[None][:7].max()
+    assert len(steps[4]) > len(steps[None])
+
+
+def _mid(s):
+    return tuple(s.midpoint)

@@ -59,6 +59,7 @@ from ..expr.polynomial import reduce_degree as lower_degree
 from ..expr.system import System
 from ..inputs import InputError, checked
 from .batch import Batch, Contractor, progress_gain
+from .batching import BatchSizer
 from .bisectors import SmearCurvatureMix, domain_scale, split
 from .buffer import BoxStack
 from .certify import Certifier, SolutionSet
@@ -87,13 +88,19 @@ class SolverLimits:
     default 1024: a batch costs ~8 ms of numpy calls plus its boxes, so on
     ``examples/systems`` 1024 takes 1.3-1.5x less CPU than 256 for the same boxes
     (katsura-6 51,246 boxes: 6.6 -> 3.9-4.7 s; katsura-5 0.95 -> 0.69 s); box counts were
-    equal on every file.  ``max_undecided``, ``max_pending``: caps on the undecided and
-    pending hulls listed in the result (:mod:`.summary`).
+    equal on every file.  ``batch_start``: the first rounds' size (:class:`~.batching.
+    BatchSizer`: it grows to ``batch_size`` while the per-box time falls); ``None`` (the
+    default): ``batch_size`` from the first round.  Either way a round under a time limit is
+    cut to the boxes the time left fits at twice the last round's per-box time, so a search
+    without a time limit groups its boxes as with a fixed size.  ``max_undecided``,
+    ``max_pending``: caps on the undecided and pending hulls listed in the result
+    (:mod:`.summary`).
     """
 
     eps: float = 1e-8
     bisect_mask: np.ndarray | None = None
     batch_size: int = 1024
+    batch_start: int | None = None
     max_undecided: int = MAX_LISTED
     max_pending: int = MAX_LISTED
 
@@ -104,10 +111,13 @@ class SolverLimits:
             raise ValueError("max_undecided must be >= 0 and max_pending >= 1")
         if not int(self.batch_size) >= 1:
             raise ValueError("batch_size must be >= 1")
+        if self.batch_start is not None and not int(self.batch_start) >= 1:
+            raise ValueError("batch_start must be >= 1 (or None)")
         mask = None if self.bisect_mask is None else np.asarray(self.bisect_mask, dtype=bool)
         for name, value in (
             ("eps", float(self.eps)),
             ("batch_size", int(self.batch_size)),
+            ("batch_start", None if self.batch_start is None else int(self.batch_start)),
             ("max_undecided", int(self.max_undecided)),
             ("max_pending", int(self.max_pending)),
             ("bisect_mask", mask),
@@ -173,6 +183,7 @@ class Solver:
         *,
         eps: float = 1e-8,
         batch_size: int = 1024,
+        batch_start: int | None = None,
         hc4_passes: int = 4,
         bisector: Any = None,
         certifier: Certifier | None = None,
@@ -188,6 +199,12 @@ class Solver:
         deadline: float | None = None,
     ) -> Solver:
         """The solver with the default pipeline (:func:`.pipeline.default_pipeline`).
+
+        ``batch_start``: the first rounds' size, grown to ``batch_size`` while that pays
+        (:class:`SolverLimits`, :class:`~.batching.BatchSizer`); ``None`` (default):
+        ``batch_size`` from the first round.  Starting small was measured not to bring the
+        first solutions earlier on IBEX's files where certsolve is behind (Trigo1-0017,
+        Brent-10, CountercurrentReactors2-12, Redeco9 at 6,000 boxes: docs/solver.md).
 
         ``hc4_passes``, ``bisector``, ``certifier``: swappable parts (defaults: 4 HC4
         passes, :class:`~.bisectors.SmearCurvatureMix`, Krawczyk).  ``newton_groups``:
@@ -228,6 +245,7 @@ class Solver:
             eps=eps,
             bisect_mask=bisect_mask,
             batch_size=batch_size,
+            batch_start=batch_start,
             max_undecided=max_undecided,
             max_pending=max_pending,
         )
@@ -272,6 +290,12 @@ class Solver:
     @property
     def batch_size(self) -> int:
         return self.limits.batch_size
+
+    def sizer(self) -> BatchSizer:
+        """A new batch size for one search: from ``batch_start`` (or ``batch_size``), cut to
+        the time left (:class:`~.batching.BatchSizer`)."""
+        start = self.limits.batch_start
+        return BatchSizer(cap=self.batch_size, start=self.batch_size if start is None else start)
 
     @property
     def bisect_mask(self) -> np.ndarray | None:
@@ -340,6 +364,7 @@ class Solver:
             progress=progress,
             cancel=cancel,
             checkpoint=checkpoint,
+            sizer=self.sizer(),
         )
         result = self.result(run)
         if verify:

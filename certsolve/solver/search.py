@@ -5,7 +5,8 @@ search differ only in what they do to a batch of boxes.  That is a *step*
 (:class:`Step`); everything around it is here, written once:
 
 * the **buffer**: the step's state holds a :class:`~.buffer.BoxStack`; a batch is the last
-  ``step.batch_size`` boxes (depth-first at the batch level);
+  ``step.batch_size`` boxes (depth-first at the batch level), or as many as a
+  :class:`~.batching.BatchSizer` chooses (small first rounds, larger while that pays);
 * the **limits** (:class:`Limits`): wall time, processed boxes, and certified results
   ("solutions": whatever the step certifies -- solutions, inside boxes, an IK point);
 * **cancellation**: a progress callback returning ``False``, or a ``cancel`` event
@@ -39,6 +40,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from .batching import BatchSizer
 from .protocol import Saver, SearchStats, Step, Tally
 
 __all__ = [
@@ -79,7 +81,8 @@ class Limits:
 
     ``timeout``: wall seconds; ``max_boxes``: boxes processed by the step; ``max_solutions``:
     results the step certifies (:attr:`Tally.solutions`).  Limits are checked between
-    batches, so a search may overshoot by one batch (one task per worker with workers).
+    batches, so a search may overshoot by one batch (one task per worker with workers);
+    a :class:`~.batching.BatchSizer` cuts a batch to what the remaining time fits.
     """
 
     timeout: float | None = None
@@ -151,6 +154,8 @@ class Search:
     results back.  ``count_new``: limits on solutions count only what this search finds
     (a task seeded with known solutions), not what its state started with.  ``checkpoint``
     (a :class:`~.checkpoint.Checkpoint`) saves the search after batches and tasks.
+    ``sizer`` (a :class:`~.batching.BatchSizer`): the size of each serial batch, adapted to
+    its timings and the time left; ``None``: ``step.batch_size`` every time.
     """
 
     def __init__(
@@ -164,8 +169,10 @@ class Search:
         stats: SearchStats | None = None,
         count_new: bool = False,
         checkpoint: Saver | None = None,
+        sizer: BatchSizer | None = None,
     ):
         self.step = step
+        self.sizer = sizer
         self.state = state
         self.limits = limits or Limits()
         self.progress = progress
@@ -222,8 +229,15 @@ class Search:
     # -- serial work -------------------------------------------------------------------------
     def batch(self) -> None:
         """Process one batch from the buffer here."""
-        lo, hi = self.state.stack.pop(self.step.batch_size)
-        self.step.process(lo, hi, self.state)
+        sizer = self.sizer
+        if sizer is None:
+            lo, hi = self.state.stack.pop(self.step.batch_size)
+            self.step.process(lo, hi, self.state)
+        else:
+            lo, hi = self.state.stack.pop(sizer.next(self.remaining_time()))
+            t0 = time.perf_counter()
+            self.step.process(lo, hi, self.state)
+            sizer.record(lo.shape[0], time.perf_counter() - t0, self.remaining_time())
         self.stats.boxes += lo.shape[0]
         self.stats.batches += 1
         self.stats.max_pending = max(self.stats.max_pending, self.pending)
@@ -371,6 +385,7 @@ def run_search(
     cancel: Any = None,
     previous: SearchRun | None = None,
     checkpoint: Saver | None = None,
+    sizer: BatchSizer | None = None,
 ) -> SearchRun:
     """Search the boxes ``lo, hi`` (``(B, n)``) with ``step`` (see the module docstring).
 
@@ -381,7 +396,8 @@ def run_search(
     ``checkpoint`` (:class:`~.checkpoint.Checkpoint`): if it holds a snapshot of this
     search (same step, problem and initial boxes ``lo, hi``), the search resumes from it
     instead of starting from ``lo, hi``; it is saved every ``checkpoint.interval``
-    seconds and when the search stops.
+    seconds and when the search stops.  ``sizer``: the adaptive size of the batches run
+    here (:class:`~.batching.BatchSizer`; worker tasks take ``step.batch_size`` boxes).
     """
     executor = executor or SerialExecutor()
     resumed = None
@@ -399,7 +415,14 @@ def run_search(
         assert hi is not None, "boxes: lo and hi together"
         state.stack.push(np.atleast_2d(lo), np.atleast_2d(hi))
     search = Search(
-        step, state, limits, progress=progress, cancel=cancel, stats=stats, checkpoint=checkpoint
+        step,
+        state,
+        limits,
+        progress=progress,
+        cancel=cancel,
+        stats=stats,
+        checkpoint=checkpoint,
+        sizer=sizer,
     )
     search.stats.executor = executor.name
     executor.run(search)
