@@ -43,6 +43,7 @@ Rules the JSON Schema cannot state (a request that breaks one is a 422 naming th
 - FK: the platform attachment points span the formulation's frame, and the formulation is
   one the robot's geometry admits (`auto` always is);
 - no wire of zero length at an IK or force pose;
+- tracking (`fk/track`, `trajectory`) takes a robot without `tolerances` (one robot, not a set);
 - IK: another method's options keep their defaults (`u_last`, `window` not with `tension`;
   `fixed_wire`, `tau_fixed`, `solve` are alg2's; `distribution`, `check_lp` tension's);
 - design parameter `path`s exist in the robot and share no number;

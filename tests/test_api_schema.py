@@ -95,6 +95,8 @@ def _repair_params(kind: str, robot: dict | None, params: dict) -> None:
         for name in {n for names in IK_METHOD_OPTIONS.values() for n in names} - set(own):
             if name not in ("timeout", "max_boxes"):
                 params.pop(name, None)
+    if kind in ("trajectory", "fk/track") and robot:  # tracking takes one robot, not a set
+        robot.pop("tolerances", None)
     if kind == "trajectory":
         params["controls"] = [(list(row) + [0.0] * m)[:m] for row in params["controls"]]
         params.pop("formulation", None)  # as fk's

@@ -42,8 +42,8 @@ from .stability import StabilityVerdict
 
 #: why tracking refuses a robot with tolerances (one message for Python, CLI and jobs)
 TOLERANCES_REFUSED = (
-    "tracking follows one robot's equilibrium branch; a robot with tolerances is a set of "
-    "robots: track the nominal robot (drop the tolerances) or run the set's forward "
+    "tracking follows the equilibrium branch of one robot, and a robot with tolerances is a "
+    "set of robots: track the nominal robot (drop the tolerances) or run the set's forward "
     "kinematics (docs/tolerances.md)"
 )
 
