@@ -18,27 +18,13 @@ import argparse
 import time
 
 import numpy as np
+from fk_bench import load, with_tensions
 
 from certsolve import Pose, Robot, inverse_kinematics
 from certsolve.kinematics.energy_minima import energy_minima
 from certsolve.kinematics.fk_solver import FKSolver, with_tau_max
-from certsolve.robot.presets import random_marionet
 
 MIDDLE = {"marionet": (111.0, 58.0, 107.0), "marionet-t": (111.0, 58.0, 107.0)}
-
-
-def load(name: str) -> Robot:
-    if name.startswith("random-"):
-        _, kind, seed = name.split("-")
-        return Robot.load(random_marionet(kind, int(seed)))
-    return Robot.load(f"examples/robots/{name}.json")
-
-
-def with_tensions(robot: Robot, lo: float, hi: float) -> Robot:
-    data = robot.spec.model_dump()
-    for w in data["wires"]:
-        w["tau"] = [lo, hi]
-    return Robot.load(data)
 
 
 def real_u(robot: Robot, rng, tensions) -> tuple[Pose, np.ndarray] | None:

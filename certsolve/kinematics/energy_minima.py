@@ -28,6 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..robot.elastic import tension
+from ..robot.geometry import gravity_wrench, wire_geometry, wrenches
 from ..robot.model import Robot
 
 __all__ = ["EnergyMinimum", "energy_minima", "start_orientations"]
@@ -104,34 +106,23 @@ class _Energy:
 
     def __init__(self, robot: Robot, u: np.ndarray):
         self.r = robot
-        self.c = robot.V + robot.K * u  # L = ρ + c
-
-    def lengths(self, p, R):
-        B = p[:, None, :] + np.einsum("sij,mj->smi", R, self.r.B)
-        d = B - self.r.A[None]
-        return B, d, np.linalg.norm(d, axis=2)
-
-    def tension(self, rho):
-        L = rho + self.c
-        return np.maximum(self.r.k * (L - self.r.L0) / L, 0.0)
+        self.u = u
 
     def value(self, p, R) -> np.ndarray:
         r = self.r
-        _, _, rho = self.lengths(p, R)
-        L = np.maximum(rho + self.c, r.L0)  # slack: the energy stays at its value at L0
+        rho = wire_geometry(r, p, R)[0]
+        L = np.maximum(rho + r.V + r.K * self.u, r.L0)  # slack: E stays at its value at L0
         E = r.k * (L - r.L0 * np.log(L))
         G = p + R @ r.com
         return E.sum(axis=1) - G @ r.weight
 
     def gradient(self, p, R) -> np.ndarray:
-        r = self.r
-        B, d, rho = self.lengths(p, R)
-        t = self.tension(rho)
-        n = d / rho[..., None]
-        f = (t[..., None] * n).sum(axis=1) - r.weight
-        lever = B - p[:, None, :]
-        m = (t[..., None] * np.cross(lever, n)).sum(axis=1) - np.cross(R @ r.com, r.weight)
-        return np.concatenate([f, m], axis=1)
+        """``∇U = -(H τ + w_g)``: the net wrench on the platform (eq. 3), negated, with the
+        tension of a slack wire 0."""
+        rho, n, CB = wire_geometry(self.r, p, R)
+        t = np.maximum(tension(self.r, rho, self.u), 0.0)
+        H = wrenches(n, CB, self.r.dof)
+        return -(np.einsum("swm,sm->sw", H, t) + gravity_wrench(self.r, R))
 
     def moved(self, p, R, step):
         return p + step[:, :3], _rotation_of(step[:, 3:]) @ R
@@ -175,10 +166,10 @@ def energy_minima(
     act = np.arange(starts)  # the starts still descending
     for _ in range(iterations):
         g = en.gradient(p[act], R[act])
-        act = act[np.linalg.norm(g, axis=1) > tol * scale]
+        moving = np.linalg.norm(g, axis=1) > tol * scale
+        act, g = act[moving], g[moving]
         if not act.size:
             break
-        g = en.gradient(p[act], R[act])
         H = en.hessian(p[act], R[act])
         lam = np.maximum(0.0, -np.linalg.eigvalsh(H)[:, 0]) * 1.1 + 1e-9 * scale
         step = -np.linalg.solve(H + lam[:, None, None] * np.eye(6), g[..., None])[..., 0]
@@ -196,9 +187,9 @@ def energy_minima(
         act = act[ok]  # a start that cannot descend any more has stopped
     g = np.linalg.norm(en.gradient(p, R), axis=1)
     eig = np.linalg.eigvalsh(en.hessian(p, R))[:, 0]
-    B, _, rho = en.lengths(p, R)
-    L = rho + en.c
-    tau = robot.k * (L - robot.L0) / L
+    rho, _, CB = wire_geometry(robot, p, R)
+    B = p[:, None, :] + CB
+    tau = tension(robot, rho, u)
     dom = robot.domain
     inside = np.all((B >= dom[:, 0]) & (B <= dom[:, 1]), axis=(1, 2))
     taut = np.all((tau >= robot.tau_min) & (tau <= robot.tau_max), axis=1)

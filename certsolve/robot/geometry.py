@@ -33,6 +33,7 @@ __all__ = [
     "platform_points",
     "wire_geometry",
     "wrench_matrix",
+    "wrenches",
     "gravity_wrench",
 ]
 
@@ -162,9 +163,15 @@ def _cross2(a, b):
 def wrench_matrix(robot: Robot, positions: ArrayLike, rotations: ArrayLike) -> np.ndarray:
     """``H`` of shape ``(P, w, m)``: column i is the wrench of a unit tension in wire i."""
     _, n, CB = wire_geometry(robot, positions, rotations)
-    if robot.dof == 2:
+    return wrenches(n, CB, robot.dof)
+
+
+def wrenches(n: np.ndarray, CB: np.ndarray, dof: int) -> np.ndarray:
+    """:func:`wrench_matrix` from :func:`wire_geometry`'s unit vectors ``n`` and attachment
+    vectors ``CB``: forces ``n_i``, moments ``CB_i × n_i`` about the platform origin."""
+    if dof == 2:
         return np.transpose(n, (0, 2, 1))
-    if robot.dof == 3:
+    if dof == 3:
         mom = _cross2(CB, n)[:, None, :]
         return np.concatenate([np.transpose(n, (0, 2, 1)), mom], axis=1)
     mom = np.cross(CB, n)

@@ -75,6 +75,15 @@ class FkParams(FkOptions, Params):  # the library's options as job params
             )  # fmt: skip
 
 
+def check_one_robot(robot: RobotSpec) -> None:
+    """Tracking (``fk/track``, ``trajectory``) follows one robot: ``ValueError`` at
+    ``robot.tolerances`` for a set of robots (the :class:`.Tracker`'s refusal)."""
+    if robot.tolerances:
+        from ...kinematics.tracking import TOLERANCES_REFUSED
+
+        raise ValueError(f"robot.tolerances: {TOLERANCES_REFUSED}")
+
+
 def fk_robot_schema(dof: int) -> dict:
     """Robots FK can take: the elastic model, and at least the 3 (planar) or 4 (spatial)
     attachment points of the formulation's frame (that they are distinct and span it is
@@ -182,10 +191,7 @@ class TrackParams(TrackOptions, Params):  # the library's options as params
 
     def check_robot(self, robot: RobotSpec, memo: dict | None = None) -> None:
         check_wires(robot, self.u, "u")
-        if robot.tolerances:
-            from ...kinematics.tracking import TOLERANCES_REFUSED
-
-            raise ValueError(f"robot.tolerances: {TOLERANCES_REFUSED}")
+        check_one_robot(robot)
         check_pose(robot, self.near_pose, "near_pose")
         check_fk_geometry(robot, "auto", memo)
 

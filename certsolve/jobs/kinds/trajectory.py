@@ -19,6 +19,7 @@ from .fk import (
     PLANAR_FORMULATIONS,
     SPATIAL_FORMULATIONS,
     check_fk_geometry,
+    check_one_robot,
     fk_robot_schema,
 )
 
@@ -51,10 +52,7 @@ class TrajectoryParams(TrajectoryOptions, Params):  # the library's options as j
                 f"formulation: tracking uses the paper's point formulations, not "
                 f"{self.formulation!r} (auto picks the paper's for the robot)"
             )
-        if robot.tolerances:
-            from ...kinematics.tracking import TOLERANCES_REFUSED
-
-            raise ValueError(f"robot.tolerances: {TOLERANCES_REFUSED}")
+        check_one_robot(robot)
         check_trajectory(len(robot.wires), self.controls)
         check_pose(robot, self.start, "start")
         check_fk_geometry(robot, self.formulation, memo)
