@@ -63,15 +63,16 @@ class StableOnly:
         full search's."""
         return f"StableOnly(tension_share={TESTED_TENSION_SHARE!r})"
 
+    def tension_ranges(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """Each wire's tension range ``(B, m)`` over the boxes: ``τ = k (1 - L0 / L)`` is
+        increasing in ``ρ`` (a float estimate: it only chooses the boxes to test)."""
+        off = self.wire_V + self.wire_K * self.csys.param_mid[self.order]
+        with np.errstate(all="ignore"):
+            return self.kL0 * (1.0 / (lo[:, self.rho] + off) - 1.0 / (hi[:, self.rho] + off))
+
     def contract(self, lo: np.ndarray, hi: np.ndarray):
         c, k = self.csys, self.order
-        u = c.param_mid[k]
-        # tension ranges, τ = k (1 - L0 / L) increasing in ρ (a float estimate: it only
-        # chooses the boxes to test)
-        off = self.wire_V + self.wire_K * u
-        with np.errstate(all="ignore"):
-            width = self.kL0 * (1.0 / (lo[:, self.rho] + off) - 1.0 / (hi[:, self.rho] + off))
-        test = np.flatnonzero(np.all(width <= self.max_width, axis=1))
+        test = np.flatnonzero(np.all(self.tension_ranges(lo, hi) <= self.max_width, axis=1))
         empty = np.zeros(lo.shape[0], dtype=bool)
         if test.size:
             Hlo, Hhi = self.hessian.enclose(lo[test], hi[test], c.param_lo[k], c.param_hi[k])
