@@ -32,7 +32,9 @@ __all__ = ["StableOnly"]
 #: keeps every curvature positive, and the test never succeeds there (measured on the first
 #: 60k boxes at 60 N, u = IK(111, 58, 107): general-19 drops 1,075 of 56,974 boxes, all
 #: with tension ranges <= 30 N, which are 25 % of the boxes; T-16 1,051 of 48,343, 78 %
-#: of them with ranges <= 40 N, 45 % of the boxes)
+#: of them with ranges <= 40 N, 45 % of the boxes).  Re-measured on the whole T-16 search
+#: (2026-11-28, docs/fk-cost.md): 0.5 324,479 boxes / 22.2 CPU s, 2/3 318,182 / 21.4, 1 (no
+#: gate) 314,602 / 26.2
 TESTED_TENSION_SHARE = 2.0 / 3.0
 
 
