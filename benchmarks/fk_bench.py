@@ -2,6 +2,7 @@
 and IK Algorithm 2.
 
     python benchmarks/fk_bench.py [--runs 3] [--workers 1,2] [--timeout 300] [--cases ...]
+                                  [--only PATTERN]
                                   [--formulation auto|general-19|T-16|...] [--curve]
                                   [--startup] [--skip-fk] [--skip-realtime]
 
@@ -13,7 +14,12 @@ boxes and bisections beside them.  Cases marked ``target`` are the targets of is
 :func:`certsolve.robot.presets.random_marionet`; ``u=IK(P)`` the control vector of IK
 Algorithm 2 at ``REAL_POSE``, ``u=IK(~,lo-hi)`` IK at a random pose near the middle with
 tensions in ``[lo, hi]`` N (:func:`control`); ``stable-only`` cases search for stable
-equilibria only.
+equilibria only.  ``--only PATTERN`` runs the cases whose name matches the regular
+expression (``--only stable-only`` the stable-only cases).
+
+``--where CASE``: where a stable-only search's boxes go (:func:`where_boxes`): every box
+that reaches the stable-only test, by distance to the nearest equilibrium, by width, by
+tension range, each split by the test's outcome (``--max-boxes`` stops the search early).
 
 ``--curve``: how time and boxes grow with tau_max (10, 20, 40, 60 N) and with the stroke
 range (u drawn in 1/4, 1/2 and all of the strokes, seed 1), for T-16 and general-19, one
@@ -28,6 +34,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import re
 import statistics
 import subprocess
 import sys
@@ -36,8 +43,10 @@ import time
 import numpy as np
 
 from certsolve.kinematics import FKSolver, Tracker, inverse_kinematics, with_tau_max
+from certsolve.kinematics.stable_only import StableOnly
 from certsolve.robot import Pose, Robot
 from certsolve.robot.presets import MARIONET_MIDDLE, MARIONET_T_MIDDLE, random_marionet
+from certsolve.solver.pipeline import find
 
 R = "examples/robots"
 ZERO4, ZERO7 = [0.0] * 4, [0.0] * 7
@@ -167,7 +176,8 @@ def row(name, w, res, wall, cpu) -> str:
 
 def bench_fk(args) -> None:
     print(HEAD)
-    for name in args.cases or CASES:
+    names = args.cases or [c for c in CASES if args.only is None or re.search(args.only, c)]
+    for name in names:
         robot_name, tau, u = CASES[name]
         base = load(robot_name)
         robot = with_tau_max(base, tau)
@@ -175,6 +185,97 @@ def bench_fk(args) -> None:
         for w in args.workers:
             wall, cpu, res = run_case(robot, uu, args, w, "stable-only" in name)
             print(row(name, w, res, wall, cpu), flush=True)
+
+
+class RecordBoxes:
+    """A stable-only test that keeps, for every box reaching it, its bounds, its tension
+    ranges and the outcome: not tested (the tension gate), dropped, or kept."""
+
+    def __init__(self, inner: StableOnly):
+        self.inner = inner
+        self.rows: list[tuple[np.ndarray, ...]] = []
+
+    def apply(self, batch) -> None:
+        lo, hi = batch.lo.copy(), batch.hi.copy()
+        self.inner.apply(batch)
+        ranges = self.inner.tension_ranges(lo, hi)
+        tested = np.all(ranges <= self.inner.max_width, axis=1)
+        self.rows.append((lo, hi, ranges.max(axis=1), tested, batch.empty.copy()))
+
+    def describe(self) -> str:
+        return self.inner.describe()
+
+
+def equilibria(fk: FKSolver, search, starts: np.ndarray):
+    """The distinct equilibria in the search domain that float Newton reaches from
+    ``starts``, with their stability at the point (an experiment's reference, not a proof)."""
+    x, ok = search.solver.certifier.newton_point(starts)
+    dom = search.domain
+    x = x[ok & np.all((x >= dom[:, 0]) & (x <= dom[:, 1]), axis=1)]
+    points: list[np.ndarray] = []
+    for p in x:
+        if all(np.max(np.abs(p - q)) > 1e-6 for q in points):
+            points.append(p)
+    verdicts = fk.hessian.verdicts(np.array(points) - 1e-9, np.array(points) + 1e-9, search.u)
+    return np.array(points).reshape(-1, dom.shape[0]), [str(v.stability) for v in verdicts]
+
+
+def histogram(title: str, key: np.ndarray, edges, outcome: np.ndarray, names) -> None:
+    """A markdown table: the rows of ``key`` binned by ``edges``, split by ``outcome``."""
+    print(f"\n| {title} | " + " | ".join(names) + " | all |")
+    print("|---" + "|---:" * (len(names) + 1) + "|")
+    bins = np.digitize(key, edges)
+    labels = [f"< {edges[0]:g}"] + [f"{a:g}-{b:g}" for a, b in zip(edges, edges[1:])]
+    for b, label in enumerate([*labels, f">= {edges[-1]:g}"]):
+        m = bins == b
+        if m.any():
+            counts = " | ".join(f"{np.sum(outcome[m] == k):,}" for k in range(len(names)))
+            print(f"| {label} | {counts} | {m.sum():,} ({100 * m.mean():.1f} %) |")
+
+
+def where_boxes(args) -> None:
+    """Where a stable-only search's boxes go: every box reaching the stable-only test
+    (after HC4 and the partial Newton, each pass of the fixpoint), by distance (cm, max over
+    the pose variables) to the nearest equilibrium, by width and by tension range."""
+    robot_name, tau, u = CASES[args.where]
+    base = load(robot_name)
+    robot = with_tau_max(base, tau)
+    fk = FKSolver(robot, args.formulation, stable_only=True)
+    search = fk.search(control(robot, u, base))
+    rec = RecordBoxes(find(search.solver.contractor, StableOnly))
+    search.solver.contractor = search.solver.contractor.replace(rec.inner, rec)
+    boxes, _ = fk.seeded_boxes(search.u, search.domain)
+    t, c = time.perf_counter(), time.process_time()
+    res = search.solver.solve(boxes=boxes, max_boxes=args.max_boxes, workers=1)
+    wall, cpu = time.perf_counter() - t, time.process_time() - c
+    lo, hi, ranges, tested, empty = (np.concatenate(a) for a in zip(*rec.rows, strict=True))
+    pose = np.setdiff1d(np.arange(lo.shape[1]), fk.form.rho_columns())
+    mid = 0.5 * (lo + hi)
+    rng = np.random.default_rng(0)
+    starts = mid[rng.choice(len(mid), min(40_000, len(mid)), replace=False)]
+    points, kinds = equilibria(fk, search, starts)
+    print(
+        f"{args.where}: {res.status}, {res.stats.boxes:,} boxes, {cpu:.1f} CPU s, "
+        f"{wall:.1f} s wall; {len(lo):,} boxes reached the test"
+    )
+    print("\n| equilibrium (Newton from the boxes) | P1 | stability | nearest of |")
+    print("|---|---|---|---:|")
+    dist = np.abs(mid[:, None, pose] - points[None, :, pose]).max(axis=2)
+    nearest = dist.argmin(axis=1)
+    for j, (p, kind) in enumerate(zip(points, kinds, strict=True)):
+        print(f"| {j} | {np.round(p[:3], 2).tolist()} | {kind} | {np.sum(nearest == j):,} |")
+    neg = np.concatenate(
+        [
+            np.linalg.eigvalsh(0.5 * np.add(*fk.hessian.enclose(m, m, search.u)))[:, 0] < 0
+            for m in np.array_split(mid, max(1, len(mid) // 4096))
+        ]
+    )
+    outcome = np.where(~tested, 0, np.where(empty, 1, np.where(neg, 2, 3)))
+    names = ["not tested", "dropped", "kept, indefinite at mid", "kept, PD at mid"]
+    width = (hi - lo)[:, pose].max(axis=1)
+    histogram("distance (cm)", dist.min(axis=1), [0.5, 2, 5, 10, 20, 50], outcome, names)
+    histogram("width (cm)", width, [1, 3, 10, 30], outcome, names)
+    histogram("tension range (N)", ranges, [5, 10, 20, 30, 40, 50], outcome, names)
 
 
 def bench_curve(args) -> None:
@@ -264,6 +365,9 @@ def main() -> None:
     ap.add_argument("--timeout", type=float, default=300.0)
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--cases", nargs="*", choices=list(CASES), default=None)
+    ap.add_argument("--only", default=None, help="the cases whose name matches this regex")
+    ap.add_argument("--where", choices=list(CASES), help="where a stable-only search's boxes go")
+    ap.add_argument("--max-boxes", type=int, default=None, help="with --where: stop after these")
     ap.add_argument("--curve", action="store_true", help="the cost curve over tau_max, strokes")
     ap.add_argument("--startup", action="store_true", help="whole-process start-up times")
     ap.add_argument("--skip-realtime", action="store_true")
@@ -278,6 +382,9 @@ def main() -> None:
         f"{platform.python_version()}; median of {args.runs} runs; "
         f"formulation {args.formulation}"
     )
+    if args.where:
+        where_boxes(args)
+        return
     if args.startup:
         bench_startup(args)
     if not args.skip_fk:

@@ -14,7 +14,9 @@ from certsolve.kinematics.fk import FKSolver, forward_kinematics, with_tau_max
 from certsolve.kinematics.stability import Stability
 from certsolve.kinematics.stable_only import StableOnly
 from certsolve.robot import Robot
+from certsolve.robot.elastic import tension
 from certsolve.solver import SearchStatus
+from certsolve.solver.pipeline import find
 
 ROBOTS = Path(__file__).resolve().parent.parent / "examples" / "robots"
 
@@ -86,6 +88,26 @@ def test_contractor_drops_boxes_around_unstable_poses_only():
             lo, hi, empty = prune.contract((mid - h)[None], (mid + h)[None])
             assert bool(empty[0]) is dropped
             assert np.array_equal(lo[0], mid - h) and np.array_equal(hi[0], mid + h)
+
+
+def test_tension_ranges_follow_the_tension_law():
+    """The gate's tension ranges are eq. (6) at the boxes' wire lengths, for the search's u
+    (the contractor found in the search's pipeline), and the search domain's tensions span
+    the limits."""
+    robot = with_tau_max(Robot.load(ROBOTS / "marionet-t.json"), 60.0)
+    fk = FKSolver(robot, stable_only=True)
+    u = _u(Robot.load(ROBOTS / "marionet-t.json"), [111.0, 58.0, 107.0, 0.0, 0.0, 0.0])
+    search = fk.search(u)
+    prune = find(search.solver.contractor, StableOnly)
+    rho = fk.form.rho_columns()
+    dom = search.domain
+    full = prune.tension_ranges(dom[None, :, 0], dom[None, :, 1])[0]
+    assert np.allclose(full, robot.tau_max - robot.tau_min, rtol=1e-9)
+    rng = np.random.default_rng(3)
+    a, b = np.sort(rng.uniform(dom[:, 0], dom[:, 1], (2, 50, dom.shape[0])), axis=0)
+    want = tension(robot, b[:, rho], u) - tension(robot, a[:, rho], u)
+    assert np.allclose(prune.tension_ranges(a, b), want, rtol=1e-9, atol=1e-9)
+    assert np.all(want >= 0.0)
 
 
 def test_fingerprint_tells_stable_only_apart():

@@ -32,7 +32,9 @@ __all__ = ["StableOnly"]
 #: keeps every curvature positive, and the test never succeeds there (measured on the first
 #: 60k boxes at 60 N, u = IK(111, 58, 107): general-19 drops 1,075 of 56,974 boxes, all
 #: with tension ranges <= 30 N, which are 25 % of the boxes; T-16 1,051 of 48,343, 78 %
-#: of them with ranges <= 40 N, 45 % of the boxes)
+#: of them with ranges <= 40 N, 45 % of the boxes).  Re-measured on the whole T-16 search
+#: (2026-11-28, docs/fk-cost.md): 0.5 324,479 boxes / 22.2 CPU s, 2/3 318,182 / 21.4, 1 (no
+#: gate) 314,602 / 26.2
 TESTED_TENSION_SHARE = 2.0 / 3.0
 
 
@@ -63,15 +65,16 @@ class StableOnly:
         full search's."""
         return f"StableOnly(tension_share={TESTED_TENSION_SHARE!r})"
 
+    def tension_ranges(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """Each wire's tension range ``(B, m)`` over the boxes: ``τ = k (1 - L0 / L)`` is
+        increasing in ``ρ`` (a float estimate: it only chooses the boxes to test)."""
+        off = self.wire_V + self.wire_K * self.csys.param_mid[self.order]
+        with np.errstate(all="ignore"):
+            return self.kL0 * (1.0 / (lo[:, self.rho] + off) - 1.0 / (hi[:, self.rho] + off))
+
     def contract(self, lo: np.ndarray, hi: np.ndarray):
         c, k = self.csys, self.order
-        u = c.param_mid[k]
-        # tension ranges, τ = k (1 - L0 / L) increasing in ρ (a float estimate: it only
-        # chooses the boxes to test)
-        off = self.wire_V + self.wire_K * u
-        with np.errstate(all="ignore"):
-            width = self.kL0 * (1.0 / (lo[:, self.rho] + off) - 1.0 / (hi[:, self.rho] + off))
-        test = np.flatnonzero(np.all(width <= self.max_width, axis=1))
+        test = np.flatnonzero(np.all(self.tension_ranges(lo, hi) <= self.max_width, axis=1))
         empty = np.zeros(lo.shape[0], dtype=bool)
         if test.size:
             Hlo, Hhi = self.hessian.enclose(lo[test], hi[test], c.param_lo[k], c.param_hi[k])
