@@ -55,8 +55,12 @@ ZERO4, ZERO7 = [0.0] * 4, [0.0] * 7
 REAL_POSE = (111.0, 58.0, 107.0, 0.0, 0.0, 0.0)
 #: a random real pose near the middle of the workspace: up to this many cm and degrees off it
 NEAR = (10.0, 10.0)
+#: a real control vector comes from a *feasible* IK (every tension within its limits, so
+#: the robot is at rest at the drawn pose): up to this many poses are drawn for one seed
+FEASIBLE_DRAWS = 50
 #: name -> (robot, tau_max, u: a list, ("S", seed, fraction) drawn in the strokes, ("IK",
-#: pose) or ("IK~", seed, (tau_lo, tau_hi)): IK at a random pose near the middle)
+#: pose) or ("IK~", seed, (tau_lo, tau_hi)): IK at the first random pose near the middle where
+#: it is feasible)
 CASES = {
     "planar-10 tau<=10": ("planar", 10.0, [0.5, 0.5, 0.5, 0.5]),
     "planar-10 tau<=60": ("planar", 60.0, [0.8, 1.8, -2.5, -3.6]),
@@ -108,11 +112,11 @@ def load(name: str) -> Robot:
     return Robot.load(f"{R}/{name}.json")
 
 
-def near_pose(robot: Robot, seed: int) -> list[float]:
+def near_pose(robot: Robot, seed: int, draw: int = 0) -> list[float]:
     """A random pose within :data:`NEAR` of the middle of the workspace (the pose the
-    robot's strokes are centred on: :func:`random_marionet`)."""
+    robot's strokes are centred on: :func:`random_marionet`); ``draw`` > 0 the next ones."""
     middle = MARIONET_T_MIDDLE if len({tuple(b) for b in robot.B}) == 3 else MARIONET_MIDDLE
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(seed if draw == 0 else (seed, draw))
     cm, deg = NEAR
     pose = np.concatenate([np.array(middle) + rng.uniform(-cm, cm, 3), rng.uniform(-deg, deg, 3)])
     return [float(v) for v in pose]
@@ -137,10 +141,11 @@ def control(robot: Robot, u, base: Robot | None = None) -> np.ndarray:
     if isinstance(u, tuple) and u[0] == "IK~":
         _, seed, (lo, hi) = u
         base = base or robot
-        res = inverse_kinematics(with_tensions(base, lo, hi), near_pose(base, seed))
-        if res.u is None:
-            raise RuntimeError(f"no control vector at the pose of seed {seed}: {res.status}")
-        return np.asarray(res.u, dtype=float)
+        for draw in range(FEASIBLE_DRAWS):  # the first drawn pose whose IK is feasible
+            res = inverse_kinematics(with_tensions(base, lo, hi), near_pose(base, seed, draw))
+            if res.feasible:
+                return np.asarray(res.u, dtype=float)
+        raise RuntimeError(f"no feasible pose in {FEASIBLE_DRAWS} draws of seed {seed}")
     if isinstance(u, tuple):
         _, seed, frac = u
         mid = 0.5 * (robot.u_min + robot.u_max)
