@@ -264,25 +264,44 @@ class _Bail(Exception):
     """Raised by the fast interval function when a value is not finite."""
 
 
-# inline code of the fast interval function (finite values only; see ScalarProgram)
+# inline code of the fast interval function (finite values only; see ScalarProgram).  The
+# products and quotients pick their two bounds by the signs of the operands (a comparison
+# costs ~10 ns in CPython, ``min``/``max`` of four products ~150 ns); as rounding to
+# nearest is monotone, the rounded product that is the bound is the minimum (maximum) of
+# the four rounded products, so the bounds are the same floats as the helpers'
 _FAST = {
     "add": "{lo} = nd({a0} + {b0}, NI); {hi} = nd({a1} + {b1}, PI)",
     "sub": "{lo} = nd({a0} - {b1}, NI); {hi} = nd({a1} - {b0}, PI)",
     "neg": "{lo} = -{a1}; {hi} = -{a0}",
     "mul": (
-        "p1 = {a0} * {b0}; p2 = {a0} * {b1}; p3 = {a1} * {b0}; p4 = {a1} * {b1}; "
-        "{lo} = nd(min(p1, p2, p3, p4), NI); {hi} = nd(max(p1, p2, p3, p4), PI)"
+        "if {a0} >= 0.0:\n"
+        "        if {b0} >= 0.0: {lo} = nd({a0} * {b0}, NI); {hi} = nd({a1} * {b1}, PI)\n"
+        "        elif {b1} <= 0.0: {lo} = nd({a1} * {b0}, NI); {hi} = nd({a0} * {b1}, PI)\n"
+        "        else: {lo} = nd({a1} * {b0}, NI); {hi} = nd({a1} * {b1}, PI)\n"
+        "    elif {a1} <= 0.0:\n"
+        "        if {b0} >= 0.0: {lo} = nd({a0} * {b1}, NI); {hi} = nd({a1} * {b0}, PI)\n"
+        "        elif {b1} <= 0.0: {lo} = nd({a1} * {b1}, NI); {hi} = nd({a0} * {b0}, PI)\n"
+        "        else: {lo} = nd({a0} * {b1}, NI); {hi} = nd({a0} * {b0}, PI)\n"
+        "    elif {b0} >= 0.0: {lo} = nd({a0} * {b1}, NI); {hi} = nd({a1} * {b1}, PI)\n"
+        "    elif {b1} <= 0.0: {lo} = nd({a1} * {b0}, NI); {hi} = nd({a0} * {b0}, PI)\n"
+        "    else: {lo} = nd(min({a0} * {b1}, {a1} * {b0}), NI); "
+        "{hi} = nd(max({a0} * {b0}, {a1} * {b1}), PI)"
     ),
     "sqr": (
-        "p1 = {a0} * {a0}; p2 = {a1} * {a1}; "
-        "{lo} = 0.0 if {a0} <= 0.0 <= {a1} else nd(min(p1, p2), NI); "
-        "{hi} = nd(max(p1, p2), PI)"
+        "if {a0} > 0.0: {lo} = nd({a0} * {a0}, NI); {hi} = nd({a1} * {a1}, PI)\n"
+        "    elif {a1} < 0.0: {lo} = nd({a1} * {a1}, NI); {hi} = nd({a0} * {a0}, PI)\n"
+        "    else: {lo} = 0.0; {hi} = nd(max({a0} * {a0}, {a1} * {a1}), PI)"
     ),
     # divisor away from 0 (the common case) inline, the IBEX cases in the helper
     "div": (
-        "if {b0} > 0.0 or {b1} < 0.0:\n"
-        "        p1 = {a0} / {b0}; p2 = {a0} / {b1}; p3 = {a1} / {b0}; p4 = {a1} / {b1}; "
-        "{lo} = nd(min(p1, p2, p3, p4), NI); {hi} = nd(max(p1, p2, p3, p4), PI)\n"
+        "if {b0} > 0.0:\n"
+        "        if {a0} >= 0.0: {lo} = nd({a0} / {b1}, NI); {hi} = nd({a1} / {b0}, PI)\n"
+        "        elif {a1} <= 0.0: {lo} = nd({a0} / {b0}, NI); {hi} = nd({a1} / {b1}, PI)\n"
+        "        else: {lo} = nd({a0} / {b0}, NI); {hi} = nd({a1} / {b0}, PI)\n"
+        "    elif {b1} < 0.0:\n"
+        "        if {a0} >= 0.0: {lo} = nd({a1} / {b1}, NI); {hi} = nd({a0} / {b0}, PI)\n"
+        "        elif {a1} <= 0.0: {lo} = nd({a1} / {b0}, NI); {hi} = nd({a0} / {b1}, PI)\n"
+        "        else: {lo} = nd({a1} / {b1}, NI); {hi} = nd({a0} / {b1}, PI)\n"
         "    else:\n"
         "        {lo}, {hi} = _div({a0}, {a1}, {b0}, {b1})"
     ),
