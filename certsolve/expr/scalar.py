@@ -174,6 +174,55 @@ def _scale(a, b, c):
     return _down(min(p, q)), _up(max(p, q))
 
 
+def _fmul(a0, a1, b0, b1):
+    """``[a0, a1]·[b0, b1]`` for finite bounds (the fast variant): the two corner products
+    that are the bounds, picked by the operands' signs."""
+    if a0 >= 0.0:
+        if b0 >= 0.0:
+            return _nd(a0 * b0, -_INF), _nd(a1 * b1, _INF)
+        if b1 <= 0.0:
+            return _nd(a1 * b0, -_INF), _nd(a0 * b1, _INF)
+        return _nd(a1 * b0, -_INF), _nd(a1 * b1, _INF)
+    if a1 <= 0.0:
+        if b0 >= 0.0:
+            return _nd(a0 * b1, -_INF), _nd(a1 * b0, _INF)
+        if b1 <= 0.0:
+            return _nd(a1 * b1, -_INF), _nd(a0 * b0, _INF)
+        return _nd(a0 * b1, -_INF), _nd(a0 * b0, _INF)
+    if b0 >= 0.0:
+        return _nd(a0 * b1, -_INF), _nd(a1 * b1, _INF)
+    if b1 <= 0.0:
+        return _nd(a1 * b0, -_INF), _nd(a0 * b0, _INF)
+    return _nd(min(a0 * b1, a1 * b0), -_INF), _nd(max(a0 * b0, a1 * b1), _INF)
+
+
+def _fsqr(a0, a1):
+    """``[a0, a1]²`` for finite bounds (the fast variant)."""
+    if a0 > 0.0:
+        return _nd(a0 * a0, -_INF), _nd(a1 * a1, _INF)
+    if a1 < 0.0:
+        return _nd(a1 * a1, -_INF), _nd(a0 * a0, _INF)
+    return 0.0, _nd(max(a0 * a0, a1 * a1), _INF)
+
+
+def _fdiv(a0, a1, b0, b1):
+    """``[a0, a1]/[b0, b1]`` for finite bounds (the fast variant): by the signs when the
+    divisor is away from 0, else the helper's IBEX cases."""
+    if b0 > 0.0:
+        if a0 >= 0.0:
+            return _nd(a0 / b1, -_INF), _nd(a1 / b0, _INF)
+        if a1 <= 0.0:
+            return _nd(a0 / b0, -_INF), _nd(a1 / b1, _INF)
+        return _nd(a0 / b0, -_INF), _nd(a1 / b0, _INF)
+    if b1 < 0.0:
+        if a0 >= 0.0:
+            return _nd(a1 / b1, -_INF), _nd(a0 / b0, _INF)
+        if a1 <= 0.0:
+            return _nd(a1 / b0, -_INF), _nd(a0 / b1, _INF)
+        return _nd(a1 / b1, -_INF), _nd(a0 / b1, _INF)
+    return _div(a0, a1, b0, b1)
+
+
 def _fwd(op, a, b, c=None, d=None):
     """Any operation without inline code: its batched enclosure (:data:`.ops.FORWARD`) on
     numpy scalars -- the same bounds as the batched evaluator, at numpy's per-call cost."""
@@ -208,6 +257,9 @@ _HELPERS = {
     "_abs": _abs,
     "_sign": _sign,
     "_scale": _scale,
+    "_fmul": _fmul,
+    "_fsqr": _fsqr,
+    "_fdiv": _fdiv,
     "math": math,
     "inf": _INF,
 }
@@ -264,47 +316,20 @@ class _Bail(Exception):
     """Raised by the fast interval function when a value is not finite."""
 
 
-# inline code of the fast interval function (finite values only; see ScalarProgram).  The
-# products and quotients pick their two bounds by the signs of the operands (a comparison
-# costs ~10 ns in CPython, ``min``/``max`` of four products ~150 ns); as rounding to
-# nearest is monotone, the rounded product that is the bound is the minimum (maximum) of
-# the four rounded products, so the bounds are the same floats as the helpers'
+# code of the fast interval function (finite values only; see ScalarProgram).  Products
+# and quotients pick their two bounds by the operands' signs (a comparison costs ~10 ns in
+# CPython, ``min``/``max`` of four products ~150 ns); as rounding to nearest is monotone,
+# the rounded product that is the bound is the minimum (maximum) of the four rounded
+# products, so the bounds are the same floats as the helpers'.  They are functions, not
+# inline code: the inline branches doubled the source and ``compile()``'s time (general-19's
+# Jacobian 18 -> 40 ms), most of building a tracker
 _FAST = {
     "add": "{lo} = nd({a0} + {b0}, NI); {hi} = nd({a1} + {b1}, PI)",
     "sub": "{lo} = nd({a0} - {b1}, NI); {hi} = nd({a1} - {b0}, PI)",
     "neg": "{lo} = -{a1}; {hi} = -{a0}",
-    "mul": (
-        "if {a0} >= 0.0:\n"
-        "        if {b0} >= 0.0: {lo} = nd({a0} * {b0}, NI); {hi} = nd({a1} * {b1}, PI)\n"
-        "        elif {b1} <= 0.0: {lo} = nd({a1} * {b0}, NI); {hi} = nd({a0} * {b1}, PI)\n"
-        "        else: {lo} = nd({a1} * {b0}, NI); {hi} = nd({a1} * {b1}, PI)\n"
-        "    elif {a1} <= 0.0:\n"
-        "        if {b0} >= 0.0: {lo} = nd({a0} * {b1}, NI); {hi} = nd({a1} * {b0}, PI)\n"
-        "        elif {b1} <= 0.0: {lo} = nd({a1} * {b1}, NI); {hi} = nd({a0} * {b0}, PI)\n"
-        "        else: {lo} = nd({a0} * {b1}, NI); {hi} = nd({a0} * {b0}, PI)\n"
-        "    elif {b0} >= 0.0: {lo} = nd({a0} * {b1}, NI); {hi} = nd({a1} * {b1}, PI)\n"
-        "    elif {b1} <= 0.0: {lo} = nd({a1} * {b0}, NI); {hi} = nd({a0} * {b0}, PI)\n"
-        "    else: {lo} = nd(min({a0} * {b1}, {a1} * {b0}), NI); "
-        "{hi} = nd(max({a0} * {b0}, {a1} * {b1}), PI)"
-    ),
-    "sqr": (
-        "if {a0} > 0.0: {lo} = nd({a0} * {a0}, NI); {hi} = nd({a1} * {a1}, PI)\n"
-        "    elif {a1} < 0.0: {lo} = nd({a1} * {a1}, NI); {hi} = nd({a0} * {a0}, PI)\n"
-        "    else: {lo} = 0.0; {hi} = nd(max({a0} * {a0}, {a1} * {a1}), PI)"
-    ),
-    # divisor away from 0 (the common case) inline, the IBEX cases in the helper
-    "div": (
-        "if {b0} > 0.0:\n"
-        "        if {a0} >= 0.0: {lo} = nd({a0} / {b1}, NI); {hi} = nd({a1} / {b0}, PI)\n"
-        "        elif {a1} <= 0.0: {lo} = nd({a0} / {b0}, NI); {hi} = nd({a1} / {b1}, PI)\n"
-        "        else: {lo} = nd({a0} / {b0}, NI); {hi} = nd({a1} / {b0}, PI)\n"
-        "    elif {b1} < 0.0:\n"
-        "        if {a0} >= 0.0: {lo} = nd({a1} / {b1}, NI); {hi} = nd({a0} / {b0}, PI)\n"
-        "        elif {a1} <= 0.0: {lo} = nd({a1} / {b0}, NI); {hi} = nd({a0} / {b1}, PI)\n"
-        "        else: {lo} = nd({a1} / {b1}, NI); {hi} = nd({a0} / {b1}, PI)\n"
-        "    else:\n"
-        "        {lo}, {hi} = _div({a0}, {a1}, {b0}, {b1})"
-    ),
+    "mul": "{lo}, {hi} = _fmul({a0}, {a1}, {b0}, {b1})",
+    "sqr": "{lo}, {hi} = _fsqr({a0}, {a1})",
+    "div": "{lo}, {hi} = _fdiv({a0}, {a1}, {b0}, {b1})",
 }
 
 
