@@ -25,6 +25,7 @@ from .ops import FLOAT, FORWARD
 __all__ = ["ScalarProgram"]
 
 _INF = math.inf
+_NINF = -math.inf
 _nd = math.nextafter
 
 
@@ -179,29 +180,29 @@ def _fmul(a0, a1, b0, b1):
     that are the bounds, picked by the operands' signs."""
     if a0 >= 0.0:
         if b0 >= 0.0:
-            return _nd(a0 * b0, -_INF), _nd(a1 * b1, _INF)
+            return _nd(a0 * b0, _NINF), _nd(a1 * b1, _INF)
         if b1 <= 0.0:
-            return _nd(a1 * b0, -_INF), _nd(a0 * b1, _INF)
-        return _nd(a1 * b0, -_INF), _nd(a1 * b1, _INF)
+            return _nd(a1 * b0, _NINF), _nd(a0 * b1, _INF)
+        return _nd(a1 * b0, _NINF), _nd(a1 * b1, _INF)
     if a1 <= 0.0:
         if b0 >= 0.0:
-            return _nd(a0 * b1, -_INF), _nd(a1 * b0, _INF)
+            return _nd(a0 * b1, _NINF), _nd(a1 * b0, _INF)
         if b1 <= 0.0:
-            return _nd(a1 * b1, -_INF), _nd(a0 * b0, _INF)
-        return _nd(a0 * b1, -_INF), _nd(a0 * b0, _INF)
+            return _nd(a1 * b1, _NINF), _nd(a0 * b0, _INF)
+        return _nd(a0 * b1, _NINF), _nd(a0 * b0, _INF)
     if b0 >= 0.0:
-        return _nd(a0 * b1, -_INF), _nd(a1 * b1, _INF)
+        return _nd(a0 * b1, _NINF), _nd(a1 * b1, _INF)
     if b1 <= 0.0:
-        return _nd(a1 * b0, -_INF), _nd(a0 * b0, _INF)
-    return _nd(min(a0 * b1, a1 * b0), -_INF), _nd(max(a0 * b0, a1 * b1), _INF)
+        return _nd(a1 * b0, _NINF), _nd(a0 * b0, _INF)
+    return _nd(min(a0 * b1, a1 * b0), _NINF), _nd(max(a0 * b0, a1 * b1), _INF)
 
 
 def _fsqr(a0, a1):
     """``[a0, a1]²`` for finite bounds (the fast variant)."""
     if a0 > 0.0:
-        return _nd(a0 * a0, -_INF), _nd(a1 * a1, _INF)
+        return _nd(a0 * a0, _NINF), _nd(a1 * a1, _INF)
     if a1 < 0.0:
-        return _nd(a1 * a1, -_INF), _nd(a0 * a0, _INF)
+        return _nd(a1 * a1, _NINF), _nd(a0 * a0, _INF)
     return 0.0, _nd(max(a0 * a0, a1 * a1), _INF)
 
 
@@ -210,16 +211,16 @@ def _fdiv(a0, a1, b0, b1):
     divisor is away from 0, else the helper's IBEX cases."""
     if b0 > 0.0:
         if a0 >= 0.0:
-            return _nd(a0 / b1, -_INF), _nd(a1 / b0, _INF)
+            return _nd(a0 / b1, _NINF), _nd(a1 / b0, _INF)
         if a1 <= 0.0:
-            return _nd(a0 / b0, -_INF), _nd(a1 / b1, _INF)
-        return _nd(a0 / b0, -_INF), _nd(a1 / b0, _INF)
+            return _nd(a0 / b0, _NINF), _nd(a1 / b1, _INF)
+        return _nd(a0 / b0, _NINF), _nd(a1 / b0, _INF)
     if b1 < 0.0:
         if a0 >= 0.0:
-            return _nd(a1 / b1, -_INF), _nd(a0 / b0, _INF)
+            return _nd(a1 / b1, _NINF), _nd(a0 / b0, _INF)
         if a1 <= 0.0:
-            return _nd(a1 / b0, -_INF), _nd(a0 / b1, _INF)
-        return _nd(a1 / b1, -_INF), _nd(a0 / b1, _INF)
+            return _nd(a1 / b0, _NINF), _nd(a0 / b1, _INF)
+        return _nd(a1 / b1, _NINF), _nd(a0 / b1, _INF)
     return _div(a0, a1, b0, b1)
 
 
