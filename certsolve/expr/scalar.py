@@ -340,11 +340,12 @@ class ScalarProgram:
     ``interval(xlo, xhi, plo, phi) -> (lo, hi)`` takes sequences of variable and parameter
     bounds and returns lists of output bounds; ``floats(x, p) -> values`` the float version.
 
-    ``interval`` first runs a *fast* variant in which the simple operations (``+ - *``,
-    squares, scalings) are inlined.  Inlining ``min``/``max`` of products is only sound
-    without infinities (``inf * 0`` gives NaN, and Python's ``min`` of a NaN is order
-    dependent), so every node of the fast variant checks that its bounds are finite and
-    bails out to the helper-based variant otherwise.
+    ``interval`` first runs a *fast* variant in which ``+ -``, negations and scalings are
+    inline code and products, quotients and squares take the bounds their operands' signs
+    pick (:func:`_fmul`, :func:`_fdiv`, :func:`_fsqr`).  Both are only sound without
+    infinities (``inf * 0`` gives NaN, and a sign test or Python's ``min`` of a NaN goes
+    either way), so the inputs of those operations and the outputs are checked to be
+    finite, and the fast variant bails out to the helper-based one otherwise.
     """
 
     def __init__(self, graph: Graph, outputs: Sequence[int]):

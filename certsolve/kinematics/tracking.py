@@ -124,9 +124,9 @@ class Tracker:
     """Newton + Krawczyk steps of forward kinematics near a known pose: the reusable form
     of :func:`track`, for control loops (``certsolve.Tracker(robot)``).
 
-    The formulation is built and compiled once, here (~0.05-0.1 s CPU); then each
+    The formulation is built and compiled once, here (~0.03-0.08 s CPU); then each
     :meth:`step` costs a few float Newton iterations and one Krawczyk test on generated
-    straight-line code (about 0.2 ms for T-16 and 0.35 ms for general-19, see
+    straight-line code (about 0.17 ms for T-16 and 0.29 ms for general-19, see
     ``benchmarks/trajectory_bench.py``)::
 
         tracker = certsolve.Tracker(robot)
@@ -445,7 +445,7 @@ class Tracker:
 
 def track(robot: Robot, u, near, half_width: float = 0.1, formulation: str = "auto") -> TrackResult:
     """One certified tracking step, with its stability verdict: the one-off form of
-    :class:`Tracker` (it compiles the system at every call, ~0.1-0.2 s CPU: use
+    :class:`Tracker` (it compiles the system at every call, ~0.05-0.15 s CPU: use
     ``Tracker(robot).step`` in loops, :func:`certsolve.track_trajectory` for paths).
 
     ``near``: a :class:`~certsolve.robot.Pose`, an :class:`FKPose` or pose parameters
