@@ -42,7 +42,7 @@ __all__ = ["Alg2Options", "Algorithm2", "ik_algorithm2"]
 
 @dataclass(kw_only=True, frozen=True)
 class Alg2Options:
-    """The options of :func:`ik_algorithm2` (documented there), checked."""
+    """The options of :class:`Algorithm2` (documented there), checked."""
 
     fixed_wire: int | Sequence[int] = 1
     tau_fixed: float | Sequence[float] | None = None
@@ -54,20 +54,21 @@ class Alg2Options:
     certify: bool = True
 
 
-def ik_algorithm2(
-    robot: Robot,
-    pose: Pose,
-    *,
-    fixed_wire: int | Sequence[int] = 1,
-    tau_fixed: float | Sequence[float] | None = None,
-    u_fixed: float | Sequence[float] | None = None,
-    solve: str = "tau",
-    u_last: ArrayLike | None = None,
-    window: float | None = None,
-    box_radius: float = 1e-4,
-    certify: bool = True,
-) -> IKResult:
-    """Algorithm 2: fix wire(s), solve the square system, certify (module docstring).
+def ik_algorithm2(robot: Robot, pose: Pose, **options: Any) -> IKResult:
+    """Algorithm 2 at one pose (module docstring): the one-off form of :class:`Algorithm2`,
+    whose options it takes and checks at every call.  ``pose`` is a
+    :class:`~certsolve.robot.Pose`, taken as it is (:meth:`Algorithm2.solve` checks it)."""
+    t0 = time.perf_counter()
+    return Algorithm2(robot, **options)._solve(pose, t0)
+
+
+class Algorithm2:
+    """IK Algorithm 2 for one robot and one set of options, pose after pose (module
+    docstring)::
+
+        alg2 = Algorithm2(robot)  # or Algorithm2(robot, fixed_wire=3, tau_fixed=4.0)
+        for pose in poses:
+            res = alg2.solve(pose)
 
     ``fixed_wire``: 1-based wire(s) whose control is fixed (``m - w`` are needed; missing ones
     are chosen by pivoted QR).  Their control comes from ``u_fixed`` if given, else from eq. 5
@@ -78,49 +79,10 @@ def ik_algorithm2(
     relative to ``1 + |u|``): half-width of the box proven to hold exactly one solution; a
     second, 1e-10-wide box proven at the same time gives the tight enclosure.
 
-    Pose after pose with the same robot and options, :class:`Algorithm2` checks them once.
-    """
-    t0 = time.perf_counter()
-    opts = _options(
-        robot,
-        fixed_wire=fixed_wire,
-        tau_fixed=tau_fixed,
-        u_fixed=u_fixed,
-        solve=solve,
-        u_last=u_last,
-        window=window,
-        box_radius=box_radius,
-        certify=certify,
-    )
-    with np.errstate(all="ignore"):
-        return _alg2(robot, pose, opts, t0)
-
-
-def _options(robot: Robot, *, u_last: ArrayLike | None, **options: Any) -> Alg2Options:
-    """:class:`Alg2Options` checked against the robot (a ``ValueError`` names the option)."""
-    if not is_elastic(robot):
-        require_elastic(robot, "alg2")
-    if options["solve"] not in ("tau", "newton"):
-        raise ValueError(f"solve {options['solve']!r}: expected tau or newton")
-    if not options["box_radius"] > 0:
-        raise ValueError("box_radius must be positive")
-    if u_last is not None:
-        _, _, u_last = search_window(robot, u_last, options["window"])
-    return Alg2Options(u_last=u_last, **options)
-
-
-class Algorithm2:
-    """IK Algorithm 2 for one robot and one set of options, pose after pose: the reusable
-    form of :func:`ik_algorithm2` (the same options, the same results)::
-
-        alg2 = Algorithm2(robot)  # or Algorithm2(robot, fixed_wire=3, tau_fixed=4.0)
-        for pose in poses:
-            res = alg2.solve(pose)
-
-    The robot and the options are checked here, once; :meth:`solve` checks only the pose
-    (:func:`~certsolve.robot.inputs.as_pose`: a :class:`~certsolve.robot.Pose` or pose
-    parameters, cm and degrees).  About 0.1 ms a pose (``benchmarks/trajectory_bench.py``),
-    where :func:`certsolve.inverse_kinematics` also validates its request at every call.
+    The robot and the options are checked here, once (a ``ValueError`` names the option);
+    :meth:`solve` checks the pose (:func:`~certsolve.robot.inputs.as_pose`).  About 0.1 ms a
+    pose (``benchmarks/trajectory_bench.py``), where :func:`certsolve.inverse_kinematics`
+    also validates its whole request at every call.
     """
 
     def __init__(
@@ -136,9 +98,16 @@ class Algorithm2:
         box_radius: float = 1e-4,
         certify: bool = True,
     ) -> None:
+        if not is_elastic(robot):
+            require_elastic(robot, "alg2")
+        if solve not in ("tau", "newton"):
+            raise ValueError(f"solve {solve!r}: expected tau or newton")
+        if not box_radius > 0:
+            raise ValueError("box_radius must be positive")
+        if u_last is not None:
+            _, _, u_last = search_window(robot, u_last, window)
         self.robot = robot
-        self.options = _options(
-            robot,
+        self.options = Alg2Options(
             fixed_wire=fixed_wire,
             tau_fixed=tau_fixed,
             u_fixed=u_fixed,
@@ -150,9 +119,12 @@ class Algorithm2:
         )
 
     def solve(self, pose: Pose | ArrayLike | str) -> IKResult:
-        """:func:`ik_algorithm2` at ``pose`` with this object's robot and options."""
+        """The controls holding the platform at ``pose`` (a :class:`~certsolve.robot.Pose`
+        or pose parameters, cm and degrees), with this object's robot and options."""
         t0 = time.perf_counter()
-        pose = as_pose(self.robot.dof, pose)
+        return self._solve(as_pose(self.robot.dof, pose), t0)
+
+    def _solve(self, pose: Pose, t0: float) -> IKResult:
         with np.errstate(all="ignore"):
             return _alg2(self.robot, pose, self.options, t0)
 
