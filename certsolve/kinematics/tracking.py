@@ -126,7 +126,7 @@ class Tracker:
 
     The formulation is built and compiled once, here (~0.03-0.08 s CPU); then each
     :meth:`step` costs a few float Newton iterations and one Krawczyk test on generated
-    straight-line code (about 0.17 ms for T-16 and 0.29 ms for general-19, see
+    straight-line code (about 0.16 ms for T-16 and 0.29 ms for general-19, see
     ``benchmarks/trajectory_bench.py``)::
 
         tracker = certsolve.Tracker(robot)
