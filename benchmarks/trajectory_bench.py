@@ -37,7 +37,7 @@ from fk_bench import TRACK, R, trajectory
 
 import certsolve
 from certsolve.kinematics import Tracker, inverse_kinematics
-from certsolve.kinematics.ik_alg2 import ik_algorithm2
+from certsolve.kinematics.ik_alg2 import Algorithm2, ik_algorithm2
 from certsolve.robot import Pose, Robot
 
 
@@ -83,6 +83,11 @@ def bench_alg2_core(robot, poses) -> tuple[float, float]:
     return medians([timed(lambda p=p: ik_algorithm2(robot, p))[1:] for p in poses[:200]])
 
 
+def bench_alg2_reused(robot, poses) -> tuple[float, float]:
+    alg2 = Algorithm2(robot)
+    return medians([timed(lambda p=p: alg2.solve(p))[1:] for p in poses[:200]])
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=3)
@@ -112,6 +117,8 @@ def main() -> None:
             print(f"{name:<12} {'IK alg2':<10} {1e3 * w:>8.3f}ms {1e3 * c:>8.3f}ms  per call")
             w, c = medians([bench_alg2_core(robot, poses) for _ in range(args.runs)])
             print(f"{name:<12} {'alg2 core':<10} {1e3 * w:>8.3f}ms {1e3 * c:>8.3f}ms  per call")
+            w, c = medians([bench_alg2_reused(robot, poses) for _ in range(args.runs)])
+            print(f"{name:<12} {'alg2 reuse':<10} {1e3 * w:>8.3f}ms {1e3 * c:>8.3f}ms  per call")
         samples = []
         for _ in range(args.runs):
             res, w, c = timed(

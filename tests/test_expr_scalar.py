@@ -75,3 +75,63 @@ def test_overflow_inside_a_sum_is_not_lost():
     # at a point where x == y the true value is 0
     plo, phi = csys.f_point(np.array([1.5, 1.5, 0.5]))
     assert plo[0] <= 0.0 <= phi[0]
+
+
+# endpoints of every sign, zeros of both signs, and magnitudes far apart
+_ENDPOINT = st.one_of(
+    st.sampled_from([0.0, -0.0, 1.0, -1.0, 2.0**-1074, -(2.0**-1074)]),
+    st.floats(-1e150, 1e150, allow_nan=False, allow_infinity=False),
+    st.floats(-1e-150, 1e-150, allow_nan=False, allow_infinity=False),
+)
+
+
+def _interval(data) -> tuple[float, float]:
+    a, b = data.draw(_ENDPOINT), data.draw(_ENDPOINT)
+    return (a, b) if a <= b else (b, a)
+
+
+def _corners(op, x, y):
+    """The values of ``op`` at the corners of the boxes, to 2200 bits: products of two
+    doubles exactly, quotients within ``2**-2200`` relative, far inside the gap of at
+    least half an ulp (``2**-1075``) between a rounded-outward bound and the value."""
+    with mpmath.workprec(2200):
+        xs = [mpmath.mpf(v) for v in x]
+        ys = [mpmath.mpf(v) for v in y]
+        if op == "sqr":
+            return [v * v for v in xs]
+        if op == "mul":
+            return [a * b for a in xs for b in ys]
+        return [a / b for a in xs for b in ys]
+
+
+@pytest.mark.parametrize("op", ["mul", "div", "sqr"])
+@settings(max_examples=300, deadline=None)
+@given(data=st.data())
+def test_fast_signed_products_are_the_helpers_bounds(op, data):
+    """The fast variant picks the bounds of ``x·y``, ``x/y`` and ``x²`` by the operands'
+    signs: the same floats as the helper-based variant (min/max of the four rounded
+    corner values, one ulp outward), and they enclose the exact range."""
+    from certsolve.expr.graph import Graph
+    from certsolve.expr.scalar import ScalarProgram, _Bail
+
+    x, y = var("x"), var("y")
+    expr = {"mul": x * y, "div": x / y, "sqr": sqr(x)}[op]
+    g = Graph(["x", "y"], [])
+    prog = ScalarProgram(g, [g.add_expr(expr)])
+    xb, yb = _interval(data), _interval(data)
+    if op == "div":  # the fast code's inline cases: divisor away from 0
+        if yb[0] <= 0.0 <= yb[1]:
+            yb = (abs(yb[1]) + 1.0, abs(yb[1]) + 2.0) if data.draw(st.booleans()) else yb
+    args = ([xb[0], yb[0]], [xb[1], yb[1]], [], [])
+    safe = prog.interval_safe(*args)
+    try:
+        fast = prog._interval_fast(*args)
+    except _Bail:  # an overflowed bound: the fast code hands over to the helpers
+        fast = prog.interval(*args)
+    assert fast == safe
+    lo, hi = fast[0][0], fast[1][0]
+    if op == "div" and yb[0] <= 0.0 <= yb[1]:
+        return  # extended division: the helper's IBEX cases, tested with the solver
+    with mpmath.workprec(2200):
+        exact = _corners(op, xb, yb)
+        assert mpmath.mpf(lo) <= min(exact) and max(exact) <= mpmath.mpf(hi)

@@ -397,3 +397,27 @@ def test_limit_violations_lists_every_limit_once_in_wire_order():
     moved[3], moved[0] = 0.2, -0.3
     got = [(v.wire, v.bound) for v in window_violations(moved, u_last, 0.4)]
     assert got == [(1, "min")]  # wire 4 is 0.2 from u_last: on the window's edge
+
+
+def test_algorithm2_reused_matches_the_one_off_call():
+    """``Algorithm2(robot).solve(pose)`` is ``ik_algorithm2`` with the robot and options
+    checked once: the same controls, tensions and certificate, pose after pose."""
+    from certsolve.inputs import InputError
+    from certsolve.kinematics.ik_alg2 import Algorithm2, ik_algorithm2
+
+    robot, poses = near_centre_poses("marionet", 5, np.random.default_rng(11))
+    alg2 = Algorithm2(robot, fixed_wire=3, tau_fixed=4.0)
+    for pose in poses:
+        a = alg2.solve(pose)
+        b = ik_algorithm2(robot, pose, fixed_wire=3, tau_fixed=4.0)
+        assert a.status == b.status and a.certificate.kind == b.certificate.kind == "unique-in-box"
+        assert np.array_equal(a.u, b.u) and np.array_equal(a.tau, b.tau)
+        assert np.array_equal(a.certificate.enclosure, b.certificate.enclosure)
+    # pose parameters as the other entry points take them; a bad one names the field
+    c = alg2.solve(list(CENTRE["marionet"]))
+    assert np.array_equal(c.u, ik_algorithm2(robot, c.pose, fixed_wire=3, tau_fixed=4.0).u)
+    with pytest.raises(InputError) as exc:
+        alg2.solve([111, 58, float("nan"), 0, 0, 0])
+    assert exc.value.field.startswith("pose")
+    with pytest.raises(ValueError, match="box_radius"):
+        Algorithm2(robot, box_radius=0.0)

@@ -14,12 +14,14 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike
 
 from ..robot.geometry import Pose
+from ..robot.inputs import as_pose
 from ..robot.model import Robot
 from .ik_enclose import PoseEnclosure, SquareSystem, enclose_pose, is_elastic
 from .ik_inputs import check_pose, controls, overdetermined_note, require_elastic, search_window
@@ -35,12 +37,12 @@ from .ik_result import (
 from .ik_search import control_point
 from .ik_tension import distribute_tensions
 
-__all__ = ["Alg2Options", "ik_algorithm2"]
+__all__ = ["Alg2Options", "Algorithm2", "ik_algorithm2"]
 
 
 @dataclass(kw_only=True, frozen=True)
 class Alg2Options:
-    """The options of :func:`ik_algorithm2` (documented there), checked."""
+    """The options of :class:`Algorithm2` (documented there), checked."""
 
     fixed_wire: int | Sequence[int] = 1
     tau_fixed: float | Sequence[float] | None = None
@@ -52,20 +54,21 @@ class Alg2Options:
     certify: bool = True
 
 
-def ik_algorithm2(
-    robot: Robot,
-    pose: Pose,
-    *,
-    fixed_wire: int | Sequence[int] = 1,
-    tau_fixed: float | Sequence[float] | None = None,
-    u_fixed: float | Sequence[float] | None = None,
-    solve: str = "tau",
-    u_last: ArrayLike | None = None,
-    window: float | None = None,
-    box_radius: float = 1e-4,
-    certify: bool = True,
-) -> IKResult:
-    """Algorithm 2: fix wire(s), solve the square system, certify (module docstring).
+def ik_algorithm2(robot: Robot, pose: Pose, **options: Any) -> IKResult:
+    """Algorithm 2 at one pose (module docstring): the one-off form of :class:`Algorithm2`,
+    whose options it takes and checks at every call.  ``pose`` is a
+    :class:`~certsolve.robot.Pose`, taken as it is (:meth:`Algorithm2.solve` checks it)."""
+    t0 = time.perf_counter()
+    return Algorithm2(robot, **options)._solve(pose, t0)
+
+
+class Algorithm2:
+    """IK Algorithm 2 for one robot and one set of options, pose after pose (module
+    docstring)::
+
+        alg2 = Algorithm2(robot)  # or Algorithm2(robot, fixed_wire=3, tau_fixed=4.0)
+        for pose in poses:
+            res = alg2.solve(pose)
 
     ``fixed_wire``: 1-based wire(s) whose control is fixed (``m - w`` are needed; missing ones
     are chosen by pivoted QR).  Their control comes from ``u_fixed`` if given, else from eq. 5
@@ -75,28 +78,55 @@ def ik_algorithm2(
     ``u_last``: controls outside ``u_last ± window/2`` are reported.  ``box_radius`` (cm,
     relative to ``1 + |u|``): half-width of the box proven to hold exactly one solution; a
     second, 1e-10-wide box proven at the same time gives the tight enclosure.
+
+    The robot and the options are checked here, once (a ``ValueError`` names the option);
+    :meth:`solve` checks the pose (:func:`~certsolve.robot.inputs.as_pose`).  About 0.1 ms a
+    pose (``benchmarks/trajectory_bench.py``), where :func:`certsolve.inverse_kinematics`
+    also validates its whole request at every call.
     """
-    t0 = time.perf_counter()
-    if not is_elastic(robot):
-        require_elastic(robot, "alg2")
-    if solve not in ("tau", "newton"):
-        raise ValueError(f"solve {solve!r}: expected tau or newton")
-    if not box_radius > 0:
-        raise ValueError("box_radius must be positive")
-    if u_last is not None:
-        _, _, u_last = search_window(robot, u_last, window)
-    opts = Alg2Options(
-        fixed_wire=fixed_wire,
-        tau_fixed=tau_fixed,
-        u_fixed=u_fixed,
-        solve=solve,
-        u_last=u_last,
-        window=window,
-        box_radius=box_radius,
-        certify=certify,
-    )
-    with np.errstate(all="ignore"):
-        return _alg2(robot, pose, opts, t0)
+
+    def __init__(
+        self,
+        robot: Robot,
+        *,
+        fixed_wire: int | Sequence[int] = 1,
+        tau_fixed: float | Sequence[float] | None = None,
+        u_fixed: float | Sequence[float] | None = None,
+        solve: str = "tau",
+        u_last: ArrayLike | None = None,
+        window: float | None = None,
+        box_radius: float = 1e-4,
+        certify: bool = True,
+    ) -> None:
+        if not is_elastic(robot):
+            require_elastic(robot, "alg2")
+        if solve not in ("tau", "newton"):
+            raise ValueError(f"solve {solve!r}: expected tau or newton")
+        if not box_radius > 0:
+            raise ValueError("box_radius must be positive")
+        if u_last is not None:
+            _, _, u_last = search_window(robot, u_last, window)
+        self.robot = robot
+        self.options = Alg2Options(
+            fixed_wire=fixed_wire,
+            tau_fixed=tau_fixed,
+            u_fixed=u_fixed,
+            solve=solve,
+            u_last=u_last,
+            window=window,
+            box_radius=box_radius,
+            certify=certify,
+        )
+
+    def solve(self, pose: Pose | ArrayLike | str) -> IKResult:
+        """The controls holding the platform at ``pose`` (a :class:`~certsolve.robot.Pose`
+        or pose parameters, cm and degrees), with this object's robot and options."""
+        t0 = time.perf_counter()
+        return self._solve(as_pose(self.robot.dof, pose), t0)
+
+    def _solve(self, pose: Pose, t0: float) -> IKResult:
+        with np.errstate(all="ignore"):
+            return _alg2(self.robot, pose, self.options, t0)
 
 
 def _fixed_wires(H, fixed_wire, count: int) -> list[int]:
@@ -215,6 +245,19 @@ def _fix_controls(robot: Robot, enc: PoseEnclosure, F, opts: Alg2Options):
     return u, wg + tauF @ Ht[F]
 
 
+def _limits(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
+    """``(τ_min, u_min) - LIMIT_TOL`` and ``(τ_max, u_max) + LIMIT_TOL`` side by side: the
+    bounds a result's ``(τ, u)`` is checked against, computed once per robot."""
+    lim = robot.derived.get(__name__)
+    if lim is None:
+        tol = LIMIT_TOL
+        lim = robot.derived[__name__] = (
+            np.concatenate((robot.tau_min - tol, robot.u_min - tol)),
+            np.concatenate((robot.tau_max + tol, robot.u_max + tol)),
+        )
+    return lim
+
+
 def _tensions_beyond_k(robot: Robot, sq: SquareSystem, c, S) -> list[int]:
     """1-based wires whose tension in the square system's solution would reach ``k``."""
     tau_S = sq.G @ -c
@@ -274,7 +317,7 @@ def _alg2(robot: Robot, pose: Pose, opts: Alg2Options, t0: float) -> IKResult:
         return result(IKStatus.SINGULAR, None, None, [])
     if opts.solve == "tau":
         tau_S = sq.G @ -c
-        if not (tau_S < robot.k[S]).all():
+        if not (tau_S < sq.k_free).all():
             bad = _tensions_beyond_k(robot, sq, c, S)
             messages.append(f"no control: wires {bad} would need a tension >= k")
             return result(IKStatus.NO_SOLUTION, None, None, [])
@@ -311,14 +354,10 @@ def _alg2(robot: Robot, pose: Pose, opts: Alg2Options, t0: float) -> IKResult:
         L = enc.W + robot.K * u
         tau = robot.k * (L - robot.L0) / L
         res_f = tau @ Ht + wg
-    tol = LIMIT_TOL
     violations: list[Violation] = []
-    if not (
-        (tau >= robot.tau_min - tol)
-        & (tau <= robot.tau_max + tol)
-        & (u >= robot.u_min - tol)
-        & (u <= robot.u_max + tol)
-    ).all():
+    lim_lo, lim_hi = _limits(robot)
+    tu = np.concatenate((tau, u))
+    if not ((lim_lo <= tu) & (tu <= lim_hi)).all():
         violations = limit_violations(robot, tau, u)
     if opts.u_last is not None and opts.window is not None:
         violations += window_violations(u, opts.u_last, opts.window)

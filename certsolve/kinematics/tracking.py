@@ -99,8 +99,8 @@ class HeldJacobian:
     def covers(self, lo: np.ndarray, hi: np.ndarray, u: np.ndarray) -> bool:
         """Whether ``[lo, hi]`` (with its centre inside it) and ``u`` are inside."""
         return bool(
-            np.all(self.lo <= lo) and np.all(hi <= self.hi)
-            and np.all(self.ulo <= u) and np.all(u <= self.uhi)
+            (self.lo <= lo).all() and (hi <= self.hi).all()
+            and (self.ulo <= u).all() and (u <= self.uhi).all()
         )  # fmt: skip
 
     def prove(self, lo, hi, c, flo, fhi, steps: int = 3):
@@ -114,7 +114,7 @@ class HeldJacobian:
             nlo, nhi = np.fmax(klo, lo), np.fmin(khi, hi)
             if ok:
                 return True, nlo, nhi
-            if np.any(nlo > nhi) or np.all(nhi - nlo > 0.9 * (hi - lo)):
+            if (nlo > nhi).any() or (nhi - nlo > 0.9 * (hi - lo)).all():
                 break
             lo, hi = nlo, nhi
         return False, lo, hi
@@ -124,9 +124,9 @@ class Tracker:
     """Newton + Krawczyk steps of forward kinematics near a known pose: the reusable form
     of :func:`track`, for control loops (``certsolve.Tracker(robot)``).
 
-    The formulation is built and compiled once, here (~0.05-0.1 s CPU); then each
+    The formulation is built and compiled once, here (~0.03-0.08 s CPU); then each
     :meth:`step` costs a few float Newton iterations and one Krawczyk test on generated
-    straight-line code (about 0.2 ms for T-16 and 0.35 ms for general-19, see
+    straight-line code (about 0.16 ms for T-16 and 0.29 ms for general-19, see
     ``benchmarks/trajectory_bench.py``)::
 
         tracker = certsolve.Tracker(robot)
@@ -217,7 +217,8 @@ class Tracker:
         x = P.ravel()
         if self._is_rho.any():
             B = f.L @ P
-            rho = np.linalg.norm(self.robot.A - B, axis=1)
+            d = self.robot.A - B
+            rho = np.sqrt((d * d).sum(axis=1))  # np.linalg.norm's floats, without its wrapper
             x = np.concatenate([x, rho])
         return x
 
@@ -303,9 +304,9 @@ class Tracker:
                 if ok:
                     return True, np.fmax(klo, lo), np.fmin(khi, hi), kp, jbox
                 nlo, nhi = np.fmax(klo, lo), np.fmin(khi, hi)
-                if np.any(nlo > nhi):  # no zero at all in X (cannot happen at a Newton point)
+                if (nlo > nhi).any():  # no zero at all in X (cannot happen at a Newton point)
                     return False, lo, hi, kp, jbox
-                if np.all(nhi - nlo > 0.9 * (hi - lo)):
+                if (nhi - nlo > 0.9 * (hi - lo)).all():
                     break  # no progress
                 lo, hi = nlo, nhi
         return False, lo, hi, kp, jbox
@@ -340,7 +341,7 @@ class Tracker:
             return self._prove(lo, hi, x, f=(flo, fhi))
         wlo, whi = self._box(x, WIDEN * h)
         du = WIDEN * h
-        if np.all(wlo <= lo) and np.all(hi <= whi):
+        if (wlo <= lo).all() and (hi <= whi).all():
             self.set_controls((u - du, u + du))
             jlo, jhi = self.jacobian_box(wlo, whi)
             self.set_controls(u)
@@ -422,7 +423,7 @@ class Tracker:
                 ok, elo, ehi = self._prove(lo, hi, x)
             if ok:
                 # the Newton point is the best estimate of the zero proven to be in E
-                inside = bool(np.all((elo <= x) & (x <= ehi)))
+                inside = bool(((elo <= x) & (x <= ehi)).all())
                 verdict = self._stability(elo, ehi, x, u) if self.stability else None
                 pose = self.fk.decode(
                     elo, ehi, u, point=x if inside else None, verdict=verdict or unknown
@@ -445,7 +446,7 @@ class Tracker:
 
 def track(robot: Robot, u, near, half_width: float = 0.1, formulation: str = "auto") -> TrackResult:
     """One certified tracking step, with its stability verdict: the one-off form of
-    :class:`Tracker` (it compiles the system at every call, ~0.1-0.2 s CPU: use
+    :class:`Tracker` (it compiles the system at every call, ~0.05-0.15 s CPU: use
     ``Tracker(robot).step`` in loops, :func:`certsolve.track_trajectory` for paths).
 
     ``near``: a :class:`~certsolve.robot.Pose`, an :class:`FKPose` or pose parameters
