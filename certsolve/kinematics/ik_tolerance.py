@@ -270,12 +270,15 @@ def _margin(robot: Robot, tlo: np.ndarray, thi: np.ndarray) -> np.ndarray:
     )
 
 
-def check_tolerant_ik(robot: Robot, method: str, solve: str = "tau") -> None:
+def check_tolerant_ik(
+    robot: Robot, method: str, solve: str = "tau", pose: Pose | None = None
+) -> None:
     """What the IK of a set does not take, refused naming the field
     (:class:`~certsolve.inputs.InputError`): Algorithm 1 (a search for one robot's
-    controls), ``solve="newton"`` (the set's statics are linear in the tensions), and a robot
+    controls), ``solve="newton"`` (the set's statics are linear in the tensions), a robot
     with fewer wires than equilibrium equations (a pose is an equilibrium of chosen robots
-    only, not of a set)."""
+    only, not of a set), and with ``pose``, a wire whose length may be 0 for a robot of the
+    set (:func:`set_statics`)."""
     if method not in ("tension", "alg2"):
         raise InputError(
             "method", f"{method} is not available for a robot with tolerances; use tension or alg2"
@@ -288,6 +291,8 @@ def check_tolerant_ik(robot: Robot, method: str, solve: str = "tau") -> None:
             f"{robot.wrench_dim} equilibrium equations for {robot.m} tensions: the pose is "
             "an equilibrium of chosen robots only, not of a set",
         )
+    if pose is not None:
+        set_statics(robot, pose)
 
 
 def _tensions(nominal: Robot, st: SetStatics, F: np.ndarray, tauF: Pair):
