@@ -62,6 +62,22 @@ def test_sampled_robots_lie_in_the_intervals(t16_tol, method, pose):
     assert np.allclose(res.u, 0.5 * (np.array(s["u_lo"]) + np.array(s["u_hi"])))
 
 
+def test_the_bounds_are_within_a_few_times_the_spread_of_the_set(t16_tol):
+    """The mean-value form keeps a wire column's entries together: the tension bounds are
+    at most 2.5 times the spread of 40 robots drawn from the set (3.6-9 times entry by
+    entry), the control intervals at most 2.5 times."""
+    pose = POSES[0]
+    res = inverse_kinematics(t16_tol, pose)
+    s = res.details["set"]
+    rng = np.random.default_rng(0)
+    own = [_same_distribution(t16_tol.draw(rng, corner=i % 2 == 0), pose, res) for i in range(40)]
+    for key, values in (("tau", [o.tau for o in own]), ("u", [o.u for o in own])):
+        spread = np.ptp(np.array(values), axis=0)
+        width = np.array(s[f"{key}_hi"]) - s[f"{key}_lo"]
+        moving = spread > 1e-9  # the fixed wire's tension is the same for every robot
+        assert np.all(width[moving] <= 2.5 * spread[moving])
+
+
 def test_a_failing_bound_names_its_wire(t16_tol):
     """Wire 1's control fixed from a tension 0.01 N under its limit: with ±1 % on k, some
     robots pull harder than 10 N; the worst case is reported for that wire, and no sampled
