@@ -62,6 +62,25 @@ def test_sampled_robots_lie_in_the_intervals(t16_tol, method, pose):
     assert np.allclose(res.u, 0.5 * (np.array(s["u_lo"]) + np.array(s["u_hi"])))
 
 
+@pytest.mark.parametrize("method", ["tension", "alg2"])
+def test_toleranced_attachments_and_mass(method):
+    """The IK of a set also takes the attachments and the mass (the FK of a set does not):
+    sampled robots still lie inside."""
+    data = json.loads((ROBOTS / "marionet-t-tol.json").read_text())
+    data["tolerances"] += [
+        {"path": "wires[*].platform[*]", "plus_minus": 0.05},
+        {"path": "platform.mass", "relative": 0.01},
+    ]
+    robot = Robot.load(data)
+    pose = POSES[1]
+    res = inverse_kinematics(robot, pose, method=method)
+    s = res.details["set"]
+    assert res.status == "ok"
+    for sample in _samples(robot):
+        own = _same_distribution(sample, pose, res)
+        assert _inside(own.u, s["u_lo"], s["u_hi"]) and _inside(own.tau, s["tau_lo"], s["tau_hi"])
+
+
 def test_the_bounds_are_within_a_few_times_the_spread_of_the_set(t16_tol):
     """The mean-value form keeps a wire column's entries together: the tension bounds are
     at most 2.5 times the spread of 40 robots drawn from the set (3.6-9 times entry by
