@@ -209,3 +209,26 @@ def test_cli_and_job(capsys, t16_tol):
         IkParams.model_validate({"pose": [115, 60, 118, 0, 0, 0], "method": "alg1"}).check_robot(
             t16_tol.spec
         )
+
+
+def test_the_quick_call_over_http(tmp_path):
+    """``POST /v1/ik`` with the robot and its tolerances inline: the set's answer; Algorithm
+    1 refused with a 422 naming the field."""
+    from fastapi.testclient import TestClient
+
+    from certsolve.api.app import create_app
+    from certsolve.jobs import ServiceSettings
+
+    robot = json.loads((ROBOTS / "marionet-t-tol.json").read_text())
+    app = create_app(ServiceSettings(data_dir=tmp_path / "data", workers=0))
+    with TestClient(app, base_url="http://localhost") as client:
+        r = client.post("/v1/ik", json={"robot": robot, "params": {"pose": list(POSES[0])}})
+        assert r.status_code == 200, r.text
+        d = r.json()
+        assert d["status"] == "ok" and d["certificate"]["kind"] == "every-robot"
+        assert len(d["details"]["set"]["u_hi"]) == 7
+        body = {"robot": robot, "params": {"pose": list(POSES[0]), "method": "alg1"}}
+        r = client.post("/v1/ik", json=body)
+        assert r.status_code == 422
+        (e,) = r.json()["detail"]  # one problem, named
+        assert e["field"] == "params.method" and "alg1 is not available" in e["msg"]

@@ -151,7 +151,7 @@ def check_tolerant_ik(
     set (:func:`set_statics`)."""
     if method not in ("tension", "alg2"):
         raise InputError(
-            "method", f"{method} is not available for a robot with tolerances; use tension or alg2"
+            "method", f"{method} is not available for a robot with tolerances (use tension or alg2)"
         )
     if solve != "tau":
         raise InputError("solve", "a robot with tolerances is solved in the tensions (tau)")
