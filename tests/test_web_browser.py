@@ -461,6 +461,7 @@ def test_the_pose_boxes_of_a_robot_with_tolerances_are_drawn(offline_browser, id
     job = {"kind": "fk", "robot": robot, "params": {"u": u}}
     progress = {"boxes": result["stats"]["boxes"], "solutions": 1}
     job_id = finish_job(idle_server, job, "done", result, progress)
+    d.get_log("browser")  # reading empties it: what the tests before left there goes
     d.get(f"{idle_server.base}/#/jobs/{job_id}")
     d.refresh()
     panels = 'article.pose[data-pose="0"] figure.pose-set svg'
@@ -478,5 +479,6 @@ def test_the_pose_boxes_of_a_robot_with_tolerances_are_drawn(offline_browser, id
         hull = svg.find_element("css selector", "polygon.pp-hull").get_attribute("points")
         assert len(hull.split()) >= (3 if b == 1 else 2)  # T-16: three points, flat in z
     assert "position bounds (cm)" in css(d, "#job-result").text
+    wait(d, lambda d: pictures_loaded(d, "article.pose img") == 1, 120, "the pose picture")
     assert console_errors(d) == []
     screenshot(d, "web-fk-tolerances.png")
