@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import time
 from pathlib import Path
@@ -51,6 +52,7 @@ def main() -> None:
     ap.add_argument("--cases", default="t16,general19")
     ap.add_argument("--samples", type=int, default=12)
     args = ap.parse_args()
+    print(f"load average at the start {os.getloadavg()[0]:.2f}")
     print("case       status    poses  boxes    wall (s)  cpu (s)  box/spread (max)")
     for name in args.cases.split(","):
         robot = _robot(name)
@@ -75,6 +77,8 @@ def main() -> None:
             f"{name:10s} {str(res.status):9s} {len(res.solutions):5d}  {res.stats.boxes:7d}  "
             f"{statistics.median(walls):8.2f}  {statistics.median(cpus):7.2f}  {ratio}"
         )
+        runs = ", ".join(f"{w:.2f} ({c:.2f})" for w, c in zip(walls, cpus, strict=True))
+        print(f"  runs, wall (cpu) s: {runs}; load average {os.getloadavg()[0]:.2f}")
         for note in res.notes:
             print(f"  note: {note}")
 

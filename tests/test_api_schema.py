@@ -80,6 +80,18 @@ def _no_zero_wire(robot: dict, pose: list) -> None:
             robot["wires"][i]["base"][0] += 1.0 if robot["wires"][i]["base"][0] < 0 else -1.0
 
 
+def _ik_of_a_set(robot: dict, params: dict) -> None:
+    """What the IK of a set does not take (alg1, Newton, fewer wires than equations, a
+    wire that may reach length 0 for a robot of the set): a robot without tolerances."""
+    from certsolve.jobs.kinds.ik import IkParams
+    from certsolve.robot.schema import RobotSpec
+
+    try:
+        IkParams.model_validate(params).check_robot(RobotSpec.model_validate(robot))
+    except ValueError:
+        robot.pop("tolerances", None)
+
+
 def _repair_params(kind: str, robot: dict | None, params: dict) -> None:
     m = len(robot["wires"]) if robot else 0
     if kind in ("fk", "fk/track"):
@@ -106,6 +118,8 @@ def _repair_params(kind: str, robot: dict | None, params: dict) -> None:
         params["fixed_wire"] = min(params.get("fixed_wire", 1), m)
     if kind in ("ik", "ik-sweep", "isotropic") and robot is not None:
         _no_zero_wire(robot, params["pose"])
+    if kind == "ik" and robot and robot.get("tolerances"):
+        _ik_of_a_set(robot, params)
     if kind == "ik-sweep":
         params["joint"] = min(params.get("joint", 1), m)
     if kind == "isotropic":

@@ -70,12 +70,31 @@ def test_isotropic_force_at_a_pose_holds_for_the_set():
     assert isotropic_force(robot.nominal(), [5, -3]).set_force_lo is None
 
 
-def test_ik_on_a_set_says_it_answers_for_the_nominal_robot():
-    from certsolve.kinematics import inverse_kinematics
+def test_the_isotropic_map_of_a_set_gives_its_certified_lower_bounds():
+    """``isotropic_map`` on a robot with tolerances: the nominal values, and at each grid
+    point a lower bound that no robot drawn from the set goes below (``null`` where the
+    force is not proven >= 0), with a note; the job's stored form keeps them."""
+    from certsolve.force.maps import IsotropicMap, isotropic_map
 
-    robot = Robot.load(ROBOTS / "marionet-t-tol.json")
-    pose = [115, 60, 118, 0, 0, 0]
-    res = inverse_kinematics(robot, pose)
-    nominal = inverse_kinematics(robot.nominal(), pose)
-    assert np.array_equal(res.u, nominal.u)
-    assert any("nominal robot's controls" in m for m in res.messages)
+    robot = _krut3([{"path": "wires[*].base[*]", "plus_minus": 1.0}])
+    xs, ys = np.linspace(-60, 60, 13), np.linspace(-80, 40, 13)
+    fmap = isotropic_map(robot, xs, ys)
+    assert np.array_equal(
+        fmap.values, isotropic_map(robot.nominal(), xs, ys).values, equal_nan=True
+    )
+    lo = fmap.set_force_lo
+    rng = np.random.default_rng(3)
+    least = np.min(
+        [isotropic_map(robot.draw(rng, corner=i % 2 == 0), xs, ys).values for i in range(8)], axis=0
+    )
+    proven = np.isfinite(lo)
+    assert proven.sum() > 0.5 * (fmap.values > 0).sum()
+    assert np.all(lo[proven] <= least[proven] * (1 + 1e-9))
+    assert np.all(least[proven] >= 0)  # proven >= 0 for the set: no drawn robot is outside
+    d = fmap.to_dict()
+    assert "set_force_lo" in d and d["summary"]["set_inside"] == int(np.sum(lo > 0))
+    assert d["notes"] and d["notes"][0].startswith("robot with tolerances")
+    back = IsotropicMap.from_dict(d, robot.A)
+    assert np.array_equal(back.set_force_lo, lo, equal_nan=True)
+    exact = isotropic_map(robot.nominal(), xs, ys)
+    assert exact.set_force_lo is None and "set_force_lo" not in exact.to_dict()

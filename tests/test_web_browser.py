@@ -22,6 +22,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 from test_service_e2e import Server, hard_system
 
@@ -443,3 +444,41 @@ def test_the_token_is_sent_but_not_stored(offline_browser, tmp_path_factory):
         assert css(d, "#token").get_attribute("value") == ""
     finally:
         server.close()
+
+
+def test_the_pose_boxes_of_a_robot_with_tolerances_are_drawn(offline_browser, idle_server):
+    """An FK job on a robot with tolerances: every attachment's bounds over the set, drawn
+    in two projections as the result has them, with their hull."""
+    from certsolve.jobs.partial import stored_result
+    from certsolve.kinematics import forward_kinematics
+    from certsolve.robot import Robot
+
+    d = offline_browser
+    robot = json.loads((ROOT / "examples/robots/marionet-t-tol.json").read_text())
+    u = [0.0] * 7
+    result = stored_result(forward_kinematics(Robot.load(robot), u), 1000)
+    (pose,) = result["solutions"]
+    job = {"kind": "fk", "robot": robot, "params": {"u": u}}
+    progress = {"boxes": result["stats"]["boxes"], "solutions": 1}
+    job_id = finish_job(idle_server, job, "done", result, progress)
+    d.get_log("browser")  # reading empties it: what the tests before left there goes
+    d.get(f"{idle_server.base}/#/jobs/{job_id}")
+    d.refresh()
+    panels = 'article.pose[data-pose="0"] figure.pose-set svg'
+    wait(d, lambda d: len(css_all(d, panels)) == 2, 30, "the pose boxes")
+    lo, hi = np.array(pose["platform_points_lo"]), np.array(pose["platform_points_hi"])
+    for svg, (a, b) in zip(css_all(d, panels), [(0, 1), (0, 2)], strict=True):
+        rects = svg.find_elements("css selector", "rect.pp-box")
+        assert len(rects) == 7
+        # one scale on both axes: each rectangle's sides are its bounds' widths times it
+        w = np.array([float(r.get_attribute("width")) for r in rects])
+        h = np.array([float(r.get_attribute("height")) for r in rects])
+        assert w / h == pytest.approx((hi[:, a] - lo[:, a]) / (hi[:, b] - lo[:, b]), rel=1e-3)
+        title = rects[0].find_element("tag name", "title").get_attribute("textContent")
+        assert title.startswith("wire 1:") and f"{lo[0, a]:.6g}"[:6] in title
+        hull = svg.find_element("css selector", "polygon.pp-hull").get_attribute("points")
+        assert len(hull.split()) >= (3 if b == 1 else 2)  # T-16: three points, flat in z
+    assert "position bounds (cm)" in css(d, "#job-result").text
+    wait(d, lambda d: pictures_loaded(d, "article.pose img") == 1, 120, "the pose picture")
+    assert console_errors(d) == []
+    screenshot(d, "web-fk-tolerances.png")

@@ -703,14 +703,114 @@ function renderFk(job, r, out) {
               ["certificate", `${p.certificate}` + (p.verified === true ? ", verified with mpmath" : p.verified === false ? ", NOT verified" : "")],
               ["stability", p.stability ? `${p.stability}, smallest Hessian eigenvalue in [${(p.eig_min || []).map((v, i) => (v === null ? (i ? "∞" : "−∞") : num(v, 6))).join(", ")}]` : "not given"],
               ["existence box", `${(p.box || []).length} variables, widths ≤ ${num(Math.max(...(p.box || [[0, 0]]).map((b) => b[1] - b[0])), 2)}`],
+              p.position_lo ? ["position bounds (cm)", p.position_lo.map((v, c) => `[${num(v, 7)}, ${num(p.position_hi[c], 7)}]`).join(", ")] : null,
             ]),
             el("table", { class: "tensions" }, el("thead", {}, el("tr", {}, el("th", { text: "wire" }), el("th", { text: "tension τ (N)" }), el("th", { text: "length ρ (cm)" }))), el("tbody", {}, wires))
-          )
+          ),
+          p.platform_points_lo && p.platform_points_lo.length ? poseBoxes(p) : null
         )
       )
     );
   });
   boxesNote(r, out);
+}
+
+// -- the pose boxes of a robot with tolerances ---------------------------------------------------
+// The SVG namespace, as the HTML parser gives it to an <svg> element (a constant string,
+// no server text).
+const SVG_NS = (() => {
+  const t = document.createElement("template");
+  t.innerHTML = "<svg></svg>";
+  return t.content.firstChild.namespaceURI;
+})();
+
+function svgEl(tag, attrs, ...children) {
+  const node = document.createElementNS(SVG_NS, tag);
+  for (const [k, v] of Object.entries(attrs || {})) {
+    if (k === "text") node.textContent = v;
+    else node.setAttribute(k, String(v));
+  }
+  for (const c of children.flat()) if (c) node.append(c);
+  return node;
+}
+
+// Convex hull (Andrew's monotone chain) of 2-D points, counter-clockwise.
+function hull2d(points) {
+  const p = points.slice().sort((a, b) => a[0] - b[0] || a[1] - b[1]);
+  if (p.length < 3) return p;
+  const cross = (o, a, b) => (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+  const half = (pts) => {
+    const h = [];
+    for (const q of pts) {
+      while (h.length >= 2 && cross(h[h.length - 2], h[h.length - 1], q) <= 0) h.pop();
+      h.push(q);
+    }
+    h.pop();
+    return h;
+  };
+  return half(p).concat(half(p.slice().reverse()));
+}
+
+// A drawing scale for boxes much smaller than the platform: 1, 2, 5, 10, 20, ... so that
+// the widest box is at least a tenth of the platform's extent.
+function enlargement(span, widest) {
+  let f = 1;
+  for (let k = 0; widest * f < 0.1 * span && k < 30; k++) f *= [2, 2.5, 2][k % 3];
+  return f;
+}
+
+// One projection of the attachments' bounds: a rectangle per attachment (its bounds over
+// every robot of the set, enlarged ``mag`` times about their centre) and the platform's
+// outline through the centres; equal scales on both axes, the second axis upwards.
+function projection(lo, hi, a, b, names, mag) {
+  const size = 240;
+  const pad = 28;
+  const c = lo.map((l, i) => [0.5 * (l[a] + hi[i][a]), 0.5 * (l[b] + hi[i][b])]);
+  const r = lo.map((l, i) => [0.5 * mag * (hi[i][a] - l[a]), 0.5 * mag * (hi[i][b] - l[b])]);
+  const xs = c.flatMap((q, i) => [q[0] - r[i][0], q[0] + r[i][0]]);
+  const ys = c.flatMap((q, i) => [q[1] - r[i][1], q[1] + r[i][1]]);
+  const x0 = Math.min(...xs);
+  const y0 = Math.min(...ys);
+  const wx = Math.max(...xs) - x0;
+  const wy = Math.max(...ys) - y0;
+  const span = Math.max(wx, wy) || 1;
+  const s = (size - 2 * pad) / span;
+  const X = (x) => pad + 0.5 * (span - wx) * s + (x - x0) * s; // centred in the panel
+  const Y = (y) => size - pad - 0.5 * (span - wy) * s - (y - y0) * s;
+  const rects = lo.map((l, i) => {
+    const h = hi[i];
+    return svgEl(
+      "rect",
+      { class: "pp-box", "data-wire": i + 1, x: X(c[i][0] - r[i][0]), y: Y(c[i][1] + r[i][1]), width: Math.max(2 * r[i][0] * s, 0.5), height: Math.max(2 * r[i][1] * s, 0.5) },
+      svgEl("title", { text: `wire ${i + 1}: ${names[0]} [${num(l[a], 7)}, ${num(h[a], 7)}], ${names[1]} [${num(l[b], 7)}, ${num(h[b], 7)}] cm` })
+    );
+  });
+  const outline = hull2d(c).map((q) => `${X(q[0]).toFixed(2)},${Y(q[1]).toFixed(2)}`).join(" ");
+  return svgEl(
+    "svg",
+    { class: "pose-boxes", viewBox: `0 0 ${size} ${size}`, width: size, height: size, role: "img", "aria-label": `attachment bounds, ${names[0]}-${names[1]} projection` },
+    svgEl("polygon", { class: "pp-hull", points: outline }),
+    rects,
+    svgEl("text", { class: "pp-axis", x: size / 2, y: size - 6, "text-anchor": "middle", text: `${names[0]} (${num(span, 3)} cm across)` }),
+    svgEl("text", { class: "pp-axis", x: 10, y: size / 2, transform: `rotate(-90 10 ${size / 2})`, "text-anchor": "middle", text: names[1] })
+  );
+}
+
+function poseBoxes(p) {
+  const lo = p.platform_points_lo;
+  const hi = p.platform_points_hi;
+  const d = lo[0].length;
+  const views = d === 3 ? [[0, 1, ["x", "y"]], [0, 2, ["x", "z"]]] : [[0, 1, ["x", "y"]]];
+  const widest = Math.max(...lo.flatMap((l, i) => l.map((v, c) => hi[i][c] - v)));
+  const ext = Math.max(...lo[0].map((_, c) => Math.max(...hi.map((h) => h[c])) - Math.min(...lo.map((l) => l[c]))));
+  const mag = enlargement(ext, widest);
+  const drawn = mag === 1 ? "" : `, drawn ${num(mag)}× enlarged about their centres`;
+  return el(
+    "figure",
+    { class: "picture-box pose-set", "data-enlarged": mag },
+    views.map(([a, b, names]) => projection(lo, hi, a, b, names, mag)),
+    el("figcaption", { class: "muted", text: `every robot of the set: the bounds of each attachment (boxes, widest side ${num(widest, 3)} cm${drawn}) and the platform through their centres` })
+  );
 }
 
 function boxesNote(r, out) {

@@ -321,6 +321,7 @@ def format_map(res: Mapping, plot: str | None = None) -> str:
         + (f" at ({s['argmax'][0]:g}, {s['argmax'][1]:g})" if s["argmax"] else ""),
         f"  {s['time']:.3f} s ({1e6 * s['time'] / max(s['poses'], 1):.2f} us per pose)",
     ]
+    lines.extend(f"  note: {note}" for note in res.get("notes", []))
     if plot:
         lines.append(f"  wrote {plot}")
     return "\n".join(lines)

@@ -140,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
         "solve": "newton" if args.newton else "tau",
         "check_lp": method == "tension",  # the table shows the closed form against the LP
     }
-    params = validated(IkParams, args, values, robot=spec)  # the ik job's checks
+    params = validated(IkParams, args, values, robot=spec, option={"solve": "newton"})
     result = run_ik(params, spec, RunContext())
     if args.json:
         print_json(result.to_dict())
@@ -213,8 +213,25 @@ def format_result(res: IKResult, robot: Robot) -> str:
             f"search: {details['boxes']} box(es), {details['rounds']} round(s), "
             f"parametric wire(s) {details.get('parametric_wires')}"
         )
+    if "set" in details:
+        lines.extend(_set_rows(details["set"]))
     lines.extend(f"note: {m}" for m in res.messages)
     return "\n".join(lines)
+
+
+def _set_rows(s: dict) -> list[str]:
+    """The bounds over a robot set (:mod:`certsolve.kinematics.ik_tolerance`), one row a wire."""
+    fixed = ", ".join(f"{w}" for w in s["fixed_wires"]) or "none"
+    out = [
+        f"every robot of the set: {s['fixed']} of wire(s) {fixed} fixed; proven tension "
+        f"margin {_num(s['margin_lo'], '.6g')} N",
+        f"{'wire':>4} {'tau bounds (N)':>23} {'u bounds (cm)':>25}",
+    ]
+    u_lo, u_hi = s["u_lo"], s["u_hi"]
+    for i, (a, b) in enumerate(zip(s["tau_lo"], s["tau_hi"], strict=True)):
+        u = "-" if u_lo is None else f"[{_num(u_lo[i], '.6f')}, {_num(u_hi[i], '.6f')}]"
+        out.append(f"{i + 1:>4} {f'[{a:.5f}, {b:.5f}]':>23} {u:>25}")
+    return out
 
 
 def run_sweep(args: argparse.Namespace, spec) -> int:

@@ -11,7 +11,7 @@ degenerate poses (flat polytope, or a platform point on an anchor).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 
 from ..robot import Robot
 from ..robot.geometry import rotation_2d, rotation_zyx
-from .isotropic import DEGENERATE, INSIDE, OUTSIDE, isotropic_values
+from .isotropic import DEGENERATE, INSIDE, OUTSIDE, isotropic_values, set_force_floor
 
 __all__ = ["IsotropicMap", "isotropic_map", "resolve_rotation"]
 
@@ -67,6 +67,9 @@ class IsotropicMap:
     status: np.ndarray  # (ny, nx) int8: 0 inside, 1 outside, 2 degenerate
     anchors: np.ndarray  # (m, d) base anchors
     time: float
+    #: a robot with tolerances: certified lower bounds over the set (N; NaN: not proven >= 0)
+    set_force_lo: np.ndarray | None = None
+    notes: list[str] = field(default_factory=list)
 
     @property
     def poses(self) -> int:
@@ -92,6 +95,10 @@ class IsotropicMap:
         if len(self.xs) > 1 and len(self.ys) > 1:
             cell = abs(self.xs[1] - self.xs[0]) * abs(self.ys[1] - self.ys[0])
             out["inside_area_estimate"] = float(ok.sum() * cell)
+        if self.set_force_lo is not None:
+            lo = self.set_force_lo
+            out["set_inside"] = int(np.sum(lo > 0))
+            out["set_max"] = float(np.nanmax(lo)) if np.any(np.isfinite(lo)) else None
         return out
 
     def to_dict(self, values: bool = True) -> dict:
@@ -107,9 +114,11 @@ class IsotropicMap:
             "summary": self.summary(),
         }
         if values:
-            out["isotropic_force"] = [
-                [None if not np.isfinite(t) else float(t) for t in row] for row in self.values
-            ]
+            out["isotropic_force"] = _rows(self.values)
+            if self.set_force_lo is not None:
+                out["set_force_lo"] = _rows(self.set_force_lo)
+        if self.notes:
+            out["notes"] = list(self.notes)
         return out
 
     @classmethod
@@ -137,6 +146,12 @@ class IsotropicMap:
             status=status.astype(np.int8),
             anchors=np.asarray(anchors, dtype=float),
             time=float(data.get("summary", {}).get("time") or 0.0),
+            set_force_lo=None
+            if data.get("set_force_lo") is None
+            else np.array(
+                [[np.nan if v is None else float(v) for v in row] for row in data["set_force_lo"]]
+            ).reshape(values.shape),
+            notes=list(data.get("notes", [])),
         )
 
 
@@ -174,6 +189,15 @@ def isotropic_map(
             raise ValueError(f"z: a dof-{robot.dof} robot is planar, give x and y only")
         P = np.stack([X.ravel(), Y.ravel()], axis=1)
     f, st = isotropic_values(robot, P, R, external)
+    floor, notes = None, []
+    if robot.toleranced:
+        floor = set_force_floor(robot, P, R if robot.dof != 2 else None, external)
+        notes.append(
+            "robot with tolerances: isotropic_force is the nominal robot's; set_force_lo is a "
+            f"certified lower bound over every robot of the set ({int(np.sum(floor > 0))} of "
+            f"{floor.size} points proven > 0; null: not proven)"
+        )
+        floor = floor.reshape(X.shape)
     return IsotropicMap(
         robot=robot.name,
         dof=robot.dof,
@@ -186,4 +210,11 @@ def isotropic_map(
         status=st.reshape(X.shape),
         anchors=robot.A.copy(),
         time=time.perf_counter() - t0,
+        set_force_lo=floor,
+        notes=notes,
     )
+
+
+def _rows(a: np.ndarray) -> list[list[float | None]]:
+    """A grid of values as JSON rows (None where not finite)."""
+    return [[None if not np.isfinite(t) else float(t) for t in row] for row in a]

@@ -35,6 +35,11 @@ are exact floats, so the certified point is an exact solution of the under-const
 For MARIONET the contraction is nearly exact and the root box is certified (or proved empty)
 in one round.
 
+A robot known within tolerances (``robot.toleranced``) is answered for **every robot of its
+set** by :mod:`.ik_tolerance`: a control interval per wire and the tension bounds of one
+distribution (``tension``: fixed tensions; ``alg2``: a fixed control), or the bound that
+fails, per wire, by its worst case; ``alg1`` is refused there.
+
 Certificates are proofs about the equations for the pose *as given in floating point*
 (position ``p`` and the float rotation matrix ``R``) and the robot's floats: every rounding
 error of the geometry, of eq. (6) and of the Krawczyk operator is bounded.
@@ -65,6 +70,7 @@ from .ik_result import (
     Violation,
     limit_violations,
 )
+from .ik_tolerance import check_tolerant_ik, tolerant_inverse_kinematics
 
 __all__ = [
     "IKResult",
@@ -101,13 +107,9 @@ def inverse_kinematics(robot, pose, method: str = "tension", **options) -> IKRes
     robot = as_robot(robot)
     pose = as_pose(robot.dof, pose)
     checked(IkOptions, {"pose": pose.params(robot.dof), "method": method})
-    if robot.toleranced:  # not yet over the set: say so, and answer for the nominal robot
-        res = inverse_kinematics(robot.nominal(), pose, method, **options)
-        res.messages.append(
-            "robot with tolerances: these are the nominal robot's controls (IK over the set "
-            "is not done yet); forward kinematics with them gives the pose box of the set"
-        )
-        return res
+    if robot.toleranced:  # control intervals for every robot of the set
+        check_tolerant_ik(robot, method, options.get("solve", "tau"))
+        return tolerant_inverse_kinematics(robot, pose, method, **options)
     if method == "tension":
         return ik_tension_first(robot, pose, **options)
     if method == "alg1":

@@ -53,6 +53,14 @@ class IkParams(IkOptions, Params):  # the library's options as job params
         m = len(robot.wires)
         if self.method == "alg2" and not self.fixed_wire <= m:
             raise ValueError(f"fixed_wire: the robot has wires 1..{m}")
+        if robot.tolerances:  # a set of robots (docs/tolerances.md)
+            from ...kinematics.ik_tolerance import check_tolerant_ik
+            from ...robot.geometry import Pose
+
+            model = robot_model(robot)
+            if model.toleranced:
+                pose = Pose.from_params(model.dof, self.pose)
+                check_tolerant_ik(model, self.method, self.solve, pose)
 
 
 class IkJob(Job):
