@@ -16,6 +16,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from ..lazy import surely_valid
+from ..solver.options_schema import SOLVE_OPTIONS_SCHEMA
 from ..solver.summary import MAX_LISTED
 from .common import (
     Deadline,
@@ -30,18 +31,12 @@ from .common import (
     validated,
 )
 
-#: the JSON Schema of ``SolveParams``, its validating keywords (``tests/test_cli_solve.py``
-#: keeps it equal to the model's)
+#: the JSON Schema of ``SolveParams``, its validating keywords: the library's options and
+#: the answer's sizes (``tests/test_cli_solve_options.py`` keeps it equal to the model's)
 PARAMS_SCHEMA: dict[str, Any] = {
-    "additionalProperties": False,
+    **SOLVE_OPTIONS_SCHEMA,
     "properties": {
-        "eps": {"exclusiveMinimum": 0, "maximum": 1000000000.0, "type": "number"},
-        "timeout": {"anyOf": [{"exclusiveMinimum": 0, "type": "number"}, {"type": "null"}]},
-        "max_boxes": {"anyOf": [{"minimum": 1, "type": "integer"}, {"type": "null"}]},
-        "max_solutions": {
-            "anyOf": [{"maximum": 1000000000, "minimum": 1, "type": "integer"}, {"type": "null"}]
-        },
-        "verify": {"type": "boolean"},
+        **SOLVE_OPTIONS_SCHEMA["properties"],
         "max_undecided": {"maximum": 100000, "minimum": 0, "type": "integer"},
         "max_pending": {"maximum": 100000, "minimum": 1, "type": "integer"},
         "cid_vars": {
@@ -51,7 +46,6 @@ PARAMS_SCHEMA: dict[str, Any] = {
             ]
         },
     },
-    "type": "object",
 }
 
 
