@@ -2,7 +2,8 @@
 
     python benchmarks/ibex_bench.py DIR [--timeout 30] [--runs 3] [--eps 1e-8]
         [--solvers certsolve,ibexsolve] [--ibexsolve PATH] [--workers N] [--cid-vars auto]
-        [--only REGEX] [--results DIR] [--markdown docs/ibex-benchs.md] [--csv OUT]
+        [--only REGEX] [--both-complete DIR] [--results DIR] [--markdown docs/ibex-benchs.md]
+        [--csv OUT]
 
 Every ``.bch`` / ``.mbx`` file under ``DIR`` (recursively) is first read by the Minibex parser
 in this process: it parses (its variables ``n`` and equations ``m`` are noted; ``m != n`` is
@@ -364,6 +365,22 @@ def save_store(path: Path, store: dict[str, list[dict]]) -> None:
     os.replace(tmp, path)
 
 
+def both_complete(args: argparse.Namespace) -> set[str]:
+    """The files whose last stored run in ``--both-complete`` is complete for both solvers."""
+    where = argparse.Namespace(**{**vars(args), "results": args.both_complete})
+    done = [
+        {
+            f
+            for f, runs in load_store(store_path(where, s)).items()
+            if runs[-1]["status"] == "complete"
+        }
+        for s in SOLVERS
+    ]
+    if not any(done):
+        raise SystemExit(f"--both-complete: no stored runs in {args.both_complete}")
+    return set.intersection(*done)
+
+
 def summary_of(runs: list[Run]) -> Run:
     """The last run's counts with the median wall and CPU times of all."""
     last = runs[-1]
@@ -484,6 +501,9 @@ def main() -> None:
     ap.add_argument("--solvers", default="certsolve,ibexsolve", help="which to run, or 'none'")
     ap.add_argument("--ibexsolve", type=Path, default=IBEXSOLVE, help="the ibexsolve binary")
     ap.add_argument("--only", default="", help="run only files whose path matches this regex")
+    ap.add_argument("--both-complete", type=Path, default=None, metavar="DIR",
+                    help="run only files both solvers complete in the runs stored in DIR "
+                    "(same --timeout and --eps): the subset of the time ratio")  # fmt: skip
     ap.add_argument("--results", type=Path, default=Path("ibex-bench-results"),
                     help="directory of stored runs (resumed)")  # fmt: skip
     ap.add_argument("--markdown", type=Path, default=None, help="write the table here")
@@ -497,6 +517,7 @@ def main() -> None:
             ap.error(f"--solvers: unknown solver {s!r} (certsolve, ibexsolve or none)")
     args.results.mkdir(parents=True, exist_ok=True)
     only = re.compile(args.only)
+    keep = None if args.both_complete is None else both_complete(args)
     files = sorted(p for p in args.dir.rglob("*") if p.suffix in (".bch", ".mbx"))
     stores = {s: load_store(store_path(args, s)) for s in SOLVERS}
     rows = []
@@ -504,8 +525,9 @@ def main() -> None:
         rel = path.relative_to(args.dir).as_posix()
         row = Row(path=rel, parsed=parse_file(path))
         rows.append(row)
+        chosen = bool(only.search(rel)) and (keep is None or rel in keep)
         for s in solvers:
-            if not only.search(rel):
+            if not chosen:
                 continue
             runs = [Run(**r) for r in stores[s].get(rel, [])]
             while len(runs) < args.runs and all(
@@ -520,7 +542,7 @@ def main() -> None:
             c = _cell(summary_of(runs))
             print(f"{rel:44s} {s:9s} {' '.join(c)}", flush=True)
         for s in SOLVERS:
-            if only.search(rel) and stores[s].get(rel):
+            if chosen and stores[s].get(rel):
                 row.runs[s] = [Run(**r) for r in stores[s][rel]]
     argv = sys.argv[1:]
     if "--solvers" in argv:  # the table is of both solvers, whichever this call ran

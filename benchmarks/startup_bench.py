@@ -16,7 +16,8 @@ the caches), since without them every run compiles certsolve's ~100 modules agai
 0.08 s of CPU more for ``solve``); ``--no-bytecode`` keeps the variable as it is set.  Two
 floors are printed beside: ``import numpy``, and numpy with pydantic's first model (the
 shared validation of the command line's options is pydantic's; its first model imports
-pydantic's schema machinery, ~0.07 s of CPU).
+pydantic's schema machinery, ~0.07 s of CPU).  ``solve`` does not pay the second when its
+options are surely valid (:func:`certsolve.lazy.surely_valid`): its floor is ``import numpy``.
 
 Usage::
 

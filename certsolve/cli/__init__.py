@@ -30,7 +30,6 @@ import time
 _STARTED = time.monotonic()  # before the command imports numpy & co.: time limits count it
 
 import argparse  # noqa: E402
-import difflib  # noqa: E402
 import importlib  # noqa: E402
 import re  # noqa: E402
 import sys  # noqa: E402
@@ -117,6 +116,8 @@ class _Formatter(argparse.HelpFormatter):
 
 def _did_you_mean(word: str, choices: Iterable[str]) -> str:
     """`` (did you mean --tau-max?)`` for the closest choice (difflib), else ``""``."""
+    import difflib  # (an error's hint: not on the way of a run)
+
     close = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
     return f" (did you mean {close[0]}?)" if close else ""
 

@@ -1,4 +1,13 @@
-"""``certsolve solve FILE``: all solutions of a Minibex system, certified."""
+"""``certsolve solve FILE``: all solutions of a Minibex system, certified.
+
+The options are the ``solve`` job's params (:class:`~certsolve.jobs.kinds.solve.
+SolveParams`), refused as the job refuses them.  The model is imported (with pydantic and
+the job kinds: ~0.08 s of CPU, a third of the start-up) only when :data:`PARAMS_SCHEMA`
+does not surely accept them (:func:`certsolve.lazy.surely_valid`); otherwise they are the
+model's own values.  The search is the job's operation, :func:`~certsolve.jobs.kinds.solve.
+run_solve`: the same call of :func:`certsolve.solve` (``tests/test_cli_solve.py`` checks
+both give it the same arguments).
+"""
 
 from __future__ import annotations
 
@@ -6,6 +15,8 @@ import argparse
 from collections.abc import Callable, Mapping
 from typing import Any
 
+from ..lazy import surely_valid
+from ..solver.options_schema import SOLVE_OPTIONS_SCHEMA
 from ..solver.summary import MAX_LISTED
 from .common import (
     Deadline,
@@ -19,6 +30,23 @@ from .common import (
     progress_reporter,
     validated,
 )
+
+#: the JSON Schema of ``SolveParams``, its validating keywords: the library's options and
+#: the answer's sizes (``tests/test_cli_solve_options.py`` keeps it equal to the model's)
+PARAMS_SCHEMA: dict[str, Any] = {
+    **SOLVE_OPTIONS_SCHEMA,
+    "properties": {
+        **SOLVE_OPTIONS_SCHEMA["properties"],
+        "max_undecided": {"maximum": 100000, "minimum": 0, "type": "integer"},
+        "max_pending": {"maximum": 100000, "minimum": 1, "type": "integer"},
+        "cid_vars": {
+            "anyOf": [
+                {"maximum": 100, "minimum": 1, "type": "integer"},
+                {"enum": ["all", "auto"], "type": "string"},
+            ]
+        },
+    },
+}
 
 
 def register(sub) -> None:
@@ -75,14 +103,26 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
+def params_of(args: argparse.Namespace) -> dict[str, Any]:
+    """The ``solve`` job's params from the options, as a dict: as given when
+    :data:`PARAMS_SCHEMA` surely accepts them (each option's default is the model's),
+    else validated by ``SolveParams`` (a refusal raises the :class:`CliError` naming the
+    option)."""
+    given = {k: getattr(args, k) for k in PARAMS_SCHEMA["properties"]}
+    if surely_valid(PARAMS_SCHEMA, given):
+        return given
+    from ..jobs.kinds.solve import SolveParams
+
+    return validated(SolveParams, args).model_dump()
+
+
 def run(args: argparse.Namespace) -> int:
     from ..expr.minibex import load_minibex
-    from ..jobs.kinds.base import RunContext
-    from ..jobs.kinds.solve import SolveParams, run_solve
+    from ..solver.branch_and_prune import solve
 
-    params = validated(SolveParams, args)  # the solve job's own checks (eps, timeout, ...)
+    params = params_of(args)  # the solve job's own checks (eps, timeout, ...)
     executor = executor_from_args(args)
-    deadline = Deadline(params.timeout, args.started)
+    deadline = Deadline(params["timeout"], args.started)
     system = load_minibex(args.file)
     show, stop = progress_reporter(not (args.json or args.stream))
     if args.stream:
@@ -90,15 +130,21 @@ def run(args: argparse.Namespace) -> int:
     saving = checkpointing(args, "solve")
     try:
         with saving as (checkpoint, cancel):
-            ctx = RunContext(
-                time_limit=deadline.solver_timeout(),
-                max_boxes=params.max_boxes,
-                progress=deadline.progress(show),
-                checkpoint=checkpoint,
+            result = solve(  # as the solve job's operation, run_solve, calls it
+                system,
+                eps=params["eps"],
+                timeout=deadline.solver_timeout(),
+                max_boxes=params["max_boxes"],
                 executor=executor,
                 cancel=cancel,
+                verify=params["verify"],
+                progress=deadline.progress(show),
+                max_solutions=params["max_solutions"],
+                max_undecided=params["max_undecided"],
+                max_pending=params["max_pending"],
+                cid_vars=None if params["cid_vars"] == "all" else params["cid_vars"],
+                checkpoint=checkpoint,
             )
-            result = run_solve(params, system, ctx)  # the solve job's operation
             saving.status = str(result.status)
     finally:
         stop()

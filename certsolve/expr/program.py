@@ -170,7 +170,7 @@ class Program:
             else:
                 param = None
             kids = a if b is None else np.concatenate([a, b])
-            unique = len(np.unique(kids)) == len(kids)
+            unique = len(set(kids.tolist())) == len(kids)  # (np.unique imports numpy.ma)
             la = () if unique else _layers(a)
             lb = () if unique or b is None else _layers(b)
             start = local[members[0]]

@@ -57,7 +57,7 @@ from ..expr.minibex import load_system
 from ..expr.node import to_string
 from ..expr.polynomial import reduce_degree as lower_degree
 from ..expr.system import System
-from ..inputs import InputError, checked
+from ..lazy import surely_valid
 from .batch import Batch, Contractor, progress_gain
 from .batching import BatchSizer
 from .bisectors import SmearCurvatureMix, domain_scale, split
@@ -66,7 +66,7 @@ from .certify import Certifier, SolutionSet
 from .checkpoint import Checkpoint
 from .executors import resolve_executor
 from .nonsquare import ManifoldPaver, overdetermined
-from .options import SolveOptions
+from .options_schema import SOLVE_OPTIONS_SCHEMA
 from .pipeline import default_pipeline, parts_of
 from .result import Certificate, Solution, SolveResult, Stats, Undecided
 from .search import Limits, Progress, SearchRun, SearchStatus, Tally, run_search
@@ -643,17 +643,21 @@ def solve(
     naming it."""
     if not isinstance(system, System):
         system = load_system(system)
-    checked(
-        SolveOptions,
-        {
-            "eps": eps,
-            "timeout": timeout,
-            "max_boxes": max_boxes,
-            "max_solutions": max_solutions,
-            "verify": verify,
-        },
-    )
+    given = {
+        "eps": eps,
+        "timeout": timeout,
+        "max_boxes": max_boxes,
+        "max_solutions": max_solutions,
+        "verify": verify,
+    }
+    if not surely_valid(SOLVE_OPTIONS_SCHEMA, given):  # the model, with pydantic, only then
+        from ..inputs import checked
+        from .options import SolveOptions
+
+        checked(SolveOptions, given)
     if len(system.equations) < system.n:  # under-determined: pave the solution set
+        from ..inputs import InputError
+
         if not system.equations:
             raise InputError("system", "no equations (inequalities alone are not solved)")
         if verify:

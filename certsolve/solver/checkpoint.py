@@ -49,12 +49,10 @@ Every search that checkpoints runs on the driver, the certified design
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import importlib
 import io
 import json
 import os
-import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -205,6 +203,8 @@ def decode(data: Any, arrays: list[np.ndarray]) -> Any:
 # -- fingerprint -----------------------------------------------------------------------------
 def fingerprint(step: Step, lo: np.ndarray | None, hi: np.ndarray | None, key: str = "") -> str:
     """SHA-256 of what defines the search (module docstring), hex."""
+    import hashlib  # (OpenSSL: ~5 ms of start-up a solve without checkpoint need not pay)
+
     h = hashlib.sha256()
     h.update(f"{type(step).__module__}.{type(step).__qualname__}\n".encode())
     describe = getattr(step, "fingerprint", None)
@@ -377,6 +377,8 @@ def unpack(data: bytes, fingerprint: str | None) -> Any:
 
 def write_atomic(path: Path, data: bytes) -> None:
     """Replace ``path`` with ``data``: a temporary file next to it, flushed to disk, renamed."""
+    import tempfile
+
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
     try:

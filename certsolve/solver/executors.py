@@ -39,7 +39,6 @@ from __future__ import annotations
 import os
 import pickle
 from collections import deque
-from concurrent.futures import FIRST_COMPLETED, wait
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -146,6 +145,7 @@ class _ProcessPool(TaskPool):
         self._start()
 
     def next_done(self):
+        from concurrent.futures import FIRST_COMPLETED, wait  # (not on a serial run)
         from concurrent.futures.process import BrokenProcessPool
 
         if not self._ready:

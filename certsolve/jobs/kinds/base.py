@@ -6,7 +6,9 @@ preconditions that need the robot, no heavy building) and ``run(params, input, c
 which imports its library function with a normal import and calls it with exactly the
 options it takes (``tests/test_jobs_kinds.py`` binds every call to the function's
 signature: an option the function lacks is a test failure, never a silent drop).  The
-worker, the quick calls, ``certsolve batch`` and the command line all call ``run``.
+worker, the quick calls, ``certsolve batch`` and the command line all call ``run``
+(``certsolve solve`` makes ``run_solve``'s call itself, without importing the kinds, for
+its start-up: ``tests/test_cli_solve_options.py`` compares the two calls).
 
 Requests are pydantic models with ``extra="forbid"`` and no NaN / Infinity; every bound
 the validation enforces on a single value (finite, range, length) is written as a
