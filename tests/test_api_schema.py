@@ -112,6 +112,8 @@ def _repair_params(kind: str, robot: dict | None, params: dict) -> None:
     if kind == "trajectory":
         params["controls"] = [(list(row) + [0.0] * m)[:m] for row in params["controls"]]
         params.pop("formulation", None)  # as fk's
+    if kind == "ik" and robot and m != robot["dof"] + 1:  # closed form: m = w + 1 wires
+        params.pop("distribution", None)
     if kind == "ik" and m:
         if params.get("u_last") is not None:
             params["u_last"] = (list(params["u_last"]) + [0.0] * m)[:m]

@@ -421,3 +421,17 @@ def test_algorithm2_reused_matches_the_one_off_call():
     assert exc.value.field.startswith("pose")
     with pytest.raises(ValueError, match="box_radius"):
         Algorithm2(robot, box_radius=0.0)
+
+
+def test_closed_form_on_a_robot_without_one_more_wire_is_refused_at_distribution():
+    """``distribution="closed-form"`` needs ``m = w + 1`` wires: with 5 wires on a planar
+    robot (w = 3) the refusal names the option, as the API's 422 and the CLI's error do."""
+    from certsolve.inputs import InputError
+
+    spec = json.loads((Path(__file__).parents[1] / "examples/robots/planar.json").read_text())
+    spec["wires"].append(dict(spec["wires"][0], base=[5.0, 95.0]))
+    robot = Robot.load(spec)
+    with pytest.raises(InputError, match="one-dimensional null space") as err:
+        inverse_kinematics(robot, [100, 60, 0], method="tension", distribution="closed-form")
+    assert err.value.field == "distribution"
+    assert inverse_kinematics(robot, [100, 60, 0], method="tension").feasible is not None

@@ -152,7 +152,9 @@ def router(job_request: Any, kinds: Sequence[str]) -> APIRouter:
         service: Service,
         caller: Caller,
         status: JobStatus | None = None,
-        kind: Annotated[str | None, Query(max_length=32)] = None,
+        kind: Annotated[
+            str | None, Query(max_length=32, json_schema_extra={"enum": list(kinds)})
+        ] = None,
         batch: Annotated[str | None, Query(max_length=64)] = None,
         limit: Annotated[int, Query(ge=1, le=500)] = 50,
         cursor: Annotated[str | None, Query(pattern=r"^[0-9]{1,18}$")] = None,

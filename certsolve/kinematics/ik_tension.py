@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..inputs import InputError
 from ..robot.statics import max_margin_tensions
 
 __all__ = ["TensionChoice", "closed_form", "distribute_tensions", "margin_of"]
@@ -157,9 +158,10 @@ def distribute_tensions(
             }
         return out
     if mode == "closed-form":
-        raise ValueError(
+        raise InputError(
+            "distribution",
             f"closed-form tensions need a one-dimensional null space (m = w + 1 = {w + 1} "
-            f"wires, rank {w}); this pose has {m} wires and rank {rank}"
+            f"wires, rank {w}); this pose has {m} wires and rank {rank}",
         )
     if rank == w and null_dim >= 1:
         lp = max_margin_tensions(H, wg, tau_min, tau_max)
