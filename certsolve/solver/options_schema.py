@@ -3,7 +3,7 @@
 :func:`~certsolve.solver.branch_and_prune.solve` checks its options against it with
 :func:`certsolve.lazy.surely_valid`, which needs no pydantic: the model (imported with
 pydantic, ~0.07 s of CPU) validates only a value the schema does not surely accept, and
-its message is the one the caller reads.  ``tests/test_solver_options_schema.py`` keeps
+its message is the one the caller reads.  ``tests/test_cli_solve_options.py`` keeps
 this copy equal to the model's ``model_json_schema()`` without titles, descriptions and
 defaults.
 """
