@@ -81,3 +81,21 @@ def test_command_help_shows_defaults(capsys):
         main(["fk", "--help"])
     out = capsys.readouterr().out
     assert "--tau-max" in out and "--half-width" in out and "(default: 1e-08)" in out
+
+
+@pytest.mark.parametrize("given", [None, "3"])
+def test_the_command_runs_with_one_blas_thread_unless_the_user_sets_it(monkeypatch, capsys, given):
+    """``main()`` as the process's command sets ``OPENBLAS_NUM_THREADS`` to
+    :data:`certsolve.cli.BLAS_THREADS` before a command imports numpy, and keeps a user's."""
+    import os
+
+    from certsolve import cli
+
+    if given is None:
+        monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
+    else:
+        monkeypatch.setenv("OPENBLAS_NUM_THREADS", given)
+    monkeypatch.setattr("sys.argv", ["certsolve", "schema", "robot"])
+    assert cli.main() == 0
+    assert os.environ["OPENBLAS_NUM_THREADS"] == (given or cli.BLAS_THREADS)
+    assert capsys.readouterr().out.lstrip().startswith("{")
