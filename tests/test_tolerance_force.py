@@ -5,11 +5,9 @@ import json
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from certsolve.force.certified import certified_workspace
 from certsolve.force.isotropic import isotropic_force
-from certsolve.inputs import InputError
 from certsolve.robot import Robot
 
 ROBOTS = Path(__file__).resolve().parent.parent / "examples" / "robots"
@@ -49,12 +47,104 @@ def test_zero_tolerance_is_the_nominal_paving():
     assert np.array_equal(a.inside, b.inside) and np.array_equal(a.boundary, b.boundary)
 
 
-def test_a_toleranced_mass_is_refused_by_name():
+WEIGHT = [
+    {"path": "platform.mass", "plus_minus": 0.002},
+    {"path": "platform.center_of_mass[*]", "plus_minus": 0.5},
+]
+
+
+def _t16(extra):
     data = json.loads((ROBOTS / "marionet-t-tol.json").read_text())
-    data["tolerances"].append({"path": "platform.mass", "plus_minus": 0.001})
-    with pytest.raises(InputError) as err:
-        certified_workspace(Robot.load(data), 1.0, [100, 110, 50, 60, 100, 110], 5.0)
-    assert err.value.field == "robot.tolerances"
+    data["tolerances"] += extra
+    return Robot.load(data)
+
+
+def test_the_weight_box_has_its_corners():
+    from certsolve.robot.params import RobotBounds
+
+    exact = RobotBounds.of_tolerances(_t16([]))
+    masses, coms = exact.weight_corners()
+    assert masses.tolist() == [0.02] and coms.tolist() == [[0.0, 0.0, 0.0]]
+    both = RobotBounds.of_tolerances(_t16(WEIGHT))
+    masses, coms = both.weight_corners()
+    assert masses.shape == (16,) and coms.shape == (16, 3)
+    assert (
+        set(masses) == {both.mass[0], both.mass[1]}
+        and both.mass[0] <= 0.018 < 0.022 <= both.mass[1]
+    )
+    assert len({tuple(c) for c in coms}) == 8 and np.all(np.abs(coms) >= 0.5)
+
+
+def test_the_force_at_a_pose_holds_for_every_mass_and_centre_of_mass():
+    """A toleranced mass and centre of mass (the weight's wrench; planar robots have none):
+    the set's certified bound is at most the force of every robot drawn from the set
+    (corners and random draws, each an exact robot), and close to the least of them."""
+    robot = _t16(WEIGHT)
+    rng = np.random.default_rng(7)
+    drawn = [robot.draw(rng, corner=i % 2 == 0) for i in range(12)]
+    for pose in ([115, 60, 118, 0, 0, 0], [112, 63, 110, 4, -3, 2]):
+        res = isotropic_force(robot, pose)
+        least = min(isotropic_force(r, pose).isotropic_force for r in drawn)
+        assert res.set_force_lo is not None and 0.9 * least < res.set_force_lo <= least
+
+
+def test_the_map_bound_holds_for_every_mass_and_centre_of_mass():
+    from certsolve.force.isotropic import set_force_floor
+
+    robot = _t16(WEIGHT)
+    positions = np.array([[115, 60, 118], [105, 55, 110], [125, 65, 112], [110, 70, 120]])
+    floor = set_force_floor(robot, positions)
+    rng = np.random.default_rng(8)
+    drawn = [robot.draw(rng, corner=i % 2 == 0) for i in range(10)]
+    least = np.min(
+        [
+            [isotropic_force(r, list(p) + [0, 0, 0]).isotropic_force for p in positions]
+            for r in drawn
+        ],
+        axis=0,
+    )
+    assert np.all(np.isfinite(floor)) and np.all(floor <= least) and np.all(floor > 0.8 * least)
+    # the weight's box costs force: the floor with an exact mass and centre of mass is higher
+    assert np.all(set_force_floor(_t16([]), positions) > floor)
+
+
+def test_a_workspace_good_for_the_set_is_good_for_its_robots():
+    robot = _t16(WEIGHT)
+    box = [100, 130, 45, 75, 100, 130]
+    ws = certified_workspace(robot, 5.0, box, 5.0)
+    nominal = certified_workspace(robot.nominal(), 5.0, box, 5.0)
+    assert ws.status == "complete" and len(ws.inside)
+    assert ws.inside_share < nominal.inside_share
+    rng = np.random.default_rng(9)
+    robots = [robot.draw(rng, corner=i % 2 == 0) for i in range(6)]
+    boxes = ws.inside[rng.choice(len(ws.inside), size=min(12, len(ws.inside)), replace=False)]
+    for b in boxes:
+        p = b[:3, 0] + rng.random(3) * (b[:3, 1] - b[:3, 0])
+        for r in robots:
+            f = isotropic_force(r, list(p) + [0, 0, 0]).isotropic_force
+            assert f is not None and f >= 5.0 * (1 - 1e-9)
+
+
+def test_a_zero_tolerance_on_the_weight_gives_the_exact_bits():
+    """``platform.mass`` and ``platform.center_of_mass`` at ``plus_minus: 0`` give the
+    enclosures of the robot without them, bit for bit (one corner: the nominal weight)."""
+    from certsolve.force.enclosure import slack_enclosures
+    from certsolve.robot.params import RobotBounds
+
+    zero = [{**t, "plus_minus": 0.0} for t in WEIGHT]
+    a, b = _t16([]), _t16(zero)
+    rng = np.random.default_rng(10)
+    p = np.array([[115.0], [60.0], [118.0]]) + rng.uniform(-8, 8, (3, 24))
+    ang = rng.uniform(-4, 4, (3, 24))
+    for prm in (RobotBounds.of_tolerances, RobotBounds.point):
+        ga = slack_enclosures(a, p - 1, p + 1, 2.0, None, ang, ang + 1, params=prm(a), norms=True)
+        gb = slack_enclosures(b, p - 1, p + 1, 2.0, None, ang, ang + 1, params=prm(b), norms=True)
+        for x, y in zip(ga, gb, strict=True):
+            assert np.array_equal(x, y)
+    box = [105, 125, 50, 70, 105, 125]
+    wa, wb = certified_workspace(a, 5.0, box, 5.0), certified_workspace(b, 5.0, box, 5.0)
+    assert len(wa.inside) and len(wa.boundary)
+    assert np.array_equal(wa.inside, wb.inside) and np.array_equal(wa.boundary, wb.boundary)
 
 
 def test_isotropic_force_at_a_pose_holds_for_the_set():

@@ -33,7 +33,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..inputs import InputError
 from ..robot import Robot
 from ..robot.params import RobotBounds
 from ..solver.buffer import BoxStack
@@ -332,17 +331,12 @@ class PavingStep:
 
 def set_bounds(robot: Robot) -> RobotBounds | None:
     """The interval arrays of a robot with tolerances (:meth:`.RobotBounds.of_tolerances`),
-    None for an exact robot.  The force index reads the anchors, the attachments and the
-    tension limits; a toleranced mass or centre of mass (the weight's wrench) is refused
-    by name, ``k``, ``K``, ``V``, ``L0`` do not enter it."""
+    None for an exact robot.  The force index reads the anchors, the attachments, the
+    tension limits and the weight's wrench (the mass and the centre of mass: the slacks
+    are taken at the corners of their box, :func:`.enclosure.slack_enclosures`); ``k``,
+    ``K``, ``V``, ``L0`` do not enter it."""
     if not robot.toleranced:
         return None
-    b = robot.bounds()
-    if b.mass[0] != b.mass[1] or not np.all(b.exact("com")):
-        raise InputError(
-            "robot.tolerances",
-            "the force index within tolerances takes an exact mass and centre of mass",
-        )
     return RobotBounds.of_tolerances(robot)
 
 

@@ -39,6 +39,17 @@ derivatives of the affine arrays (:func:`_column_slopes`; ``φ`` with slopes in 
 limits, :func:`~.meanvalue.phi_mv`), so coordinates moved together by one parameter stay
 correlated to first order.
 
+**Interval mass and centre of mass.**  ``params.mass`` and ``params.com`` (a robot with
+tolerances) enter only the weight's wrench ``w_g = (m g, (R c) × (m g))``, which is
+multilinear in ``(m, c)``, and every ``g`` is affine in ``w_ext``: over the box of ``(m, c)``,
+``g`` lies between its least and greatest values at the box's corners (``g(m, c)`` is a
+convex combination of them, with the multilinear interpolation weights).  So the slacks are
+enclosed for each corner robot -- each an exact weight, in the slope form above -- and the
+result is their hull (rigid platforms: the corners are one more axis of the batch of
+``c_k·w``, :func:`_weight_mv`; the rest is shared).  A point platform has no centre of mass,
+and its ``m g`` is a plain interval product.  An exact weight is one corner, the nominal
+one: the same floats as before.
+
 **Point platform (dof 2).**  ``c_j = (a_jy, -a_jx)`` and
 ``c_j·ĥ_i = -cross(A_j - p, A_i - p) = -(cross(A_j, A_i) + cross(A_i - A_j, p))``, linear in
 ``p``: its interval is exact up to rounding.
@@ -308,11 +319,12 @@ def _column_slopes(robot: Robot, e, b, R, dR, prm: RobotBounds) -> list:
     return out
 
 
-def _weight_wrench(robot: Robot, B: int, external):
-    """dof 2: enclosure of ``w_ext`` = weight (+ ``external``), shape ``(2, B)``."""
+def _weight_wrench(robot: Robot, B: int, external, prm: RobotBounds):
+    """dof 2: enclosure of ``w_ext`` = weight (+ ``external``), shape ``(2, B)``: the
+    interval of the mass (``prm.mass``) times ``g``."""
     d = robot.dim
-    mass = np.full(d, robot.mass)
-    flo, fhi = arith.mul(mass, mass, robot.gravity, robot.gravity)  # weight = mass * g
+    mlo, mhi = np.full(d, prm.mass[0]), np.full(d, prm.mass[1])
+    flo, fhi = arith.mul(mlo, mhi, robot.gravity, robot.gravity)  # weight = mass * g
     wlo = np.broadcast_to(flo[:, None], (d, B))
     whi = np.broadcast_to(fhi[:, None], (d, B))
     if external is not None:
@@ -383,29 +395,36 @@ def _parts_point(robot: Robot, plo, phi, prm: RobotBounds):
     return subsets, rho, D, c, cf
 
 
-def _weight_mv(robot: Robot, R, Rmid, dR, nd: int, B: int, external) -> MV:
-    """``w_ext`` ``(w, B)`` as a slope triple (it depends on the angles through ``R com``)."""
+def _weight_mv(robot: Robot, R, Rmid, dR, nd: int, B: int, external, prm: RobotBounds) -> MV:
+    """``w_ext`` ``(w, V, B)`` as a slope triple (it depends on the angles through ``R com``),
+    one per corner ``v`` of the box of the mass and the centre of mass
+    (:meth:`.RobotBounds.weight_corners`; ``V = 1`` for an exact weight): each is the exact
+    robot's triple, ``w_v = (m_v g, (R c_v) × (m_v g))``."""
     d = robot.dim
-    mass = np.full(d, robot.mass)
-    flo, fhi = arith.mul(mass, mass, robot.gravity, robot.gravity)  # weight = mass * g
-    f = MV.const(np.broadcast_to(flo[:, None], (d, B)), np.broadcast_to(fhi[:, None], (d, B)), nd)
-    com = robot.com[None, :]
-    gm = _matvec_point(Rmid, com)
-    gx = _matvec_point(R, com)
-    z = np.zeros((1, d, B))
-    gs = [(z, z)] * d + [_matvec_point(dRj, com) for dRj in dR]
+    masses, coms = prm.weight_corners()  # (V,), (V, d)
+    V = masses.shape[0]
+    mass = np.broadcast_to(masses, (d, V))
+    g = np.broadcast_to(robot.gravity[:, None], (d, V))
+    flo, fhi = arith.mul(mass, mass, g, g)  # weight = mass * g
+    f = MV.const(
+        np.broadcast_to(flo[..., None], (d, V, B)), np.broadcast_to(fhi[..., None], (d, V, B)), nd
+    )
+    gm = _matvec_point(Rmid, coms)
+    gx = _matvec_point(R, coms)
+    z = np.zeros((V, d, B))
+    gs = [(z, z)] * d + [_matvec_point(dRj, coms) for dRj in dR]
     gs += [(z, z)] * (nd - len(gs))  # the design parameters do not move the weight
-    g = MV(gm, gx, gs).apply(lambda t: t[0])  # (d, B)
+    rc = MV(gm, gx, gs).apply(lambda t: np.moveaxis(t, 0, 1))  # (d, V, B)
 
     def comp(u, i):
         return u.apply(lambda t: t[i])
 
     if robot.dof == 3:
-        mom = comp(g, 0) * comp(f, 1) - comp(g, 1) * comp(f, 0)
+        mom = comp(rc, 0) * comp(f, 1) - comp(rc, 1) * comp(f, 0)
         moms = [mom]
     else:
         moms = [
-            comp(g, i) * comp(f, j) - comp(g, j) * comp(f, i) for i, j in ((1, 2), (2, 0), (0, 1))
+            comp(rc, i) * comp(f, j) - comp(rc, j) * comp(f, i) for i, j in ((1, 2), (2, 0), (0, 1))
         ]
     parts = [comp(f, i) for i in range(d)] + moms
     out = MV(
@@ -417,10 +436,8 @@ def _weight_mv(robot: Robot, R, Rmid, dR, nd: int, B: int, external) -> MV:
         ],
     )
     if external is not None:
-        ex = np.asarray(external, dtype=float)[:, None]
-        out = out + MV.const(
-            np.broadcast_to(ex, (len(ex), B)), np.broadcast_to(ex, (len(ex), B)), nd
-        )
+        ex = np.broadcast_to(np.asarray(external, dtype=float)[:, None, None], (len(parts), V, B))
+        out = out + MV.const(ex, ex, nd)
     return out
 
 
@@ -510,7 +527,7 @@ def _rigid(robot: Robot, plo, phi, f_req, external, alo, ahi, rotation, prm: Rob
     rho = sq.sqrt()  # (m, B)
     rho = rho.tighten(radii)
     wires_ok = np.all(rho.x[0] > 0.0, axis=0)
-    wext = _weight_mv(robot, R, Rmid, dR, nd, B, external)  # (w, B)
+    wext = _weight_mv(robot, R, Rmid, dR, nd, B, external, prm)  # (w, V, B)
 
     # basis per box: the one whose inverse is proven with the smallest β over the box
     bases = list(combinations(range(m), w))
@@ -573,7 +590,7 @@ def _rigid_basis(robot: Robot, b0, h: MV, rho: MV, wext: MV, radii, f_req, nf, p
     # leading batch for the matrix algebra
     hb = h.apply(lambda t: np.transpose(t[:, list(b0)], (2, 0, 1)))  # (B, w, w)
     hn = h.apply(lambda t: np.transpose(t[:, nn], (2, 0, 1)))  # (B, w, e)
-    wv = wext.apply(lambda t: t.T[:, :, None])  # (B, w, 1)
+    wv = wext.apply(lambda t: np.transpose(t, (2, 0, 1)))  # (B, w, V)
     Pm = mr_from_bounds(*hb.m)[0]
     P = np.linalg.inv(np.where(np.isfinite(Pm), Pm, 0.0) + 0.0)
     GX = _BasisInverse(P, hb.x)
@@ -605,7 +622,7 @@ def _rigid_basis(robot: Robot, b0, h: MV, rho: MV, wext: MV, radii, f_req, nf, p
     Gf = MV(gm, gx, gs).tighten(rad3)  # rows of G, force columns: (B, w, nf)
     # batch last again
     y = y.apply(lambda t: np.transpose(t, (1, 2, 0)))  # (w, e, B)
-    z = z.apply(lambda t: t[:, :, 0].T)  # (w, B)
+    z = z.apply(lambda t: np.transpose(t, (1, 2, 0)))  # (w, V, B)
     Gf = Gf.apply(lambda t: np.transpose(t, (1, 2, 0)))  # (w, nf, B)
     nd = len(radii)
     gp_lo, gp_hi, gm_lo, gm_hi, n_hi = [], [], [], [], []
@@ -640,9 +657,9 @@ def _rigid_basis(robot: Robot, b0, h: MV, rho: MV, wext: MV, radii, f_req, nf, p
         w_terms, f_terms = [], []
         for f in range(t + 1):
             lf = lam.take(f)  # (Kt, B)
-            w_terms.append(lf * z.take(F[:, f]))
+            w_terms.append(lf.take((slice(None), None)) * z.take(F[:, f]))
             f_terms.append(lf.take(None) * Gf.take(F[:, f]).apply(lambda a: np.moveaxis(a, 1, 0)))
-        cw = mv_sum(w_terms)
+        cw = mv_sum(w_terms)  # (Kt, V, B): one per corner of the weight's box
         cf = mv_sum(f_terms)  # (nf, Kt, B)
         cf = cf.tighten(radii)
         n2 = cf.apply(lambda a: a[0]).sqr()
@@ -651,12 +668,15 @@ def _rigid_basis(robot: Robot, b0, h: MV, rho: MV, wext: MV, radii, f_req, nf, p
         nrm = n2.sqrt()
         n_hi.append(nrm.enclose(radii)[1])
         fr = nrm.scale(float(f_req))
-        gp = (Np + cw - fr).enclose(radii)
-        gn = (Nm - cw - fr).enclose(radii)
-        gp_lo.append(gp[0])
-        gp_hi.append(gp[1])
-        gm_lo.append(gn[0])
-        gm_hi.append(gn[1])
+        Np_v, Nm_v, fr_v = (u.take((slice(None), None)) for u in (Np, Nm, fr))
+        # g is linear in w_ext, which is multilinear in the mass and the centre of mass: over
+        # their box it lies between its values at the corners
+        gp = (Np_v + cw - fr_v).enclose(radii)
+        gn = (Nm_v - cw - fr_v).enclose(radii)
+        gp_lo.append(np.min(gp[0], axis=1))
+        gp_hi.append(np.max(gp[1], axis=1))
+        gm_lo.append(np.min(gn[0], axis=1))
+        gm_hi.append(np.max(gn[1], axis=1))
     glo = np.concatenate(gp_lo + gm_lo)
     ghi = np.concatenate(gp_hi + gm_hi)
     return glo, ghi, np.concatenate(n_hi + n_hi), ok
@@ -696,7 +716,7 @@ def _point_slacks(robot, f_req, external, prm: RobotBounds, subsets, rho, D, c, 
     pm = _phi(-qhi, -qlo, tmn, tmx)
     Np = _sum([(pp[0][:, i], pp[1][:, i]) for i in range(m)])  # (K, B)
     Nm = _sum([(pm[0][:, i], pm[1][:, i]) for i in range(m)])
-    wlo, whi = _weight_wrench(robot, B, external)  # (2, B)
+    wlo, whi = _weight_wrench(robot, B, external, prm)  # (2, B)
     cw = _sum([arith.mul(c[0][r], c[1][r], wlo[r][None], whi[r][None]) for r in range(w)])
     Np = arith.add(*Np, *cw)
     Nm = arith.sub(*Nm, *cw)

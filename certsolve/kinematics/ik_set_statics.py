@@ -24,7 +24,12 @@ matrix of the set nonsingular (one solution per robot) and that solution within 
 anchor and attachment over the set (:func:`_slopes`), ``t_i`` its tension.  Enclosing
 ``f(c, P)`` entry by entry instead reads a column's six entries, which move together with
 its anchor, as independent: on T-16 (±0.05 cm, ±1 % ``k``) the tension bounds were 3.6-9
-times the spread of 40 sampled robots; they are 1.1-2.3 times in this form.
+times the spread of 40 sampled robots; they are 1.1-2.3 times in this form.  A toleranced
+mass ``m`` and centre of mass ``c`` enter the same form (:func:`_weight_slopes`):
+``w_g = m u(c)``, ``u(c) = (g, (R c) × g)`` affine in ``c``, so ``w_g(m, c) - w_g(m0, c0) =
+(m - m0) u(c) + Σ_j (c_j - c0_j) m0 u_j`` exactly, and ``Y w_g`` is ``Y w_g(m0, c0)`` plus
+``Σ_q |Y s_q| r_q`` over those slopes, instead of ``Y`` times the interval ``w_g`` (which
+reads the force and the moments, moved together by ``m`` and ``c``, as independent).
 """
 
 from __future__ import annotations
@@ -119,17 +124,58 @@ def _statics(robot: Robot, pose: Pose, A: Pair, B: Pair) -> SetStatics:
     n = arith.div_nonzero(AB[0], AB[1], rho[0][:, None], rho[1][:, None])
     rows = [(n[0][:, c], n[1][:, c]) for c in range(robot.dim)] + _moments(CB, n, robot.dof)
     H = (np.array([r[0] for r in rows]), np.array([r[1] for r in rows]))
-    F = robot.weight_bounds()
+    wg = _weight(robot, R, robot.weight_bounds(), _pair(robot.bounds().com))
+    return SetStatics(rho=rho, H=H, wg=wg, n=n, CB=CB)
+
+
+def _weight(robot: Robot, R: np.ndarray, F: Pair, com: Pair) -> Pair:
+    """``w_g = (F, (R c) × F)`` ``(w,)`` over the intervals of the force ``F`` ``(d,)`` and the
+    centre of mass ``c`` ``(d,)`` (no moment for a point robot)."""
     force = [(np.atleast_1d(F[0][c]), np.atleast_1d(F[1][c])) for c in range(robot.dim)]
     wg = force
     if robot.dof != 2:
-        clo, chi = _pair(robot.bounds().com)
-        cg = point_matmul_interval(R, clo, chi)
+        cg = point_matmul_interval(R, com[0], com[1])
         Fv = (np.asarray(F[0], dtype=float)[None], np.asarray(F[1], dtype=float)[None])
         wg = force + _moments((cg[0][None], cg[1][None]), Fv, robot.dof)
     wgl = np.array([np.ravel(x[0])[0] for x in wg])
     wgh = np.array([np.ravel(x[1])[0] for x in wg])
-    return SetStatics(rho=rho, H=H, wg=(wgl, wgh), n=n, CB=CB)
+    return wgl, wgh
+
+
+def _weight_slopes(robot: Robot, pose: Pose) -> tuple[Pair, tuple[Pair, np.ndarray]] | None:
+    """The weight's wrench in the mean-value form over the mass ``m`` and the centre of mass
+    ``c`` of the set, None where both are exact.  ``w_g = m u(c)`` with
+    ``u(c) = (g, (R c) × g)`` affine in ``c``, so for every ``(m, c)`` of the set, exactly,
+
+        w_g(m, c) - w_g(m0, c0) = (m - m0) u(c) + Σ_j (c_j - c0_j) m0 u_j,
+        u_j = (0, (R e_j) × g),
+
+    (``(m0, c0)`` the middle): returns ``w_g(m0, c0)`` and the slopes ``(w, 1 + d)``
+    (``u(C)`` over the set's ``c``, then ``m0 u_j``) with their radii ``|m - m0|``,
+    ``|c_j - c0_j|`` ``(1 + d,)``."""
+    b = robot.bounds()
+    mass, com = (np.array([b.mass[0]]), np.array([b.mass[1]])), _pair(b.com)
+    if mass[0][0] == mass[1][0] and np.array_equal(*com):
+        return None
+    R = np.asarray(pose.rotation, dtype=float)
+    d, g = robot.dim, robot.gravity
+    mids, rads = [], []
+    for lo, hi in (mass, com):
+        mid = np.clip(midpoint(lo, hi), lo, hi)
+        mids.append(mid)
+        rads.append(np.maximum(up(hi - mid), up(mid - lo)))
+    m0 = np.full(d, mids[0][0])
+    F0 = arith.mul(m0, m0, g, g)
+    wg0 = _weight(robot, R, F0, (mids[1], mids[1]))
+    slopes = [_weight(robot, R, (g, g), com)]  # in m: u(c) over the set's c
+    for j in range(d):
+        e = np.zeros(d)
+        e[j] = 1.0
+        lo, hi = _weight(robot, R, F0, (e, e))  # in c_j: m0 u_j (no force)
+        lo[:d], hi[:d] = 0.0, 0.0
+        slopes.append((lo, hi))
+    S = (np.stack([s[0] for s in slopes], axis=1), np.stack([s[1] for s in slopes], axis=1))
+    return wg0, (S, np.concatenate(rads))
 
 
 def _imatmul(a: Pair, b: Pair) -> Pair:
@@ -208,14 +254,16 @@ class SetSystem:
     """The free wires' statics of every robot of the set, for a batch of fixed tensions:
     ``f(x, p) = H_S(p) x + H_F(p) τ_F + w_g``, linear in ``x = τ_S``, with its
     preconditioned residual in the mean-value form of :class:`.fk_tolerance.SetKrawczyk`
-    in the anchors and attachments ``p`` (the mass, the centre of mass and ``τ_F`` as
+    in the anchors and attachments ``p``, the mass and the centre of mass (``τ_F`` as
     intervals)::
 
-        Y f(x, p) ∈ Y f(x, p0) + Σ_i (Y G_i) t_i (p_i - p0_i),
+        Y f(x, p) ∈ Y f(x, p0) + Σ_i (Y G_i) t_i (p_i - p0_i) + Σ_q (Y s_q) (q - q0),
 
     ``p0`` the middle of the set, ``G_i`` :func:`_slopes` over the set, ``t_i`` the tension
     of wire ``i`` (``x_i`` or ``τ_F``): the six entries of a wire's column move together
-    with its anchor, which an interval ``H(P)`` alone reads as independent."""
+    with its anchor, which an interval ``H(P)`` alone reads as independent; ``q`` the mass
+    and the centre of mass, ``s_q`` the weight's slopes (:func:`_weight_slopes`; none
+    where both are exact, and then ``w_g`` is the nominal weight)."""
 
     def __init__(self, robot: Robot, pose: Pose, st: SetStatics, F: np.ndarray, tauF: Pair):
         m = st.H[0].shape[1]
@@ -233,6 +281,11 @@ class SetSystem:
         self.radius = np.concatenate(rads, axis=1)  # (m, 2d): |p_i - p0_i|
         self.G = mr_from_bounds(*_slopes(robot, pose, st))  # (m, w, 2d)
         self.wg = st.wg
+        self.weight: tuple[tuple[np.ndarray, np.ndarray], np.ndarray] | None = None
+        weight = _weight_slopes(robot, pose)
+        if weight is not None:  # w_g at the middle, and its slopes in the mass and the com
+            self.wg, (S, r) = weight
+            self.weight = mr_from_bounds(*S), r
 
     def preconditioned(self, Y: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``Y f(x, p)`` over the set, midpoint-radius ``(C, w)``, for ``x`` ``(C, w)``."""
@@ -257,6 +310,11 @@ class SetSystem:
         mag_t[:, S] = np.abs(x)
         mag_t[:, F] = np.maximum(np.abs(self.tauF[0]), np.abs(self.tauF[1]))
         spread = up((mag_t @ q.T) * (1.0 + 2.0 * gamma(q.shape[1] + 2)))
+        if self.weight is not None:  # Σ_q |Y s_q| r_q: the weight's first-order spread
+            (sc, sr), r = self.weight
+            YS = mr_matmul(Y, None, sc, sr)  # (w, 1 + d)
+            gw = 1.0 + 2.0 * gamma(r.shape[0] + 2)
+            spread = up(spread + up(((np.abs(YS[0]) + YS[1]) @ r) * gw))
         return bc[..., 0], up(br[..., 0] + spread)
 
 

@@ -74,6 +74,9 @@ class RobotBounds:
     box; ``dA``, ``dB`` ``(k, m, d)`` and ``dtau_min``, ``dtau_max`` ``(k, m)`` are the exact
     derivatives of the arrays in each parameter (they are affine).  A proof made with these
     holds for every robot of the box.  ``k = 0`` for a fixed robot (:meth:`point`).
+    ``mass`` (floats) and ``com`` (``(d,)`` arrays) are the intervals of the mass and the
+    centre of mass (platform frame), shared by the batch; they are not parameters (the
+    weight's wrench is multilinear in them: :meth:`weight_corners`).
     """
 
     A: tuple[np.ndarray, np.ndarray]
@@ -89,6 +92,8 @@ class RobotBounds:
     dB: np.ndarray
     dtau_min: np.ndarray
     dtau_max: np.ndarray
+    mass: tuple[float, float]
+    com: tuple[np.ndarray, np.ndarray]
 
     @property
     def k(self) -> int:
@@ -109,16 +114,30 @@ class RobotBounds:
             A=A, B=B, tau_min=tn, tau_max=tx, A_mid=A, B_mid=B, tau_min_mid=tn, tau_max_mid=tx,
             radius=np.zeros((0, 1)), dA=np.zeros((0, m, d)), dB=np.zeros((0, m, d)),
             dtau_min=np.zeros((0, m)), dtau_max=np.zeros((0, m)),
+            mass=(robot.mass, robot.mass), com=(robot.com, robot.com),
         )  # fmt: skip
+
+    def weight_corners(self) -> tuple[np.ndarray, np.ndarray]:
+        """The corners ``(masses (V,), coms (V, d))`` of the box of the mass and the centre of
+        mass: each toleranced number at both ends, the exact ones once (``V = 1`` for an
+        exact weight: the nominal numbers).  The weight's wrench ``(m g, (R c) × (m g))`` is
+        multilinear in ``(m, c)``, so a quantity affine in it lies, for every robot of the
+        box, between its least and greatest value at the corners."""
+        lo = np.r_[self.mass[0], self.com[0]]
+        hi = np.r_[self.mass[1], self.com[1]]
+        ends = [np.unique([a, b]) for a, b in zip(lo, hi, strict=True)]
+        corners = np.array(list(product(*ends)), dtype=float)
+        return corners[:, 0], corners[:, 1:]
 
     @classmethod
     def of_tolerances(cls, robot: Robot) -> RobotBounds:
         """The robot set of a file with tolerances (:meth:`.Robot.bounds`) as a batch of one
         box of parameters: one parameter per toleranced anchor or attachment coordinate,
         ``A = A_c + Σ_l θ_l e_l`` (an affine map like the design's ``set`` parameters),
-        ``θ_l`` over its interval; the tension limits are exact.  A proof made with these
-        holds for every robot of the set (the numbers the force index reads: anchors,
-        attachments, tension limits)."""
+        ``θ_l`` over its interval; the tension limits are exact; the mass and the centre of
+        mass are their intervals.  A proof made with these holds for every robot of the set
+        (the numbers the force index reads: anchors, attachments, tension limits, mass and
+        centre of mass)."""
         b = robot.bounds()
         base = cls.point(robot)
         m, d = robot.A.shape
@@ -143,6 +162,7 @@ class RobotBounds:
             radius=np.array(radius).reshape(k, 1),
             dA=np.array(slopes["A"]).reshape(k, m, d), dB=np.array(slopes["B"]).reshape(k, m, d),
             dtau_min=np.zeros((k, m)), dtau_max=np.zeros((k, m)),
+            mass=b.mass, com=b.com,
         )  # fmt: skip
 
     def take(self, idx: np.ndarray | slice) -> RobotBounds:
@@ -326,6 +346,8 @@ class AffineRobot:
             dB=self._coef["B"],
             dtau_min=dtau[..., 0],
             dtau_max=dtau[..., 1],
+            mass=(self.robot.mass, self.robot.mass),
+            com=(self.robot.com, self.robot.com),
         )
 
     def _enclose(self, lo, hi) -> dict:
