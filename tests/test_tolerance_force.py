@@ -5,6 +5,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from certsolve.force.certified import certified_workspace
 from certsolve.force.isotropic import isotropic_force
@@ -188,3 +189,26 @@ def test_the_isotropic_map_of_a_set_gives_its_certified_lower_bounds():
     assert np.array_equal(back.set_force_lo, lo, equal_nan=True)
     exact = isotropic_map(robot.nominal(), xs, ys)
     assert exact.set_force_lo is None and "set_force_lo" not in exact.to_dict()
+
+
+def test_the_map_picture_of_a_set_draws_the_set_bound():
+    """``plot_map`` of a robot with tolerances draws ``set_force_lo`` (what holds for every
+    robot of the set), says so on its colour bar, and the nominal values otherwise."""
+    pytest.importorskip("matplotlib")
+    from certsolve.force.maps import isotropic_map
+    from certsolve.force.plots import plot_map
+
+    robot = _krut3([{"path": "wires[*].base[*]", "plus_minus": 1.0}])
+    xs, ys = np.linspace(-60, 60, 7), np.linspace(-80, 40, 7)
+    for res, label in (
+        (isotropic_map(robot, xs, ys), "certified lower bound over the set (N)"),
+        (isotropic_map(robot.nominal(), xs, ys), "maximum isotropic force (N)"),
+    ):
+        fig = plot_map(res)
+        ax, bar = fig.axes
+        drawn = ax.images[0].get_array()
+        shown = res.values if res.set_force_lo is None else res.set_force_lo
+        assert np.array_equal(
+            drawn.filled(np.nan), np.where(shown >= 0, shown, np.nan), equal_nan=True
+        )
+        assert bar.get_ylabel() == label

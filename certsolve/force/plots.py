@@ -36,7 +36,10 @@ def _plt():
 
 def _draw_map(ax, res: IsotropicMap, vmax=None, title=None, cmap="jet", colorbar=True):
     plt = _plt()
-    v = np.where(res.values >= 0, res.values, np.nan)
+    # a robot with tolerances: the certified lower bound over its set (NaN where not proven)
+    over_set = res.set_force_lo is not None
+    values = res.set_force_lo if over_set else res.values
+    v = np.where(values >= 0, values, np.nan)
     masked = np.ma.masked_invalid(v)
     cm = plt.get_cmap(cmap).with_extremes(bad="white")
     dx = (res.xs[-1] - res.xs[0]) / max(len(res.xs) - 1, 1) / 2
@@ -53,7 +56,7 @@ def _draw_map(ax, res: IsotropicMap, vmax=None, title=None, cmap="jet", colorbar
         interpolation="nearest",
         aspect="equal",
     )
-    finite = np.where(np.isfinite(res.values), res.values, -1.0)
+    finite = np.where(np.isfinite(values), values, -1.0)
     if (finite >= 0).any() and (finite < 0).any() and len(res.xs) > 1 and len(res.ys) > 1:
         ax.contour(res.xs, res.ys, finite, levels=[0.0], colors="k", linewidths=0.8)
     A = res.anchors
@@ -68,12 +71,15 @@ def _draw_map(ax, res: IsotropicMap, vmax=None, title=None, cmap="jet", colorbar
     ax.set_xlim(min(extent[0], A[:, 0].min()) - pad, max(extent[1], A[:, 0].max()) + pad)
     ax.set_ylim(min(extent[2], A[:, 1].min()) - pad, max(extent[3], A[:, 1].max()) + pad)
     if title is None:
-        title = f"{res.robot}: maximum isotropic force"
+        title = f"{res.robot}: maximum isotropic force" + (", every robot" if over_set else "")
         if res.z is not None:
             title += f" (z = {res.z:g} cm)"
     ax.set_title(title)
     if colorbar:
-        plt.colorbar(im, ax=ax, label="maximum isotropic force (N)", shrink=0.85)
+        label = "maximum isotropic force (N)"
+        if over_set:
+            label = "certified lower bound over the set (N)"
+        plt.colorbar(im, ax=ax, label=label, shrink=0.85)
     return im
 
 
@@ -101,7 +107,10 @@ def plot_maps(
 ) -> Figure:
     """Several maps side by side with one shared colour scale (the paper's Fig. 10)."""
     plt = _plt()
-    vmax = max(float(np.nanmax(np.where(m.values >= 0, m.values, np.nan))) for m in maps)
+    vmax = max(
+        float(np.nanmax(np.where(v >= 0, v, np.nan)))
+        for v in (m.values if m.set_force_lo is None else m.set_force_lo for m in maps)
+    )
     fig, axes = plt.subplots(1, len(maps), figsize=(4.6 * len(maps) + 1.0, 4.6), dpi=120)
     axes = np.atleast_1d(axes)
     im = None
