@@ -38,6 +38,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg.lapack
 from numpy.typing import ArrayLike
 
 from ..interval.linalg import UNDERFLOW, U, gamma, krawczyk_mr
@@ -55,10 +56,14 @@ __all__ = [
     "jacobian_mr",
     "krawczyk_mr",
     "SquareSystem",
+    "FreeWires",
+    "free_wires",
     "is_elastic",
 ]
 
 SAFE = 1.0 + 2.0**-20
+
+_dgesv = scipy.linalg.lapack.dgesv
 
 _G3 = gamma(3)
 
@@ -81,7 +86,7 @@ class _Consts:
     eF: list
     com: list
     wg_const: tuple | None  # (wg, ewg) when the gravity wrench does not depend on the pose
-    per_free: dict[bytes, tuple[np.ndarray, ...]]  # SquareSystem constants per set of free wires
+    per_free: dict[bytes, FreeWires]  # SquareSystem constants per set of free wires
 
 
 def _consts(robot: Robot) -> _Consts:
@@ -345,18 +350,71 @@ def jacobian_mr(
     return Jc, Jr * SAFE + UNDERFLOW
 
 
-def _per_free(cs: _Consts, S: np.ndarray) -> tuple[np.ndarray, ...]:
-    """The constants of :class:`SquareSystem` that depend only on the free wires ``S``."""
-    return (
-        cs.K[S] * (1.0 + 4.0 * U),
-        cs.kL0K[S] * ((1.0 + 16.0 * U) / (1.0 - 8.0 * U) ** 2),
-        cs.kL0K[S] * ((1.0 - 16.0 * U) / (1.0 + 8.0 * U) ** 2),
-        cs.kL0 * ((1.0 + 4.0 * U) * SAFE),
-        cs.k[S],
-        cs.kL0[S] / cs.K[S],
-        1.0 / cs.K[S],
-        np.eye(S.size),
+@dataclass(frozen=True, kw_only=True)
+class FreeWires:
+    """What :class:`SquareSystem` needs from the robot for one set of free wires ``S``,
+    computed once (:func:`free_wires`): the selection (a slice when ``S`` is a run of wires,
+    so that taking the columns is a view, not a copy), the identity, the bounds' constants."""
+
+    free: np.ndarray  # (n,) 0-based free wires
+    sel: slice | np.ndarray  # the same wires as a slice when contiguous
+    eye: np.ndarray  # (n, n) identity
+    Kr: np.ndarray  # K_S (1 + 4u): the growth of L over a box of radius r
+    Chi: np.ndarray  # k L0 K (1 + 16u) / (1 - 8u)²: τ' = Chi / L² rounded up
+    Clo: np.ndarray  # k L0 K (1 - 16u) / (1 + 8u)²: rounded down
+    CkL0: np.ndarray  # (m,) k L0 (1 + 4u) SAFE: the bound of τ(L) - τ(L̃)
+    kS: np.ndarray  # k_S
+    aS: np.ndarray  # k L0 / K over S (eq. 5)
+    iKS: np.ndarray  # 1 / K_S
+    C2: np.ndarray  # (2, 1, n): Chi and Clo stacked, for both bounds of τ' in one division
+    g: float  # γ_n
+    gmS: float  # γ_{m+2} SAFE: the rounding of f = H τ + w_g
+    kq: float  # SAFE (1 + γ_{n+4}): the rounding of the Krawczyk radius
+    c0: np.ndarray | None  # the error of w_g in f when w_g does not depend on the pose
+
+
+def free_wires(robot: Robot, free: ArrayLike) -> FreeWires:
+    """The :class:`FreeWires` of ``free``, computed once per robot and set of free wires."""
+    cs = _consts(robot)
+    S = np.asarray(free, dtype=np.int64)
+    key = S.tobytes()
+    fw = cs.per_free.get(key)
+    if fw is None:
+        fw = cs.per_free[key] = _free_wires(cs, S)
+    return fw
+
+
+def _free_wires(cs: _Consts, S: np.ndarray) -> FreeWires:
+    n = S.size
+    run = n > 0 and bool(np.array_equal(S, np.arange(S[0], S[0] + n)))
+    Chi = cs.kL0K[S] * ((1.0 + 16.0 * U) / (1.0 - 8.0 * U) ** 2)
+    Clo = cs.kL0K[S] * ((1.0 - 16.0 * U) / (1.0 + 8.0 * U) ** 2)
+    gmS = gamma(cs.A.shape[0] + 2) * SAFE
+    c0 = None
+    if cs.wg_const is not None:
+        wg, ewg = cs.wg_const
+        c0 = ewg + gmS * np.abs(wg) + UNDERFLOW
+    return FreeWires(
+        free=S,
+        sel=slice(int(S[0]), int(S[0]) + n) if run else S,
+        eye=np.eye(n),
+        Kr=cs.K[S] * (1.0 + 4.0 * U),
+        Chi=Chi,
+        Clo=Clo,
+        CkL0=cs.kL0 * ((1.0 + 4.0 * U) * SAFE),
+        kS=cs.k[S],
+        aS=cs.kL0[S] / cs.K[S],
+        iKS=1.0 / cs.K[S],
+        C2=np.stack((Chi, Clo))[:, None, :],
+        g=gamma(n),
+        gmS=gmS,
+        kq=SAFE * (1.0 + gamma(n + 4)),
+        c0=c0,
     )
+
+
+_PM = np.array([-1.0, 1.0])[:, None, None]  # (2, 1, 1): the lower and the upper bound
+_PM_INF = _PM * np.inf  # the directions of the outward rounding
 
 
 class SquareSystem:
@@ -375,44 +433,53 @@ class SquareSystem:
     agree).  ``Y`` is used only through these bounds; any ``Y`` is sound.
     """
 
-    def __init__(self, robot: Robot, enc: PoseEnclosure, free: ArrayLike) -> None:
-        cs = _consts(robot)
+    def __init__(
+        self,
+        robot: Robot,
+        enc: PoseEnclosure,
+        free: ArrayLike | FreeWires,
+    ) -> None:
+        self._cs = _consts(robot)
         self.robot = robot
         self.enc = enc
-        S = self.free = np.asarray(free, dtype=np.int64)
-        Hs = enc.Ht[S].T
-        eHt = _bound(enc.Ht_err)
-        n = Hs.shape[1]
-        if Hs.shape[0] != n:
+        fw = self.fw = free if isinstance(free, FreeWires) else free_wires(robot, free)
+        self.free = fw.free
+        sel = fw.sel
+        Ht = enc.Ht
+        if Ht.shape[1] != fw.free.size:
             raise ValueError("the free wires must make the system square")
-        self.G = G = np.linalg.inv(Hs)  # LinAlgError: singular
+        eHt = _bound(enc.Ht_err)
+        Hs = Ht[sel].T
+        # LAPACK's gesv on (H_S, I), as np.linalg.inv does, without its wrapper (~3 us)
+        _, _, G, info = _dgesv(Hs, fw.eye)
+        if info > 0:
+            raise np.linalg.LinAlgError("Singular matrix")
+        # C order, as np.linalg.inv returns it: BLAS takes another path (other floats) for a
+        # Fortran-ordered G in G @ x
+        self.G = G = np.ascontiguousarray(G)
         self.Gt = G.T
         aG = np.abs(G)
         self.aGt = aG.T
-        self.g = g = gamma(n)
-        key = S.tobytes()
-        per = cs.per_free.get(key)
-        if per is None:
-            per = cs.per_free[key] = _per_free(cs, S)
-        GH = G @ Hs - per[-1]  # G H_S - I (x - 0 is x: the same floats as the diagonal alone)
+        aHt = np.abs(Ht)
+        GH = G @ Hs - fw.eye  # G H_S - I (x - 0 is x: the same floats as the diagonal alone)
         self.DeltaT = (
-            (np.abs(GH) * (1.0 + 4.0 * U) + aG @ (g * np.abs(Hs) + eHt[S].T)) * SAFE + UNDERFLOW
+            (np.abs(GH) * (1.0 + 4.0 * U) + aG @ (fw.g * aHt[sel].T + eHt[sel].T)) * SAFE
+            + UNDERFLOW
         ).T
-        aHt = np.abs(enc.Ht)
-        gm = gamma(enc.Ht.shape[0] + 2)
-        self._A1 = eHt + (gm * SAFE) * aHt
+        self._A1 = eHt + fw.gmS * aHt
         self._A2 = (aHt + eHt) * SAFE
-        self._c0 = _bound(enc.wg_err) + (gm * SAFE) * np.abs(enc.wg) + UNDERFLOW
-        self._Kr, self._Chi, self._Clo, self._CkL0, self._kS, self._aS, self._iKS, _ = per
+        c0 = fw.c0
+        if c0 is None:
+            c0 = _bound(enc.wg_err) + fw.gmS * np.abs(enc.wg) + UNDERFLOW
+        self._c0 = c0
         #: ``k`` of the free wires (a tension of the square system must stay below it)
-        self.k_free = self._kS
-        self._WS = enc.W[S]
-        self._cs = cs
-        self._kq = SAFE * (1.0 + gamma(n + 4))
+        self.k_free = fw.kS
+        self._WS = enc.W[sel]
 
     def controls(self, tau_S: np.ndarray) -> np.ndarray:
         """Eq. (5) for the free wires, in floating point (a candidate, no bound)."""
-        return self._aS / (self._kS - tau_S) - self._WS * self._iKS
+        fw = self.fw
+        return fw.aS / (fw.kS - tau_S) - self._WS * fw.iKS
 
     def tensions(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Float tensions at ``u`` ``(B, m)`` with error bounds, and ``L``, ``eL`` (eq. 2, 6)."""
@@ -422,7 +489,7 @@ class SquareSystem:
         eL = _bound(enc.W_err) + (2.0 * U * SAFE) * (np.abs(Ku) + np.abs(L))
         tau = cs.k * (L - cs.L0) / L
         Llo = L - eL
-        etau = self._CkL0 * eL / (Llo * L) + (2.0 * _G3 * SAFE) * np.abs(tau)
+        etau = self.fw.CkL0 * eL / (Llo * L) + (2.0 * _G3 * SAFE) * np.abs(tau)
         if not (Llo.min() > 0.0):
             etau = np.where(Llo > 0.0, etau, np.inf)
         return tau, etau, L, eL
@@ -440,32 +507,33 @@ class SquareSystem:
         Returns ``(xlo, xhi, klo, khi, proven, tau, fc)`` over the free wires (``tau``, ``fc``:
         float tensions and residual at ``u``).
         """
-        S = self.free
+        fw = self.fw
+        sel = fw.sel
         tau, etau, L, eL = self.tensions(u)
         fc = tau @ self.enc.Ht + self.enc.wg
         fr = np.abs(tau) @ self._A1 + etau @ self._A2 + self._c0
-        uc = u[:, S]
-        xlo = np.nextafter(uc - rad, -np.inf)
-        xhi = np.nextafter(uc + rad, np.inf)
+        uc = u[:, sel]
+        # [xlo, xhi] = uc -+ rad rounded outward, in one call: uc + (-rad) is uc - rad
+        X = np.nextafter(uc + _PM * rad, _PM_INF)
+        xlo, xhi = X[0], X[1]
         r = np.maximum(xhi - uc, uc - xlo) * (1.0 + 4.0 * U)
-        # τ' = k L0 K / L² over the box: L ∈ L(u_S) ± (eL + K r)
-        Ls = L[:, S]
-        eLs = eL[:, S] + self._Kr * r
-        lo = Ls - eLs
-        hi = Ls + eLs
-        dhi = self._Chi / (lo * lo)
-        dlo = self._Clo / (hi * hi)
-        if not (lo.min() > 0.0):
-            dhi = np.where(lo > 0.0, dhi, np.inf)
+        # τ' = k L0 K / L² over the box: L ∈ L(u_S) ± (eL + K r); Chi / lo², Clo / hi²
+        Ls = L[:, sel]
+        eLs = eL[:, sel] + fw.Kr * r
+        LB = Ls + _PM * eLs
+        D = fw.C2 / (LB * LB)
+        dhi, dlo = D[0], D[1]
+        if not (LB[0].min() > 0.0):
+            dhi = np.where(LB[0] > 0.0, dhi, np.inf)
         dc = 0.5 * (dlo + dhi)
         dr = (0.5 * SAFE) * (dhi - dlo) + (4.0 * U) * dc
         # K(X) = c - Y f(c) + (I - Y J)(X - c) with Y = diag(1/dc) G:
         # |Y f(c) - bc| + |(I - Y J)(X - c)| <= q / dc + rounding
-        q = (fr + self.g * np.abs(fc)) @ self.aGt + dr * r + ((dc + dr) * r) @ self.DeltaT
+        q = (fr + fw.g * np.abs(fc)) @ self.aGt + dr * r + ((dc + dr) * r) @ self.DeltaT
         bc = (fc @ self.Gt) / dc
         ce = uc - bc
-        rr = self._kq * (q / dc) + (4.0 * U * SAFE) * (np.abs(uc) + np.abs(bc)) + UNDERFLOW
-        klo = np.nextafter(ce - rr, -np.inf)
-        khi = np.nextafter(ce + rr, np.inf)
+        rr = fw.kq * (q / dc) + (4.0 * U * SAFE) * (np.abs(uc) + np.abs(bc)) + UNDERFLOW
+        Kx = np.nextafter(ce + _PM * rr, _PM_INF)
+        klo, khi = Kx[0], Kx[1]
         proven = ((klo > xlo) & (khi < xhi)).all(axis=1)
         return xlo, xhi, klo, khi, proven, tau, fc

@@ -191,7 +191,7 @@ def no_certificate() -> Certificate:
 def unique_in_box(
     u: np.ndarray,
     F: np.ndarray,
-    S: np.ndarray,
+    S: np.ndarray | slice,
     xlo: np.ndarray,
     xhi: np.ndarray,
     klo: np.ndarray,
