@@ -366,10 +366,9 @@ class FreeWires:
     kS: np.ndarray  # k_S
     aS: np.ndarray  # k L0 / K over S (eq. 5)
     iKS: np.ndarray  # 1 / K_S
-    C2: np.ndarray  # (2, 1, n): Chi and Clo stacked, for both bounds of τ' in one division
-    g: float  # γ_n
-    gmS: float  # γ_{m+2} SAFE: the rounding of f = H τ + w_g
-    kq: float  # SAFE (1 + γ_{n+4}): the rounding of the Krawczyk radius
+    g: np.ndarray  # γ_n (0-d, as the three below)
+    gmS: np.ndarray  # γ_{m+2} SAFE: the rounding of f = H τ + w_g
+    kq: np.ndarray  # SAFE (1 + γ_{n+4}): the rounding of the Krawczyk radius
     c0: np.ndarray | None  # the error of w_g in f when w_g does not depend on the pose
 
 
@@ -405,16 +404,28 @@ def _free_wires(cs: _Consts, S: np.ndarray) -> FreeWires:
         kS=cs.k[S],
         aS=cs.kL0[S] / cs.K[S],
         iKS=1.0 / cs.K[S],
-        C2=np.stack((Chi, Clo))[:, None, :],
-        g=gamma(n),
-        gmS=gmS,
-        kq=SAFE * (1.0 + gamma(n + 4)),
+        g=np.array(gamma(n)),
+        gmS=np.array(gmS),
+        kq=np.array(SAFE * (1.0 + gamma(n + 4))),
         c0=c0,
     )
 
 
-_PM = np.array([-1.0, 1.0])[:, None, None]  # (2, 1, 1): the lower and the upper bound
-_PM_INF = _PM * np.inf  # the directions of the outward rounding
+# The constants of the per-pose arithmetic below as 0-d arrays: an array times a 0-d array
+# is the same float as times the Python float, without the conversion of the scalar (0.21
+# against 0.37 us for a (2, 6) product)
+_NINF = np.array(-np.inf)
+_PINF = np.array(np.inf)
+_ZERO = np.array(0.0)
+_HALF = np.array(0.5)
+_HALF_SAFE = np.array(0.5 * SAFE)
+_R4 = np.array(1.0 + 4.0 * U)  # one relative rounding
+_A4 = np.array(4.0 * U)
+_A4S = np.array(4.0 * U * SAFE)
+_A2S = np.array(2.0 * U * SAFE)
+_G3S = np.array(2.0 * _G3 * SAFE)
+_SAFE = np.array(SAFE)
+_TINY = np.array(UNDERFLOW)
 
 
 class SquareSystem:
@@ -462,15 +473,12 @@ class SquareSystem:
         self.aGt = aG.T
         aHt = np.abs(Ht)
         GH = G @ Hs - fw.eye  # G H_S - I (x - 0 is x: the same floats as the diagonal alone)
-        self.DeltaT = (
-            (np.abs(GH) * (1.0 + 4.0 * U) + aG @ (fw.g * aHt[sel].T + eHt[sel].T)) * SAFE
-            + UNDERFLOW
-        ).T
+        self.DeltaT = ((np.abs(GH) * _R4 + aG @ (fw.g * aHt[sel].T + eHt[sel].T)) * _SAFE + _TINY).T
         self._A1 = eHt + fw.gmS * aHt
-        self._A2 = (aHt + eHt) * SAFE
+        self._A2 = (aHt + eHt) * _SAFE
         c0 = fw.c0
         if c0 is None:
-            c0 = _bound(enc.wg_err) + fw.gmS * np.abs(enc.wg) + UNDERFLOW
+            c0 = _bound(enc.wg_err) + fw.gmS * np.abs(enc.wg) + _TINY
         self._c0 = c0
         #: ``k`` of the free wires (a tension of the square system must stay below it)
         self.k_free = fw.kS
@@ -486,11 +494,11 @@ class SquareSystem:
         cs, enc = self._cs, self.enc
         Ku = cs.K * u
         L = enc.W + Ku
-        eL = _bound(enc.W_err) + (2.0 * U * SAFE) * (np.abs(Ku) + np.abs(L))
+        eL = _bound(enc.W_err) + _A2S * (np.abs(Ku) + np.abs(L))
         tau = cs.k * (L - cs.L0) / L
         Llo = L - eL
-        etau = self.fw.CkL0 * eL / (Llo * L) + (2.0 * _G3 * SAFE) * np.abs(tau)
-        if not (Llo.min() > 0.0):
+        etau = self.fw.CkL0 * eL / (Llo * L) + _G3S * np.abs(tau)
+        if not (np.minimum.reduce(Llo, axis=None) > 0.0):
             etau = np.where(Llo > 0.0, etau, np.inf)
         return tau, etau, L, eL
 
@@ -513,27 +521,27 @@ class SquareSystem:
         fc = tau @ self.enc.Ht + self.enc.wg
         fr = np.abs(tau) @ self._A1 + etau @ self._A2 + self._c0
         uc = u[:, sel]
-        # [xlo, xhi] = uc -+ rad rounded outward, in one call: uc + (-rad) is uc - rad
-        X = np.nextafter(uc + _PM * rad, _PM_INF)
-        xlo, xhi = X[0], X[1]
-        r = np.maximum(xhi - uc, uc - xlo) * (1.0 + 4.0 * U)
-        # τ' = k L0 K / L² over the box: L ∈ L(u_S) ± (eL + K r); Chi / lo², Clo / hi²
+        xlo = np.nextafter(uc - rad, _NINF)
+        xhi = np.nextafter(uc + rad, _PINF)
+        r = np.maximum(xhi - uc, uc - xlo) * _R4
+        # τ' = k L0 K / L² over the box: L ∈ L(u_S) ± (eL + K r)
         Ls = L[:, sel]
         eLs = eL[:, sel] + fw.Kr * r
-        LB = Ls + _PM * eLs
-        D = fw.C2 / (LB * LB)
-        dhi, dlo = D[0], D[1]
-        if not (LB[0].min() > 0.0):
-            dhi = np.where(LB[0] > 0.0, dhi, np.inf)
-        dc = 0.5 * (dlo + dhi)
-        dr = (0.5 * SAFE) * (dhi - dlo) + (4.0 * U) * dc
+        lo = Ls - eLs
+        hi = Ls + eLs
+        dhi = fw.Chi / (lo * lo)
+        dlo = fw.Clo / (hi * hi)
+        if not (np.minimum.reduce(lo, axis=None) > 0.0):
+            dhi = np.where(lo > 0.0, dhi, np.inf)
+        dc = _HALF * (dlo + dhi)
+        dr = _HALF_SAFE * (dhi - dlo) + _A4 * dc
         # K(X) = c - Y f(c) + (I - Y J)(X - c) with Y = diag(1/dc) G:
         # |Y f(c) - bc| + |(I - Y J)(X - c)| <= q / dc + rounding
         q = (fr + fw.g * np.abs(fc)) @ self.aGt + dr * r + ((dc + dr) * r) @ self.DeltaT
         bc = (fc @ self.Gt) / dc
         ce = uc - bc
-        rr = fw.kq * (q / dc) + (4.0 * U * SAFE) * (np.abs(uc) + np.abs(bc)) + UNDERFLOW
-        Kx = np.nextafter(ce + _PM * rr, _PM_INF)
-        klo, khi = Kx[0], Kx[1]
-        proven = ((klo > xlo) & (khi < xhi)).all(axis=1)
+        rr = fw.kq * (q / dc) + _A4S * (np.abs(uc) + np.abs(bc)) + _TINY
+        klo = np.nextafter(ce - rr, _NINF)
+        khi = np.nextafter(ce + rr, _PINF)
+        proven = np.logical_and.reduce((klo > xlo) & (khi < xhi), axis=1)
         return xlo, xhi, klo, khi, proven, tau, fc
