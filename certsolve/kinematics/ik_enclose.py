@@ -208,13 +208,16 @@ def _gravity(cs: _Consts, R):
     return np.array(F + [m0, m1, m2]), np.array(eF + [e0, e1, e2])
 
 
-_C_RHO = 10.0 * U * SAFE
-_C_BETA = 8.0 * U * SAFE
-_C_N1 = 14.0 * U * SAFE * (1 + 6 * U)
-_C_N2 = 16.0 * U * SAFE * (1 + 6 * U)
-_C_N3 = 2.0 * U * SAFE
-_C_M1 = (1.0 + 4 * U) * SAFE
-_C_M2 = 6.0 * U * SAFE
+# 0-d arrays: an array times one is the same float as times the Python float, faster
+_C_RHO = np.array(10.0 * U * SAFE)
+_C_BETA = np.array(8.0 * U * SAFE)
+_C_N1 = np.array(14.0 * U * SAFE * (1 + 6 * U))
+_C_N2 = np.array(16.0 * U * SAFE * (1 + 6 * U))
+_C_N3 = np.array(2.0 * U * SAFE)
+_C_M1 = np.array((1.0 + 4 * U) * SAFE)
+_C_M2 = np.array(6.0 * U * SAFE)
+_C_W1 = np.array(1.0 + 4 * U)
+_C_W2 = np.array(2.0 * U * SAFE)
 
 
 def enclose_pose(
@@ -226,7 +229,7 @@ def enclose_pose(
     R = np.asarray(rotation, dtype=float)
     CB = cs.B @ R.T
     AB = (cs.A - position) - CB
-    rho = np.sqrt((AB * AB).sum(axis=1))
+    rho = np.sqrt(np.add.reduce(AB * AB, axis=1))  # .sum(axis=1) without its wrapper
     if dof == 6:
         # the columns (n, c × n) written in place; c and n doubled side by side, so that
         # (c_1, c_2, c_0) and (c_2, c_0, c_1) are slices (a list index costs ~1 us a use)
@@ -259,7 +262,7 @@ def enclose_pose(
     else:
         em = beta * (_C_M1 * en + _C_M2)
         Ht_err = np.array([en, en, en, em, em, em]).T
-    eW = erho * (1.0 + 4 * U) + (2.0 * U * SAFE) * W
+    eW = erho * _C_W1 + _C_W2 * W
     return PoseEnclosure(rho, erho, Ht, Ht_err, wg, ewg, W, eW, valid)
 
 
