@@ -80,10 +80,14 @@ class Algorithm2:
     relative to ``1 + |u|``): half-width of the box proven to hold exactly one solution; a
     second, 1e-10-wide box proven at the same time gives the tight enclosure.
 
-    The robot and the options are checked here, once (a ``ValueError`` names the option);
-    :meth:`solve` checks the pose (:func:`~certsolve.robot.inputs.as_pose`).  About 0.1 ms a
-    pose (``benchmarks/trajectory_bench.py``), where :func:`certsolve.inverse_kinematics`
-    also validates its whole request at every call.
+    The robot and the options are checked here, once (a ``ValueError`` names the option),
+    and what depends only on them is worked out once (:class:`_Plan`: the fixed and free
+    wires, the fixed wire's eq. 5 constant, the free wires' constants
+    :class:`~.ik_enclose.FreeWires`, the limits); :meth:`solve` checks the pose
+    (:func:`~certsolve.robot.inputs.as_pose`; a :class:`~certsolve.robot.Pose` of float64
+    arrays is taken as it is, and refused at ``pose`` if it is not finite).  About 0.09 ms a
+    pose on the MARIONET robots (``benchmarks/trajectory_bench.py``), where
+    :func:`certsolve.inverse_kinematics` also validates its whole request at every call.
     """
 
     def __init__(
