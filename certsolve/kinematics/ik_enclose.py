@@ -231,13 +231,16 @@ def enclose_pose(
     AB = (cs.A - position) - CB
     rho = np.sqrt(np.add.reduce(AB * AB, axis=1))  # .sum(axis=1) without its wrapper
     if dof == 6:
-        # the columns (n, c × n) written in place; c and n doubled side by side, so that
-        # (c_1, c_2, c_0) and (c_2, c_0, c_1) are slices (a list index costs ~1 us a use)
-        Ht = np.empty((AB.shape[0], 6))
-        n = np.divide(AB, rho[:, None], out=Ht[:, :3])
-        C2 = np.concatenate((CB, CB), axis=1)
-        N2 = np.concatenate((n, n), axis=1)
-        np.subtract(C2[:, 1:4] * N2[:, 2:5], C2[:, 2:5] * N2[:, 1:4], out=Ht[:, 3:])
+        # the rows (n, c × n) of H written in place; c and n doubled, so that (c_1, c_2, c_0)
+        # and (c_2, c_0, c_1) are slices (a list index costs ~1 us a use).  H is built
+        # transposed, (6, m), where these slices are contiguous blocks of rows (arithmetic on
+        # strided (m, 3) column blocks costs three times as much), then copied to C order
+        Hw = np.empty((6, AB.shape[0]))
+        n = np.divide(AB.T.copy(), rho, out=Hw[:3])
+        C2 = np.concatenate((CB.T, CB.T))
+        N2 = np.concatenate((n, n))
+        np.subtract(C2[1:4] * N2[2:5], C2[2:5] * N2[1:4], out=Hw[3:])
+        Ht = Hw.T.copy()
     elif dof == 3:
         n = AB / rho[:, None]
         Ht = np.concatenate([n, (CB[:, 0] * n[:, 1] - CB[:, 1] * n[:, 0])[:, None]], axis=1)
