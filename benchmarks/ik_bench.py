@@ -10,7 +10,9 @@ call's controls (Algorithm 1 searches the 1 mm window around them).  Every call 
 
 References (Merlet 2007, ALIAS on a 2007 laptop): Algorithm 1 14 s (full stroke) and 2 s
 (1 mm window); Algorithm 2 12 ms (full range) and 2 ms (near the last u).  Target for
-Algorithm 2: <= 0.5 ms median (``../shared/TARGETS.md``).  The last row is an IK sweep
+Algorithm 2: <= 0.1 ms median (``../shared/TARGETS.md``), met by its reusable form
+:class:`~certsolve.kinematics.ik_alg2.Algorithm2` (the "reused" row: the robot and the
+options checked once, ``solve(pose)`` per pose).  The last row is an IK sweep
 (:func:`certsolve.kinematics.ik_sweep.ik_sweep`, Merlet's Fig. 3 procedure) of ``n`` points of
 ``u_1`` in [-1, 1] cm at the centre pose: time per point, median over 5 sweeps.
 """
@@ -29,6 +31,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from certsolve.kinematics.ik import inverse_kinematics  # noqa: E402
+from certsolve.kinematics.ik_alg2 import Algorithm2  # noqa: E402
 from certsolve.kinematics.ik_sweep import ik_sweep  # noqa: E402
 from certsolve.robot import Pose, Robot  # noqa: E402
 
@@ -50,24 +53,34 @@ def poses_trajectory(n, rng):
     return out
 
 
-def timed(robot, poses, method, chain=False, **options):
-    """Median/p90/min (ms) over the poses, certified/ok counts."""
+def timed(robot, poses, method, chain=False, reuse=False, **options):
+    """Median/p90/min (ms) over the poses, certified/ok counts.  ``chain``: each call gets
+    the previous call's controls (the first pose gives the first ones, not timed);
+    ``reuse``: Algorithm 2 by one :class:`Algorithm2` (``method`` "alg2")."""
+    if reuse:
+        return _stats(poses, Algorithm2(robot, **options).solve)
+    if not chain:
+        return _stats(poses, lambda pose: inverse_kinematics(robot, pose, method, **options))
+    last = [inverse_kinematics(robot, poses[0], method, **options).u]
+
+    def call(pose):
+        res = inverse_kinematics(robot, pose, method, u_last=last[0], **options)
+        if res.u is not None:
+            last[0] = res.u
+        return res
+
+    return _stats(poses[1:], call)
+
+
+def _stats(poses, solve):
+    """The figures of :func:`timed` for ``solve(pose)`` over the poses."""
     times, certified, ok = [], 0, 0
-    u_last = None
-    if chain:  # the first pose gives the starting controls, not timed
-        u_last = inverse_kinematics(robot, poses[0], method, **options).u
-        poses = poses[1:]
     for pose in poses:
-        opts = dict(options)
-        if chain:
-            opts["u_last"] = u_last
         t0 = time.perf_counter()
-        res = inverse_kinematics(robot, pose, method, **opts)
+        res = solve(pose)
         times.append(time.perf_counter() - t0)
         certified += res.certificate.kind != "none"
         ok += res.status == "ok"
-        if chain and res.u is not None:
-            u_last = res.u
     t = np.array(times) * 1e3
     return {
         "median_ms": float(np.median(t)),
@@ -116,6 +129,7 @@ def main(argv=None) -> int:
         ("Alg 1, full stroke [-20, 20]", timed(robot, rand, "alg1")),
         ("Alg 1, 1 mm window around last u", timed(robot, traj, "alg1", True, window=0.1)),
         ("Alg 2, full range (tau solve)", timed(robot, rand, "alg2")),
+        ("Alg 2, full range, reused Algorithm2", timed(robot, rand, "alg2", reuse=True)),
         ("Alg 2, full range (Newton from mid-stroke)", timed(robot, rand, "alg2", **newton)),
         ("Alg 2, near last u (Newton from last u)", timed(robot, traj, "alg2", True, **newton)),
         ("Alg 2, near last u (tau solve)", timed(robot, traj, "alg2", True)),

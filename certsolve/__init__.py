@@ -8,6 +8,7 @@ The functions a script needs, with the result dataclasses the CLI prints (each h
 ``solve``                 every solution of a square system, certified
 ``load_robot``            robot file (path, JSON text or dict) -> :class:`Robot`
 ``inverse_kinematics``    controls and tensions at a pose (tension-first, Alg. 1, Alg. 2)
+``Algorithm2``            reusable IK Algorithm 2: ``Algorithm2(robot).solve(pose)``
 ``forward_kinematics``    every certified equilibrium pose for a control vector
 ``track``                 one real-time tracking step near a known pose (one-off form)
 ``Tracker``               reusable tracker: ``Tracker(robot).step(u, near, half_width=)``
@@ -33,6 +34,7 @@ _EXPORTS = {
     "solve": "certsolve.solver.branch_and_prune:solve",
     "load_robot": "certsolve.robot.model:Robot.load",
     "inverse_kinematics": "certsolve.kinematics.ik:inverse_kinematics",
+    "Algorithm2": "certsolve.kinematics.ik_alg2:Algorithm2",
     "forward_kinematics": "certsolve.kinematics.fk:forward_kinematics",
     "track": "certsolve.kinematics.tracking:track",
     "Tracker": "certsolve.kinematics.tracking:Tracker",

@@ -435,3 +435,73 @@ def test_closed_form_on_a_robot_without_one_more_wire_is_refused_at_distribution
         inverse_kinematics(robot, [100, 60, 0], method="tension", distribution="closed-form")
     assert err.value.field == "distribution"
     assert inverse_kinematics(robot, [100, 60, 0], method="tension").feasible is not None
+
+
+def _same_result(a, b):
+    assert a.status == b.status and a.certificate.kind == b.certificate.kind
+    assert np.array_equal(a.u, b.u) and np.array_equal(a.tau, b.tau)
+    for x, y in (
+        (a.certificate.box, b.certificate.box),
+        (a.certificate.enclosure, b.certificate.enclosure),
+    ):
+        assert (x is None) == (y is None)
+        if x is not None:
+            assert np.array_equal(x[0], y[0]) and np.array_equal(x[1], y[1])
+
+
+@pytest.mark.parametrize("name", ["marionet", "marionet-t", "planar"])
+@pytest.mark.parametrize("options", [{}, {"fixed_wire": 3, "tau_fixed": 4.0}, {"u_fixed": 0.1}])
+def test_algorithm2_planned_wires_match_the_per_pose_split(name, options):
+    """``Algorithm2`` works out the fixed and free wires (a slice for a run of wires), the
+    fixed wire's eq. 5 constant and the free wires' constants once; a wire given as a list
+    takes the per-pose path (pivoted QR completion, index arrays): the same floats."""
+    from certsolve.kinematics.ik_alg2 import Algorithm2
+
+    robot, poses = near_centre_poses(name, 4, np.random.default_rng(3))
+    wire = options.get("fixed_wire", 1)
+    planned = Algorithm2(robot, **options)
+    per_pose = Algorithm2(robot, **{**options, "fixed_wire": [wire]})
+    assert planned._plan.split is not None and per_pose._plan.split is None
+    for pose in poses:
+        a, b = planned.solve(pose), per_pose.solve(pose)
+        _same_result(a, b)
+        assert a.details["fixed_wires"] == [wire]
+        assert a.certificate.kind == "unique-in-box"
+        lo, hi = a.certificate.enclosure
+        assert np.all(lo <= a.u) and np.all(a.u <= hi)
+
+
+def test_algorithm2_checks_options_once_and_pose_at_solve():
+    """Bad options raise in the constructor, naming the option; a ``Pose`` that is not
+    finite is refused by ``solve`` with an error at the field ``pose`` (checked only when
+    its geometry is undefined, as ``as_pose`` would have)."""
+    from certsolve.inputs import InputError
+    from certsolve.kinematics.ik_alg2 import Algorithm2
+
+    robot = load("marionet")
+    with pytest.raises(ValueError, match="fixed wire 9"):
+        Algorithm2(robot, fixed_wire=9)
+    with pytest.raises(ValueError, match="tau_fixed"):
+        Algorithm2(robot, tau_fixed=1e9)
+    with pytest.raises(ValueError, match="fixed controls"):
+        Algorithm2(robot, u_fixed=float("inf"))
+    alg2 = Algorithm2(robot)
+    good = Pose.from_params(6, CENTRE["marionet"])
+    inf_rotation = good.rotation.copy()
+    inf_rotation[0, 0] = np.inf
+    for bad in (Pose(good.position * np.nan, good.rotation), Pose(good.position, inf_rotation)):
+        with pytest.raises(InputError) as exc:
+            alg2.solve(bad)
+        assert exc.value.field == "pose"
+    # a pose of another shape or type goes through as_pose
+    with pytest.raises(InputError):
+        alg2.solve(Pose(good.position[:2], good.rotation))
+    _same_result(alg2.solve(Pose(list(good.position), good.rotation.tolist())), alg2.solve(good))
+
+
+def test_algorithm2_is_exported():
+    import certsolve
+    import certsolve.kinematics
+    from certsolve.kinematics.ik_alg2 import Algorithm2
+
+    assert certsolve.Algorithm2 is certsolve.kinematics.Algorithm2 is Algorithm2

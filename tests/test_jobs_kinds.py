@@ -321,7 +321,7 @@ FORWARDED = {
     "ik": (  # by method: test_ik_passes_each_option_to_its_methods_function
         "certsolve.kinematics.ik_first:ik_tension_first",
         "certsolve.kinematics.ik_alg1:ik_algorithm1",
-        "certsolve.kinematics.ik_alg2:ik_algorithm2",
+        "certsolve.kinematics.ik_alg2:Algorithm2",  # ik_algorithm2 takes its options
     ),
 }
 

@@ -3,7 +3,8 @@
 * :mod:`.ik` -- inverse kinematics (:func:`inverse_kinematics` dispatches): tension first
   (:mod:`.ik_first`, tensions by :mod:`.ik_tension`), Algorithm 1 (:mod:`.ik_alg1`, the
   interval search :mod:`.ik_search`: first certified solution), Algorithm 2
-  (:mod:`.ik_alg2`: fixed wire, Newton, Krawczyk certificate, bounds in :mod:`.ik_enclose`);
+  (:mod:`.ik_alg2`: fixed wire, Newton, Krawczyk certificate, bounds in :mod:`.ik_enclose`;
+  :class:`Algorithm2` is its reusable form, pose after pose);
   results in :mod:`.ik_result`, input checks in :mod:`.ik_inputs`
 * :mod:`.fk_systems` -- the table of forward-kinematics formulations (10/13/16/19
   equations, the platform frame, pose parameters): what each owns in
@@ -37,6 +38,7 @@ if TYPE_CHECKING:
         ik_tension_first,
         inverse_kinematics,
     )
+    from .ik_alg2 import Algorithm2
     from .seeding import planar_counterpart, seeded_forward_kinematics
     from .tracking import Tracker, TrackResult, track
 
@@ -49,6 +51,7 @@ _WHERE = {
     "FORMULATIONS": ".fk_systems",
     "build_formulation": ".fk_systems",
     "METHODS": ".ik",
+    "Algorithm2": ".ik_alg2",
     "Certificate": ".ik",
     "IKResult": ".ik",
     "Violation": ".ik",
@@ -69,6 +72,7 @@ __getattr__, __dir__ = lazy_exports(__name__, _WHERE)
 __all__ = [
     "FORMULATIONS",
     "METHODS",
+    "Algorithm2",
     "Certificate",
     "FKPose",
     "FKResult",

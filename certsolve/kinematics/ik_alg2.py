@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 from ..robot.geometry import Pose
 from ..robot.inputs import as_pose
 from ..robot.model import Robot
-from .ik_enclose import PoseEnclosure, SquareSystem, enclose_pose, is_elastic
+from .ik_enclose import FreeWires, PoseEnclosure, SquareSystem, enclose_pose, free_wires, is_elastic
 from .ik_inputs import check_pose, controls, overdetermined_note, require_elastic, search_window
 from .ik_result import (
     LIMIT_TOL,
@@ -31,6 +31,7 @@ from .ik_result import (
     IKStatus,
     Violation,
     limit_violations,
+    no_certificate,
     unique_in_box,
     window_violations,
 )
@@ -79,10 +80,14 @@ class Algorithm2:
     relative to ``1 + |u|``): half-width of the box proven to hold exactly one solution; a
     second, 1e-10-wide box proven at the same time gives the tight enclosure.
 
-    The robot and the options are checked here, once (a ``ValueError`` names the option);
-    :meth:`solve` checks the pose (:func:`~certsolve.robot.inputs.as_pose`).  About 0.1 ms a
-    pose (``benchmarks/trajectory_bench.py``), where :func:`certsolve.inverse_kinematics`
-    also validates its whole request at every call.
+    The robot and the options are checked here, once (a ``ValueError`` names the option),
+    and what depends only on them is worked out once (:class:`_Plan`: the fixed and free
+    wires, the fixed wire's eq. 5 constant, the free wires' constants
+    :class:`~.ik_enclose.FreeWires`, the limits); :meth:`solve` checks the pose
+    (:func:`~certsolve.robot.inputs.as_pose`; a :class:`~certsolve.robot.Pose` of float64
+    arrays is taken as it is, and refused at ``pose`` if it is not finite).  About 0.09 ms a
+    pose on the MARIONET robots (``benchmarks/trajectory_bench.py``), where
+    :func:`certsolve.inverse_kinematics` also validates its whole request at every call.
     """
 
     def __init__(
@@ -117,16 +122,119 @@ class Algorithm2:
             box_radius=box_radius,
             certify=certify,
         )
+        d = robot.dim
+        self._shapes = ((d,), (d, d))
+        self._radii = np.array([[box_radius], [1e-10]])
+        self._plan = _plan(robot, self.options)
 
     def solve(self, pose: Pose | ArrayLike | str) -> IKResult:
         """The controls holding the platform at ``pose`` (a :class:`~certsolve.robot.Pose`
         or pose parameters, cm and degrees), with this object's robot and options."""
         t0 = time.perf_counter()
-        return self._solve(as_pose(self.robot.dof, pose), t0)
+        if not _plain_pose(pose, self._shapes):
+            pose = as_pose(self.robot.dof, pose)
+        # else: a Pose of float64 arrays of the right shapes; its finiteness is checked
+        # only if its geometry is undefined (a NaN or an infinity makes it so), by as_pose
+        return self._solve(pose, t0)  # type: ignore[arg-type]  # a Pose either way
 
     def _solve(self, pose: Pose, t0: float) -> IKResult:
         with np.errstate(all="ignore"):
-            return _alg2(self.robot, pose, self.options, t0)
+            return _alg2(self, pose, t0)
+
+
+_F8 = np.dtype(np.float64)
+_ONE = np.array(1.0)  # 0-d: an array plus it is the same float as plus 1.0, faster
+_all = np.logical_and.reduce  # of a 1-D array: .all() without the method's wrapper
+_min = np.minimum.reduce
+_max = np.maximum.reduce
+
+
+def _plain_pose(pose: object, shapes: tuple[tuple[int, ...], tuple[int, ...]]) -> bool:
+    """Whether ``pose`` is a :class:`Pose` whose arrays are float64 of the robot's shapes
+    (what :func:`~certsolve.robot.inputs.as_pose` returns as it is when they are finite)."""
+    if type(pose) is not Pose:
+        return False
+    p, R = pose.position, pose.rotation
+    return (
+        type(p) is np.ndarray
+        and type(R) is np.ndarray
+        and p.dtype == _F8
+        and R.dtype == _F8
+        and (p.shape, R.shape) == shapes
+    )
+
+
+@dataclass(kw_only=True, frozen=True)
+class _OneFixed:
+    """One fixed wire ``j`` (MARIONET, planar) in Python floats: its control is ``u`` if
+    given, else ``a - W_j / K`` with ``a = k L0 / (K (k - τ_j))`` (eq. 5; ``W = ρ + V``)."""
+
+    j: int
+    k: float
+    K: float
+    L0: float
+    a: float | None
+    u: float | None
+
+    def control(self, W: float) -> float:
+        uj = self.u if self.u is not None else self.a - W / self.K  # type: ignore[operator]
+        if not math.isfinite(uj):
+            raise ValueError("fixed controls must be finite")
+        return uj
+
+
+@dataclass(kw_only=True, frozen=True)
+class _Plan:
+    """What Algorithm 2 does at every pose that depends only on the robot and the options:
+    the fixed and free wires when they do not depend on the pose (``None`` otherwise), the
+    free wires' constants and the fixed wire's, the bounds of the limits check."""
+
+    split: tuple[np.ndarray, np.ndarray, FreeWires] | None  # (F, S, S's constants)
+    one: _OneFixed | None
+    lim_lo: np.ndarray
+    lim_hi: np.ndarray
+
+
+def _plan(robot: Robot, opts: Alg2Options) -> _Plan:
+    m, w = robot.m, robot.wrench_dim
+    lim_lo, lim_hi = _limits(robot)
+    split = one = None
+    fixed_wire = opts.fixed_wire
+    if m == w + 1 and isinstance(fixed_wire, (int, np.integer)):
+        j = int(fixed_wire) - 1
+        if not 0 <= j < m:
+            raise ValueError(f"fixed wire {j + 1}: the robot has wires 1..{m}")
+        F, S = robot.wire_splits[j]
+        split = (F, S, free_wires(robot, S))
+        if _scalar_options(opts):
+            one = _one_fixed(robot, j, opts)
+    return _Plan(split=split, one=one, lim_lo=lim_lo, lim_hi=lim_hi)
+
+
+def _scalar_options(opts: Alg2Options) -> bool:
+    """Whether ``u_fixed`` and ``tau_fixed`` are numbers (or not given)."""
+    u_fixed, tau_fixed = opts.u_fixed, opts.tau_fixed
+    return (u_fixed is None or np.ndim(u_fixed) == 0) and (
+        tau_fixed is None or np.ndim(tau_fixed) == 0
+    )
+
+
+def _one_fixed(robot: Robot, j: int, opts: Alg2Options) -> _OneFixed:
+    k, K, L0 = float(robot.k[j]), float(robot.K[j]), float(robot.L0[j])
+    if opts.u_fixed is not None:
+        uj = float(opts.u_fixed)  # type: ignore[arg-type]  # ndim 0: a number
+        if not math.isfinite(uj):
+            raise ValueError("fixed controls must be finite")
+        return _OneFixed(j=j, k=k, K=K, L0=L0, a=None, u=uj)
+    tau_fixed = opts.tau_fixed
+    tj = (
+        0.5 * (float(robot.tau_min[j]) + float(robot.tau_max[j]))
+        if tau_fixed is None
+        else float(tau_fixed)  # type: ignore[arg-type]  # ndim 0, as u_fixed
+    )
+    if not tj < k:
+        raise ValueError("tau_fixed must be below the wire constant k")
+    return _OneFixed(j=j, k=k, K=K, L0=L0, a=k * L0 / (K * (k - tj)), u=None)
 
 
 def _fixed_wires(H, fixed_wire, count: int) -> list[int]:
@@ -197,36 +305,22 @@ def _newton_u(robot, rho, H_S, c, S, u0, max_iter=30):
     return u, max_iter, False
 
 
-def _fix_controls(robot: Robot, enc: PoseEnclosure, F, opts: Alg2Options):
-    """Controls ``u`` (fixed wires set, others 0) and ``c = w_g + H_F τ_F`` (eqs. 5, 6)."""
+def _fix_controls(robot: Robot, enc: PoseEnclosure, F, opts: Alg2Options, one: _OneFixed | None):
+    """Controls ``u`` (fixed wires set, others 0) and ``c = w_g + H_F τ_F`` (eqs. 5, 6);
+    ``one``: the fixed wire's constants when they were computed once (:func:`_plan`)."""
     m = robot.m
     Ht, wg = enc.Ht, enc.wg
     u = np.zeros(m)
-    u_fixed, tau_fixed = opts.u_fixed, opts.tau_fixed
-    if (
-        F.size == 1
-        and (u_fixed is None or np.ndim(u_fixed) == 0)
-        and (tau_fixed is None or np.ndim(tau_fixed) == 0)
-    ):
-        # one fixed wire (MARIONET, planar): scalar arithmetic
-        j = int(F[0])
-        k, K, L0, W = float(robot.k[j]), float(robot.K[j]), float(robot.L0[j]), float(enc.W[j])
-        if u_fixed is not None:
-            uj = float(u_fixed)  # type: ignore[arg-type]  # ndim 0: a number, not a sequence
-        else:
-            tj = (
-                0.5 * (float(robot.tau_min[j]) + float(robot.tau_max[j]))
-                if tau_fixed is None
-                else float(tau_fixed)  # type: ignore[arg-type]  # ndim 0, as u_fixed
-            )
-            if not tj < k:
-                raise ValueError("tau_fixed must be below the wire constant k")
-            uj = k * L0 / (K * (k - tj)) - W / K
-        if not math.isfinite(uj):
-            raise ValueError("fixed controls must be finite")
+    if one is None and F.size == 1 and _scalar_options(opts):
+        one = _one_fixed(robot, int(F[0]), opts)
+    if one is not None:  # one fixed wire (MARIONET, planar): scalar arithmetic
+        j = one.j
+        W = float(enc.W[j])
+        uj = one.control(W)
         u[j] = uj
-        Lj = W + K * uj
-        return u, wg + (k * (Lj - L0) / Lj) * Ht[j]
+        Lj = W + one.K * uj
+        return u, wg + (one.k * (Lj - one.L0) / Lj) * Ht[j]
+    u_fixed, tau_fixed = opts.u_fixed, opts.tau_fixed
     if not F.size:
         return u, wg
     if u_fixed is not None:
@@ -264,9 +358,12 @@ def _tensions_beyond_k(robot: Robot, sq: SquareSystem, c, S) -> list[int]:
     return [int(S[i]) + 1 for i in np.flatnonzero(~(tau_S < robot.k[S]))]
 
 
-def _alg2(robot: Robot, pose: Pose, opts: Alg2Options, t0: float) -> IKResult:
+def _alg2(alg: Algorithm2, pose: Pose, t0: float) -> IKResult:
+    robot, opts, plan = alg.robot, alg.options, alg._plan
     enc = enclose_pose(robot, pose.position, pose.rotation)
-    check_pose(pose, enc)
+    if not enc.valid:
+        as_pose(robot.dof, pose)  # InputError naming the pose if it is not finite
+        check_pose(pose, enc)
     rho, Ht, wg = enc.rho, enc.Ht, enc.wg
     m, w = Ht.shape
     messages: list[str] = []
@@ -275,9 +372,8 @@ def _alg2(robot: Robot, pose: Pose, opts: Alg2Options, t0: float) -> IKResult:
     def result(status, u, tau, violations, cert=None, f=None) -> IKResult:
         res = margin = None
         if tau is not None:
-            res = float(np.abs(tau @ Ht + wg if f is None else f).max())
-            margin = float(np.minimum(tau - robot.tau_min, robot.tau_max - tau).min())
-        extra = {} if cert is None else {"certificate": cert}
+            res = float(_max(abs(tau @ Ht + wg if f is None else f)))
+            margin = float(_min(np.minimum(tau - robot.tau_min, robot.tau_max - tau)))
         return IKResult(
             robot=robot.name,
             dof=robot.dof,
@@ -293,8 +389,8 @@ def _alg2(robot: Robot, pose: Pose, opts: Alg2Options, t0: float) -> IKResult:
             violations=violations,
             messages=messages,
             details=details,
+            certificate=no_certificate() if cert is None else cert,
             time=time.perf_counter() - t0,
-            **extra,
         )
 
     if m < w:  # over-determined: unique tensions if any, nothing square to certify
@@ -305,11 +401,15 @@ def _alg2(robot: Robot, pose: Pose, opts: Alg2Options, t0: float) -> IKResult:
         status = IKStatus.NOT_EQUILIBRIUM if not ch.equilibrium else IKStatus.UNCERTIFIED
         return result(status, u, ch.tau, viol)
 
-    F, S = _split_wires(robot, Ht, opts.fixed_wire, m - w)
+    if plan.split is not None:
+        F, S, fw = plan.split
+    else:
+        F, S = _split_wires(robot, Ht, opts.fixed_wire, m - w)
+        fw = free_wires(robot, S)
     details["fixed_wires"] = [int(j) + 1 for j in F]
-    u, c = _fix_controls(robot, enc, F, opts)
+    u, c = _fix_controls(robot, enc, F, opts, plan.one)
     try:
-        sq = SquareSystem(robot, enc, S)
+        sq = SquareSystem(robot, enc, fw)
     except np.linalg.LinAlgError:
         messages.append(
             "the wrench matrix of the free wires is singular at this pose: fix another wire"
@@ -317,7 +417,7 @@ def _alg2(robot: Robot, pose: Pose, opts: Alg2Options, t0: float) -> IKResult:
         return result(IKStatus.SINGULAR, None, None, [])
     if opts.solve == "tau":
         tau_S = sq.G @ -c
-        if not (tau_S < sq.k_free).all():
+        if not _all(tau_S < fw.kS):
             bad = _tensions_beyond_k(robot, sq, c, S)
             messages.append(f"no control: wires {bad} would need a tension >= k")
             return result(IKStatus.NO_SOLUTION, None, None, [])
@@ -334,20 +434,20 @@ def _alg2(robot: Robot, pose: Pose, opts: Alg2Options, t0: float) -> IKResult:
             if bad:
                 messages.append(f"no control exists: wires {bad} would need a tension >= k")
             return result(IKStatus.NO_SOLUTION, None, None, [])
-    u[S] = u_S
+    sel = fw.sel
+    u[sel] = u_S
     cert = None
     if opts.certify:
         # two nested boxes in one call: the large one for uniqueness, the small one for a
-        # tight enclosure
-        au = 1.0 + np.abs(u_S)
-        radii = np.array([[opts.box_radius], [1e-10]]) * au  # (2, m): no np.stack, ~8 us
+        # tight enclosure (u twice, not broadcast: BLAS takes another path for one row)
+        radii = alg._radii * (np.abs(u_S) + _ONE)
         xlo, xhi, klo, khi, proven, tc, fc = sq.krawczyk(np.array([u, u]), radii)
         tau = tc[0]
         res_f = fc[0]
         if proven[0] or proven[1]:
             b = 0 if proven[0] else 1
             e = 1 if proven[1] else 0
-            cert = unique_in_box(u, F, S, xlo[b], xhi[b], klo[e], khi[e], xlo[e], xhi[e])
+            cert = unique_in_box(u, F, sel, xlo[b], xhi[b], klo[e], khi[e], xlo[e], xhi[e])
         else:
             messages.append("Krawczyk test failed: the solution is not certified")
     else:
@@ -355,9 +455,8 @@ def _alg2(robot: Robot, pose: Pose, opts: Alg2Options, t0: float) -> IKResult:
         tau = robot.k * (L - robot.L0) / L
         res_f = tau @ Ht + wg
     violations: list[Violation] = []
-    lim_lo, lim_hi = _limits(robot)
     tu = np.concatenate((tau, u))
-    if not ((lim_lo <= tu) & (tu <= lim_hi)).all():
+    if not _all((plan.lim_lo <= tu) & (tu <= plan.lim_hi)):
         violations = limit_violations(robot, tau, u)
     if opts.u_last is not None and opts.window is not None:
         violations += window_violations(u, opts.u_last, opts.window)

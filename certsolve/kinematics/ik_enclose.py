@@ -38,6 +38,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg.lapack
 from numpy.typing import ArrayLike
 
 from ..interval.linalg import UNDERFLOW, U, gamma, krawczyk_mr
@@ -55,10 +56,14 @@ __all__ = [
     "jacobian_mr",
     "krawczyk_mr",
     "SquareSystem",
+    "FreeWires",
+    "free_wires",
     "is_elastic",
 ]
 
 SAFE = 1.0 + 2.0**-20
+
+_dgesv = scipy.linalg.lapack.dgesv
 
 _G3 = gamma(3)
 
@@ -81,7 +86,7 @@ class _Consts:
     eF: list
     com: list
     wg_const: tuple | None  # (wg, ewg) when the gravity wrench does not depend on the pose
-    per_free: dict[bytes, tuple[np.ndarray, ...]]  # SquareSystem constants per set of free wires
+    per_free: dict[bytes, FreeWires]  # SquareSystem constants per set of free wires
 
 
 def _consts(robot: Robot) -> _Consts:
@@ -182,18 +187,26 @@ def _gravity(cs: _Consts, R):
     if cs.wg_const is not None:
         return cs.wg_const
     F, eF, com = cs.F, cs.eF, cs.com
-    Rl = R.tolist()
-    cg = []
-    ecg = []
     k = 2.0 * _G3
-    for row in Rl:  # R com and 2 γ_3 |R| |com|, summed in order (no generators: ~5 µs)
-        s = a = 0.0
-        for r, c in zip(row, com, strict=True):
-            t = r * c
-            s += t
-            a += abs(t)
-        cg.append(s)
-        ecg.append(k * a * SAFE)
+    if cs.dof == 6:  # R com and 2 γ_3 |R| |com|, summed in order, unrolled (3 -> 2 µs)
+        c0, c1, c2 = com
+        cg = []
+        ecg = []
+        for r0, r1, r2 in R.tolist():
+            t0, t1, t2 = r0 * c0, r1 * c1, r2 * c2
+            cg.append(0.0 + t0 + t1 + t2)
+            ecg.append(k * (0.0 + abs(t0) + abs(t1) + abs(t2)) * SAFE)
+    else:
+        cg = []
+        ecg = []
+        for row in R.tolist():  # as above, any size (no generators: ~5 µs)
+            s = a = 0.0
+            for r, c in zip(row, com, strict=True):
+                t = r * c
+                s += t
+                a += abs(t)
+            cg.append(s)
+            ecg.append(k * a * SAFE)
     if cs.dof == 3:
         mz, emz = _xprod(cg, ecg, F, eF, 0, 1)
         return np.array(F + [mz]), np.array(eF + [emz])
@@ -203,13 +216,16 @@ def _gravity(cs: _Consts, R):
     return np.array(F + [m0, m1, m2]), np.array(eF + [e0, e1, e2])
 
 
-_C_RHO = 10.0 * U * SAFE
-_C_BETA = 8.0 * U * SAFE
-_C_N1 = 14.0 * U * SAFE * (1 + 6 * U)
-_C_N2 = 16.0 * U * SAFE * (1 + 6 * U)
-_C_N3 = 2.0 * U * SAFE
-_C_M1 = (1.0 + 4 * U) * SAFE
-_C_M2 = 6.0 * U * SAFE
+# 0-d arrays: an array times one is the same float as times the Python float, faster
+_C_RHO = np.array(10.0 * U * SAFE)
+_C_BETA = np.array(8.0 * U * SAFE)
+_C_N1 = np.array(14.0 * U * SAFE * (1 + 6 * U))
+_C_N2 = np.array(16.0 * U * SAFE * (1 + 6 * U))
+_C_N3 = np.array(2.0 * U * SAFE)
+_C_M1 = np.array((1.0 + 4 * U) * SAFE)
+_C_M2 = np.array(6.0 * U * SAFE)
+_C_W1 = np.array(1.0 + 4 * U)
+_C_W2 = np.array(2.0 * U * SAFE)
 
 
 def enclose_pose(
@@ -221,15 +237,18 @@ def enclose_pose(
     R = np.asarray(rotation, dtype=float)
     CB = cs.B @ R.T
     AB = (cs.A - position) - CB
-    rho = np.sqrt((AB * AB).sum(axis=1))
+    rho = np.sqrt(np.add.reduce(AB * AB, axis=1))  # .sum(axis=1) without its wrapper
     if dof == 6:
-        # the columns (n, c × n) written in place; c and n doubled side by side, so that
-        # (c_1, c_2, c_0) and (c_2, c_0, c_1) are slices (a list index costs ~1 us a use)
-        Ht = np.empty((AB.shape[0], 6))
-        n = np.divide(AB, rho[:, None], out=Ht[:, :3])
-        C2 = np.concatenate((CB, CB), axis=1)
-        N2 = np.concatenate((n, n), axis=1)
-        np.subtract(C2[:, 1:4] * N2[:, 2:5], C2[:, 2:5] * N2[:, 1:4], out=Ht[:, 3:])
+        # the rows (n, c × n) of H written in place; c and n doubled, so that (c_1, c_2, c_0)
+        # and (c_2, c_0, c_1) are slices (a list index costs ~1 us a use).  H is built
+        # transposed, (6, m), where these slices are contiguous blocks of rows (arithmetic on
+        # strided (m, 3) column blocks costs three times as much), then copied to C order
+        Hw = np.empty((6, AB.shape[0]))
+        n = np.divide(AB.T.copy(), rho, out=Hw[:3])
+        C2 = np.concatenate((CB.T, CB.T))
+        N2 = np.concatenate((n, n))
+        np.subtract(C2[1:4] * N2[2:5], C2[2:5] * N2[1:4], out=Hw[3:])
+        Ht = Hw.T.copy()
     elif dof == 3:
         n = AB / rho[:, None]
         Ht = np.concatenate([n, (CB[:, 0] * n[:, 1] - CB[:, 1] * n[:, 0])[:, None]], axis=1)
@@ -247,14 +266,16 @@ def enclose_pose(
     if not valid:
         rlo = np.where(rlo > 0.0, rlo, 0.0)
     en = (_C_N1 * rho + _C_N2 * beta) / rlo + _C_N3
+    # C order, as Ht: sums of arrays of one layout are 3 times faster than of mixed ones
+    Ht_err = np.empty(Ht.shape)
     if dof == 2:
-        Ht_err = np.array([en, en]).T
-    elif dof == 3:
-        Ht_err = np.array([en, en, beta * (_C_M1 * en + _C_M2)]).T
+        Ht_err[:] = en[:, None]
     else:
         em = beta * (_C_M1 * en + _C_M2)
-        Ht_err = np.array([en, en, en, em, em, em]).T
-    eW = erho * (1.0 + 4 * U) + (2.0 * U * SAFE) * W
+        d = cs.dim  # the force columns (n), then the moment columns (μ)
+        Ht_err[:, :d] = en[:, None]
+        Ht_err[:, d:] = em[:, None]
+    eW = erho * _C_W1 + _C_W2 * W
     return PoseEnclosure(rho, erho, Ht, Ht_err, wg, ewg, W, eW, valid)
 
 
@@ -345,18 +366,90 @@ def jacobian_mr(
     return Jc, Jr * SAFE + UNDERFLOW
 
 
-def _per_free(cs: _Consts, S: np.ndarray) -> tuple[np.ndarray, ...]:
-    """The constants of :class:`SquareSystem` that depend only on the free wires ``S``."""
-    return (
-        cs.K[S] * (1.0 + 4.0 * U),
-        cs.kL0K[S] * ((1.0 + 16.0 * U) / (1.0 - 8.0 * U) ** 2),
-        cs.kL0K[S] * ((1.0 - 16.0 * U) / (1.0 + 8.0 * U) ** 2),
-        cs.kL0 * ((1.0 + 4.0 * U) * SAFE),
-        cs.k[S],
-        cs.kL0[S] / cs.K[S],
-        1.0 / cs.K[S],
-        np.eye(S.size),
+@dataclass(frozen=True, kw_only=True)
+class FreeWires:
+    """What :class:`SquareSystem` needs from the robot for one set of free wires ``S``,
+    computed once (:func:`free_wires`): the selection (a slice when ``S`` is a run of wires,
+    so that taking the columns is a view, not a copy), the identity, the bounds' constants."""
+
+    free: np.ndarray  # (n,) 0-based free wires
+    sel: slice | np.ndarray  # the same wires as a slice when contiguous
+    eye: np.ndarray  # (n, n) identity
+    Kr: np.ndarray  # K_S (1 + 4u): the growth of L over a box of radius r
+    Chi: np.ndarray  # k L0 K (1 + 16u) / (1 - 8u)²: τ' = Chi / L² rounded up
+    Clo: np.ndarray  # k L0 K (1 - 16u) / (1 + 8u)²: rounded down
+    CkL0: np.ndarray  # (m,) k L0 (1 + 4u) SAFE: the bound of τ(L) - τ(L̃)
+    kS: np.ndarray  # k_S
+    aS: np.ndarray  # k L0 / K over S (eq. 5)
+    iKS: np.ndarray  # 1 / K_S
+    g: np.ndarray  # γ_n (0-d, as the three below)
+    gmS: np.ndarray  # γ_{m+2} SAFE: the rounding of f = H τ + w_g
+    kq: np.ndarray  # SAFE (1 + γ_{n+4}): the rounding of the Krawczyk radius
+    c0: np.ndarray | None  # the error of w_g in f when w_g does not depend on the pose
+    #: (K, k, L0, CkL0, Kr, Chi, Clo) as two rows each, for a batch of two boxes (Algorithm
+    #: 2's): a (2, n) array with a (2, n) one costs a third of one with an (n,) broadcast
+    two: tuple[np.ndarray, ...]
+
+
+def free_wires(robot: Robot, free: ArrayLike) -> FreeWires:
+    """The :class:`FreeWires` of ``free``, computed once per robot and set of free wires."""
+    cs = _consts(robot)
+    S = np.asarray(free, dtype=np.int64)
+    key = S.tobytes()
+    fw = cs.per_free.get(key)
+    if fw is None:
+        fw = cs.per_free[key] = _free_wires(cs, S)
+    return fw
+
+
+def _free_wires(cs: _Consts, S: np.ndarray) -> FreeWires:
+    n = S.size
+    run = n > 0 and bool(np.array_equal(S, np.arange(S[0], S[0] + n)))
+    Chi = cs.kL0K[S] * ((1.0 + 16.0 * U) / (1.0 - 8.0 * U) ** 2)
+    Clo = cs.kL0K[S] * ((1.0 - 16.0 * U) / (1.0 + 8.0 * U) ** 2)
+    gmS = gamma(cs.A.shape[0] + 2) * SAFE
+    Kr = cs.K[S] * (1.0 + 4.0 * U)
+    c0 = None
+    if cs.wg_const is not None:
+        wg, ewg = cs.wg_const
+        c0 = ewg + gmS * np.abs(wg) + UNDERFLOW
+    return FreeWires(
+        free=S,
+        sel=slice(int(S[0]), int(S[0]) + n) if run else S,
+        eye=np.eye(n),
+        Kr=Kr,
+        Chi=Chi,
+        Clo=Clo,
+        CkL0=cs.kL0 * ((1.0 + 4.0 * U) * SAFE),
+        kS=cs.k[S],
+        aS=cs.kL0[S] / cs.K[S],
+        iKS=1.0 / cs.K[S],
+        g=np.array(gamma(n)),
+        gmS=np.array(gmS),
+        kq=np.array(SAFE * (1.0 + gamma(n + 4))),
+        c0=c0,
+        two=tuple(
+            np.array((x, x))
+            for x in (cs.K, cs.k, cs.L0, cs.kL0 * ((1.0 + 4.0 * U) * SAFE), Kr, Chi, Clo)
+        ),
     )
+
+
+# The constants of the per-pose arithmetic below as 0-d arrays: an array times a 0-d array
+# is the same float as times the Python float, without the conversion of the scalar (0.21
+# against 0.37 us for a (2, 6) product)
+_NINF = np.array(-np.inf)
+_PINF = np.array(np.inf)
+_ZERO = np.array(0.0)
+_HALF = np.array(0.5)
+_HALF_SAFE = np.array(0.5 * SAFE)
+_R4 = np.array(1.0 + 4.0 * U)  # one relative rounding
+_A4 = np.array(4.0 * U)
+_A4S = np.array(4.0 * U * SAFE)
+_A2S = np.array(2.0 * U * SAFE)
+_G3S = np.array(2.0 * _G3 * SAFE)
+_SAFE = np.array(SAFE)
+_TINY = np.array(UNDERFLOW)
 
 
 class SquareSystem:
@@ -375,55 +468,65 @@ class SquareSystem:
     agree).  ``Y`` is used only through these bounds; any ``Y`` is sound.
     """
 
-    def __init__(self, robot: Robot, enc: PoseEnclosure, free: ArrayLike) -> None:
-        cs = _consts(robot)
+    def __init__(
+        self,
+        robot: Robot,
+        enc: PoseEnclosure,
+        free: ArrayLike | FreeWires,
+    ) -> None:
+        self._cs = _consts(robot)
         self.robot = robot
         self.enc = enc
-        S = self.free = np.asarray(free, dtype=np.int64)
-        Hs = enc.Ht[S].T
-        eHt = _bound(enc.Ht_err)
-        n = Hs.shape[1]
-        if Hs.shape[0] != n:
+        fw = self.fw = free if isinstance(free, FreeWires) else free_wires(robot, free)
+        self.free = fw.free
+        sel = fw.sel
+        Ht = enc.Ht
+        if Ht.shape[1] != fw.free.size:
             raise ValueError("the free wires must make the system square")
-        self.G = G = np.linalg.inv(Hs)  # LinAlgError: singular
+        eHt = _bound(enc.Ht_err)
+        Hs = Ht[sel].T
+        # LAPACK's gesv on (H_S, I), as np.linalg.inv does, without its wrapper (~3 us)
+        _, _, G, info = _dgesv(Hs, fw.eye)
+        if info > 0:
+            raise np.linalg.LinAlgError("Singular matrix")
+        # C order, as np.linalg.inv returns it: BLAS takes another path (other floats) for a
+        # Fortran-ordered G in G @ x
+        self.G = G = np.ascontiguousarray(G)
         self.Gt = G.T
         aG = np.abs(G)
         self.aGt = aG.T
-        self.g = g = gamma(n)
-        key = S.tobytes()
-        per = cs.per_free.get(key)
-        if per is None:
-            per = cs.per_free[key] = _per_free(cs, S)
-        GH = G @ Hs - per[-1]  # G H_S - I (x - 0 is x: the same floats as the diagonal alone)
-        self.DeltaT = (
-            (np.abs(GH) * (1.0 + 4.0 * U) + aG @ (g * np.abs(Hs) + eHt[S].T)) * SAFE + UNDERFLOW
-        ).T
-        aHt = np.abs(enc.Ht)
-        gm = gamma(enc.Ht.shape[0] + 2)
-        self._A1 = eHt + (gm * SAFE) * aHt
-        self._A2 = (aHt + eHt) * SAFE
-        self._c0 = _bound(enc.wg_err) + (gm * SAFE) * np.abs(enc.wg) + UNDERFLOW
-        self._Kr, self._Chi, self._Clo, self._CkL0, self._kS, self._aS, self._iKS, _ = per
+        aHt = np.abs(Ht)
+        GH = G @ Hs - fw.eye  # G H_S - I (x - 0 is x: the same floats as the diagonal alone)
+        self.DeltaT = ((np.abs(GH) * _R4 + aG @ (fw.g * aHt[sel].T + eHt[sel].T)) * _SAFE + _TINY).T
+        self._A1 = eHt + fw.gmS * aHt
+        self._A2 = (aHt + eHt) * _SAFE
+        c0 = fw.c0
+        if c0 is None:
+            c0 = _bound(enc.wg_err) + fw.gmS * np.abs(enc.wg) + _TINY
+        self._c0 = c0
         #: ``k`` of the free wires (a tension of the square system must stay below it)
-        self.k_free = self._kS
-        self._WS = enc.W[S]
-        self._cs = cs
-        self._kq = SAFE * (1.0 + gamma(n + 4))
+        self.k_free = fw.kS
+        self._WS = enc.W[sel]
 
     def controls(self, tau_S: np.ndarray) -> np.ndarray:
         """Eq. (5) for the free wires, in floating point (a candidate, no bound)."""
-        return self._aS / (self._kS - tau_S) - self._WS * self._iKS
+        fw = self.fw
+        return fw.aS / (fw.kS - tau_S) - self._WS * fw.iKS
 
     def tensions(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Float tensions at ``u`` ``(B, m)`` with error bounds, and ``L``, ``eL`` (eq. 2, 6)."""
-        cs, enc = self._cs, self.enc
-        Ku = cs.K * u
+        cs, enc, fw = self._cs, self.enc, self.fw
+        if u.shape[0] == 2:
+            K, k, L0, CkL0 = fw.two[:4]
+        else:
+            K, k, L0, CkL0 = cs.K, cs.k, cs.L0, fw.CkL0
+        Ku = u * K
         L = enc.W + Ku
-        eL = _bound(enc.W_err) + (2.0 * U * SAFE) * (np.abs(Ku) + np.abs(L))
-        tau = cs.k * (L - cs.L0) / L
+        eL = _bound(enc.W_err) + _A2S * (np.abs(Ku) + np.abs(L))
+        tau = k * (L - L0) / L
         Llo = L - eL
-        etau = self._CkL0 * eL / (Llo * L) + (2.0 * _G3 * SAFE) * np.abs(tau)
-        if not (Llo.min() > 0.0):
+        etau = CkL0 * eL / (Llo * L) + _G3S * np.abs(tau)
+        if not (np.minimum.reduce(Llo, axis=None) > 0.0):
             etau = np.where(Llo > 0.0, etau, np.inf)
         return tau, etau, L, eL
 
@@ -440,32 +543,36 @@ class SquareSystem:
         Returns ``(xlo, xhi, klo, khi, proven, tau, fc)`` over the free wires (``tau``, ``fc``:
         float tensions and residual at ``u``).
         """
-        S = self.free
+        fw = self.fw
+        sel = fw.sel
+        Kr, Chi, Clo = fw.two[4:] if u.shape[0] == 2 else (fw.Kr, fw.Chi, fw.Clo)
         tau, etau, L, eL = self.tensions(u)
         fc = tau @ self.enc.Ht + self.enc.wg
         fr = np.abs(tau) @ self._A1 + etau @ self._A2 + self._c0
-        uc = u[:, S]
-        xlo = np.nextafter(uc - rad, -np.inf)
-        xhi = np.nextafter(uc + rad, np.inf)
-        r = np.maximum(xhi - uc, uc - xlo) * (1.0 + 4.0 * U)
+        # the free wires' columns copied: arithmetic on a strided (2, n) view costs three
+        # times as much (0.67 against 0.2 us)
+        uc = u[:, sel].copy()
+        xlo = np.nextafter(uc - rad, _NINF)
+        xhi = np.nextafter(uc + rad, _PINF)
+        r = np.maximum(xhi - uc, uc - xlo) * _R4
         # τ' = k L0 K / L² over the box: L ∈ L(u_S) ± (eL + K r)
-        Ls = L[:, S]
-        eLs = eL[:, S] + self._Kr * r
+        Ls = L[:, sel].copy()
+        eLs = eL[:, sel] + Kr * r
         lo = Ls - eLs
         hi = Ls + eLs
-        dhi = self._Chi / (lo * lo)
-        dlo = self._Clo / (hi * hi)
-        if not (lo.min() > 0.0):
+        dhi = Chi / (lo * lo)
+        dlo = Clo / (hi * hi)
+        if not (np.minimum.reduce(lo, axis=None) > 0.0):
             dhi = np.where(lo > 0.0, dhi, np.inf)
-        dc = 0.5 * (dlo + dhi)
-        dr = (0.5 * SAFE) * (dhi - dlo) + (4.0 * U) * dc
+        dc = _HALF * (dlo + dhi)
+        dr = _HALF_SAFE * (dhi - dlo) + _A4 * dc
         # K(X) = c - Y f(c) + (I - Y J)(X - c) with Y = diag(1/dc) G:
         # |Y f(c) - bc| + |(I - Y J)(X - c)| <= q / dc + rounding
-        q = (fr + self.g * np.abs(fc)) @ self.aGt + dr * r + ((dc + dr) * r) @ self.DeltaT
+        q = (fr + fw.g * np.abs(fc)) @ self.aGt + dr * r + ((dc + dr) * r) @ self.DeltaT
         bc = (fc @ self.Gt) / dc
         ce = uc - bc
-        rr = self._kq * (q / dc) + (4.0 * U * SAFE) * (np.abs(uc) + np.abs(bc)) + UNDERFLOW
-        klo = np.nextafter(ce - rr, -np.inf)
-        khi = np.nextafter(ce + rr, np.inf)
-        proven = ((klo > xlo) & (khi < xhi)).all(axis=1)
+        rr = fw.kq * (q / dc) + _A4S * (np.abs(uc) + np.abs(bc)) + _TINY
+        klo = np.nextafter(ce - rr, _NINF)
+        khi = np.nextafter(ce + rr, _PINF)
+        proven = np.logical_and.reduce((klo > xlo) & (khi < xhi), axis=1)
         return xlo, xhi, klo, khi, proven, tau, fc

@@ -191,7 +191,7 @@ def no_certificate() -> Certificate:
 def unique_in_box(
     u: np.ndarray,
     F: np.ndarray,
-    S: np.ndarray,
+    S: np.ndarray | slice,
     xlo: np.ndarray,
     xhi: np.ndarray,
     klo: np.ndarray,
@@ -204,10 +204,9 @@ def unique_in_box(
     wires ``F`` are fixed at ``u[F]``."""
     slo = xlo if slo is None else slo
     shi = xhi if shi is None else shi
-    blo, bhi = u.copy(), u.copy()
-    blo[S], bhi[S] = xlo, xhi
-    elo, ehi = u.copy(), u.copy()
-    elo[S], ehi[S] = np.maximum(klo, slo), np.minimum(khi, shi)
+    # the four bounds as the rows of one array (four copies of u, then the free wires)
+    blo, bhi, elo, ehi = b = np.array((u, u, u, u))
+    b[0, S], b[1, S], b[2, S], b[3, S] = xlo, xhi, np.maximum(klo, slo), np.minimum(khi, shi)
     fixed = {int(j) + 1: float(u[j]) for j in F}
     if fixed:
         fx = ", ".join(f"u_{j} = {v!r}" for j, v in fixed.items())
