@@ -46,6 +46,7 @@ Rules the JSON Schema cannot state (a request that breaks one is a 422 naming th
 - tracking (`fk/track`, `trajectory`) takes a robot without `tolerances` (one robot, not a set);
 - IK of a robot with `tolerances`: method `tension` or `alg2` with `solve` `tau`, at least as
   many wires as equilibrium equations, and no wire of zero length for any robot of the set;
+- IK Algorithm 2: `tau_fixed` below the fixed wire's stiffness `k` (eq. 5);
 - IK with `distribution` `closed-form`: one more wire than equations (`m = w + 1`) and a
   wrench matrix of full rank at the pose;
 - IK: another method's options keep their defaults (`u_last`, `window` not with `tension`;

@@ -114,6 +114,10 @@ def _repair_params(kind: str, robot: dict | None, params: dict) -> None:
         params.pop("formulation", None)  # as fk's
     if kind == "ik" and robot and m != robot["dof"] + 1:  # closed form: m = w + 1 wires
         params.pop("distribution", None)
+    if kind == "ik" and robot and params.get("tau_fixed") is not None:  # eq. 5: tau < k
+        ks = [w["k"] for w in robot["wires"] if w.get("k") is not None]
+        if ks and params["tau_fixed"] >= min(ks):
+            params.pop("tau_fixed")
     if kind == "ik" and m:
         if params.get("u_last") is not None:
             params["u_last"] = (list(params["u_last"]) + [0.0] * m)[:m]

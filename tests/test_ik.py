@@ -479,12 +479,14 @@ def test_algorithm2_checks_options_once_and_pose_at_solve():
     from certsolve.kinematics.ik_alg2 import Algorithm2
 
     robot = load("marionet")
-    with pytest.raises(ValueError, match="fixed wire 9"):
-        Algorithm2(robot, fixed_wire=9)
-    with pytest.raises(ValueError, match="tau_fixed"):
-        Algorithm2(robot, tau_fixed=1e9)
-    with pytest.raises(ValueError, match="fixed controls"):
-        Algorithm2(robot, u_fixed=float("inf"))
+    for options, field, words in (
+        ({"fixed_wire": 9}, "fixed_wire", "wire 9"),
+        ({"tau_fixed": 1e9}, "tau_fixed", "below the wire constant k"),
+        ({"u_fixed": float("inf")}, "u_fixed", "fixed controls must be finite"),
+    ):
+        with pytest.raises(InputError, match=words) as err:
+            Algorithm2(robot, **options)
+        assert err.value.field == field
     alg2 = Algorithm2(robot)
     good = Pose.from_params(6, CENTRE["marionet"])
     inf_rotation = good.rotation.copy()

@@ -716,13 +716,8 @@ function renderFk(job, r, out) {
 }
 
 // -- the pose boxes of a robot with tolerances ---------------------------------------------------
-// The SVG namespace, as the HTML parser gives it to an <svg> element (a constant string,
-// no server text).
-const SVG_NS = (() => {
-  const t = document.createElement("template");
-  t.innerHTML = "<svg></svg>";
-  return t.content.firstChild.namespaceURI;
-})();
+// The SVG namespace (the W3C's name for it, not a URL the page loads).
+const SVG_NS = "http://www.w3.org/2000/svg";
 
 function svgEl(tag, attrs, ...children) {
   const node = document.createElementNS(SVG_NS, tag);

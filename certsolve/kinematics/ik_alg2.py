@@ -20,6 +20,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike
 
+from ..inputs import InputError
 from ..robot.geometry import Pose
 from ..robot.inputs import as_pose
 from ..robot.model import Robot
@@ -38,7 +39,7 @@ from .ik_result import (
 from .ik_search import control_point
 from .ik_tension import distribute_tensions
 
-__all__ = ["Alg2Options", "Algorithm2", "ik_algorithm2"]
+__all__ = ["Alg2Options", "Algorithm2", "fix_controls", "fixed_wires", "ik_algorithm2"]
 
 
 @dataclass(kw_only=True, frozen=True)
@@ -179,7 +180,8 @@ class _OneFixed:
     def control(self, W: float) -> float:
         uj = self.u if self.u is not None else self.a - W / self.K  # type: ignore[operator]
         if not math.isfinite(uj):
-            raise ValueError("fixed controls must be finite")
+            field = "u_fixed" if self.u is not None else "tau_fixed"
+            raise InputError(field, "the fixed controls must be finite")
         return uj
 
 
@@ -203,7 +205,7 @@ def _plan(robot: Robot, opts: Alg2Options) -> _Plan:
     if m == w + 1 and isinstance(fixed_wire, (int, np.integer)):
         j = int(fixed_wire) - 1
         if not 0 <= j < m:
-            raise ValueError(f"fixed wire {j + 1}: the robot has wires 1..{m}")
+            raise InputError("fixed_wire", f"wire {j + 1}: the robot has wires 1..{m}")
         F, S = robot.wire_splits[j]
         split = (F, S, free_wires(robot, S))
         if _scalar_options(opts):
@@ -224,7 +226,7 @@ def _one_fixed(robot: Robot, j: int, opts: Alg2Options) -> _OneFixed:
     if opts.u_fixed is not None:
         uj = float(opts.u_fixed)  # type: ignore[arg-type]  # ndim 0: a number
         if not math.isfinite(uj):
-            raise ValueError("fixed controls must be finite")
+            raise InputError("u_fixed", "the fixed controls must be finite")
         return _OneFixed(j=j, k=k, K=K, L0=L0, a=None, u=uj)
     tau_fixed = opts.tau_fixed
     tj = (
@@ -233,11 +235,11 @@ def _one_fixed(robot: Robot, j: int, opts: Alg2Options) -> _OneFixed:
         else float(tau_fixed)  # type: ignore[arg-type]  # ndim 0, as u_fixed
     )
     if not tj < k:
-        raise ValueError("tau_fixed must be below the wire constant k")
+        raise InputError("tau_fixed", "must be below the wire constant k")
     return _OneFixed(j=j, k=k, K=K, L0=L0, a=k * L0 / (K * (k - tj)), u=None)
 
 
-def _fixed_wires(H, fixed_wire, count: int) -> list[int]:
+def fixed_wires(H, fixed_wire, count: int) -> list[int]:
     """``count`` 0-based wires to fix: the requested ones, completed by pivoted QR."""
     m = H.shape[1]
     if fixed_wire is None:
@@ -248,7 +250,7 @@ def _fixed_wires(H, fixed_wire, count: int) -> list[int]:
         given = [int(j) - 1 for j in fixed_wire]
     for j in given:
         if not 0 <= j < m:
-            raise ValueError(f"fixed wire {j + 1}: the robot has wires 1..{m}")
+            raise InputError("fixed_wire", f"wire {j + 1}: the robot has wires 1..{m}")
     if len(set(given)) != len(given):
         raise ValueError("fixed wires must be distinct")
     if count <= 0:
@@ -271,9 +273,9 @@ def _split_wires(robot: Robot, Ht, fixed_wire, count):
     if isinstance(fixed_wire, (int, np.integer)) and count == 1:
         j = int(fixed_wire) - 1
         if not 0 <= j < m:
-            raise ValueError(f"fixed wire {j + 1}: the robot has wires 1..{m}")
+            raise InputError("fixed_wire", f"wire {j + 1}: the robot has wires 1..{m}")
         return robot.wire_splits[j]
-    F = _fixed_wires(Ht.T, fixed_wire, count)
+    F = fixed_wires(Ht.T, fixed_wire, count)
     return np.array(F, dtype=np.int64), np.array([j for j in range(m) if j not in F], np.int64)
 
 
@@ -305,7 +307,9 @@ def _newton_u(robot, rho, H_S, c, S, u0, max_iter=30):
     return u, max_iter, False
 
 
-def _fix_controls(robot: Robot, enc: PoseEnclosure, F, opts: Alg2Options, one: _OneFixed | None):
+def fix_controls(
+    robot: Robot, enc: PoseEnclosure, F, opts: Alg2Options, one: _OneFixed | None = None
+):
     """Controls ``u`` (fixed wires set, others 0) and ``c = w_g + H_F τ_F`` (eqs. 5, 6);
     ``one``: the fixed wire's constants when they were computed once (:func:`_plan`)."""
     m = robot.m
@@ -329,10 +333,11 @@ def _fix_controls(robot: Robot, enc: PoseEnclosure, F, opts: Alg2Options, one: _
         tf = 0.5 * (robot.tau_min[F] + robot.tau_max[F]) if tau_fixed is None else tau_fixed
         tf = np.broadcast_to(np.asarray(tf, dtype=float), F.shape)
         if np.any(tf >= robot.k[F]):
-            raise ValueError("tau_fixed must be below the wire constant k")
+            raise InputError("tau_fixed", "must be below the wire constant k")
         uf = control_point(robot, enc.rho[F], tf, F)
     if not np.all(np.isfinite(uf)):
-        raise ValueError("fixed controls must be finite")
+        field = "u_fixed" if u_fixed is not None else "tau_fixed"
+        raise InputError(field, "the fixed controls must be finite")
     u[F] = uf
     LF = enc.W[F] + robot.K[F] * u[F]
     tauF = robot.k[F] * (LF - robot.L0[F]) / LF
@@ -407,7 +412,7 @@ def _alg2(alg: Algorithm2, pose: Pose, t0: float) -> IKResult:
         F, S = _split_wires(robot, Ht, opts.fixed_wire, m - w)
         fw = free_wires(robot, S)
     details["fixed_wires"] = [int(j) + 1 for j in F]
-    u, c = _fix_controls(robot, enc, F, opts, plan.one)
+    u, c = fix_controls(robot, enc, F, opts, plan.one)
     try:
         sq = SquareSystem(robot, enc, fw)
     except np.linalg.LinAlgError:

@@ -60,7 +60,7 @@ from ..interval.core import Pair, midpoint
 from ..interval.rounding import down
 from ..robot.geometry import Pose
 from ..robot.model import Robot
-from .ik_alg2 import Alg2Options, _fix_controls, _fixed_wires
+from .ik_alg2 import Alg2Options, fix_controls, fixed_wires
 from .ik_enclose import enclose_pose, is_elastic
 from .ik_inputs import check_pose, require_elastic, search_window
 from .ik_result import (
@@ -284,9 +284,9 @@ def tolerant_inverse_kinematics(
     else:
         if u_last is not None:
             _, _, u_last = search_window(nominal, u_last, window)
-        F = np.array(_fixed_wires(H0, fixed_wire, m - w), dtype=np.int64)
+        F = np.array(fixed_wires(H0, fixed_wire, m - w), dtype=np.int64)
         opts = Alg2Options(fixed_wire=fixed_wire, tau_fixed=tau_fixed, u_fixed=u_fixed)
-        u0, _ = _fix_controls(nominal, enc, F, opts)
+        u0, _ = fix_controls(nominal, enc, F, opts)
         uF = u0[F]
         fixed_u = {int(j) + 1: float(v) for j, v in zip(F, uF, strict=True)}
         tauF = _tension_of_control(robot, st, F, uF)
