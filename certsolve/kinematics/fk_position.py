@@ -113,6 +113,12 @@ def unit_vector_bounds(alo: np.ndarray, ahi: np.ndarray) -> tuple[np.ndarray, np
     return nlo, nhi
 
 
+def _pull(tau, nlo, nhi) -> tuple[np.ndarray, np.ndarray]:
+    """``[τ_i][n_i]`` ``(B, m, d)``: each wire's pull on the platform, towards ``A_i``
+    negated (``n_i`` points from ``A_i`` to ``B_i``)."""
+    return arith.mul(tau[0][..., None], tau[1][..., None], nlo, nhi)
+
+
 class ForceBalance:
     """The force balance ``g(p; E, u)`` with ``ρ_i = |B_i - A_i|`` and its Jacobian in the
     position ``p = P_1``, for a platform-frame formulation (module docstring).
@@ -121,7 +127,8 @@ class ForceBalance:
     the box's orientations, for a batch of boxes of the formulation's variables.
     """
 
-    def __init__(self, form: FKFormulation):
+    def __init__(self, form: FKFormulation, centred: bool = True):
+        self.centred = centred
         names = list(form.system.variables)
         robot = form.robot
         d = robot.dim
@@ -176,34 +183,63 @@ class ForceBalance:
         ok = np.all((rho[0] > 0.0) & (Llo > 0.0), axis=1)
         return (nlo, nhi), tau, dtau, w, ok
 
+    def stiffness(self, lo, hi, ulo, uhi):
+        """Each wire's ``H_i = w_i I + (τ_i' - w_i) n_i n_iᵀ`` over the boxes ``(B, m, d, d)``
+        (``∂(τ_i n_i)/∂a_i``), ``[τ_i][n_i]`` ``(B, m, d)``, and where every ``ρ_i`` and
+        ``L_i`` is positive."""
+        d = self.d
+        (nlo, nhi), tau, dtau, w, ok = self.wires(lo, hi, ulo, uhi)
+        clo, chi = arith.sub(*dtau, *w)
+        olo, ohi = arith.mul(
+            nlo[..., :, None], nhi[..., :, None], nlo[..., None, :], nhi[..., None, :]
+        )
+        diag = np.arange(d)
+        olo[..., diag, diag], ohi[..., diag, diag] = arith.sqr(nlo, nhi)
+        hlo, hhi = arith.mul(clo[..., None, None], chi[..., None, None], olo, ohi)
+        eye = np.eye(d)
+        hlo, hhi = arith.add(hlo, hhi, w[0][..., None, None] * eye, w[1][..., None, None] * eye)
+        return (hlo, hhi), _pull(tau, nlo, nhi), ok
+
+    def balance(self, lo, hi, ulo, uhi):
+        """``g = W - Σ_i [τ_i][n_i]`` over the boxes ``(B, d)``, and where it is defined."""
+        (nlo, nhi), tau, _, _, ok = self.wires(lo, hi, ulo, uhi)
+        return arith.sub(*self.W, *_sum(*_pull(tau, nlo, nhi), axis=1)), ok
+
     def enclose(self, lo, hi, plo, phi):
         """``(c, flo, fhi, jlo, jhi, defined)`` for boxes ``lo, hi`` ``(B, n)`` and parameters
         in ``[plo, phi]``: ``c`` ``(B, d)`` the position's midpoint, ``g(c)`` over the box's
         orientations ``(B, d)``, ``∂g/∂p`` over the box ``(B, d, d)``, and where ``g`` is
-        differentiable on the box (every ``ρ_i > 0`` and ``L_i > 0``)."""
-        pos, d = self.position, self.d
+        differentiable on the box (every ``ρ_i > 0`` and ``L_i > 0``).
+
+        ``g(c)`` is the intersection of two enclosures: ``W - Σ_i [τ_i][n_i]`` directly, and
+        the mean-value form in the orientation, ``g(c, E_m) + Σ_j ∂g/∂E_j ([E_j] - E_m,j)``
+        with ``∂g/∂E_j = -Σ_i l_ij H_i`` over ``{c} × [E]`` (``E_m`` the orientation's
+        midpoint), which keeps the wires' first-order coupling."""
+        pos = self.position
         ulo, uhi = plo[self.u_index], phi[self.u_index]
-        (nlo, nhi), _, dtau, w, ok = self.wires(lo, hi, ulo, uhi)
-        # ∂g/∂p = -Σ_i (w_i I + (τ_i' - w_i) n_i n_iᵀ)
-        clo, chi = arith.sub(*dtau, *w)
-        pa = (nlo[..., :, None], nhi[..., :, None])
-        pb = (nlo[..., None, :], nhi[..., None, :])
-        olo, ohi = arith.mul(*pa, *pb)  # (B, m, d, d)
-        dlo, dhi = arith.sqr(nlo, nhi)
-        diag = np.arange(d)
-        olo[..., diag, diag], ohi[..., diag, diag] = dlo, dhi
-        tlo, thi = arith.mul(clo[..., None, None], chi[..., None, None], olo, ohi)
-        eye = np.eye(d)
-        tlo, thi = arith.add(tlo, thi, w[0][..., None, None] * eye, w[1][..., None, None] * eye)
-        jlo, jhi = arith.neg(*_sum(tlo, thi, axis=1))
-        # g(c) = W - Σ_i τ_i n_i at the position's midpoint, over the box's orientations
+        (hlo, hhi), _, ok = self.stiffness(lo, hi, ulo, uhi)
+        jlo, jhi = arith.neg(*_sum(hlo, hhi, axis=1))  # ∂g/∂p = -Σ_i H_i
         c = midpoint(lo[:, pos], hi[:, pos])
-        clo_, chi_ = lo.copy(), hi.copy()
-        clo_[:, pos] = c
-        chi_[:, pos] = c
-        (mlo, mhi), tau, _, _, okc = self.wires(clo_, chi_, ulo, uhi)
-        slo, shi = _sum(*arith.mul(tau[0][..., None], tau[1][..., None], mlo, mhi), axis=1)
-        flo, fhi = arith.sub(self.W[0], self.W[1], slo, shi)
+        at_c = lo.copy(), hi.copy()
+        for x in at_c:
+            x[:, pos] = c
+        (klo, khi), pull, okc = self.stiffness(*at_c, ulo, uhi)
+        flo, fhi = arith.sub(*self.W, *_sum(*pull, axis=1))  # W - Σ_i [τ_i][n_i]
+        if self.centred:
+            em = midpoint(lo[:, self.edges], hi[:, self.edges])  # (B, k - 1, d)
+            mid = lo.copy()
+            mid[:, pos] = c
+            mid[:, self.edges] = em
+            (glo, ghi), okm = self.balance(mid, mid, ulo, uhi)
+            dlo = arith.sub(lo[:, self.edges], lo[:, self.edges], em, em)[0]
+            dhi = arith.sub(hi[:, self.edges], hi[:, self.edges], em, em)[1]
+            for j in range(self.edges.shape[0]):
+                # ∂g/∂E_j [E_j - E_m,j] = -Σ_i l_ij H_i [E_j - E_m,j]
+                slo, shi = _sum(*arith.scale(klo, khi, self.coef[None, :, j, None, None]), axis=1)
+                tlo, thi = arith.mul(slo, shi, dlo[:, j, None, :], dhi[:, j, None, :])
+                glo, ghi = arith.sub(glo, ghi, *_sum(tlo, thi, axis=-1))
+            flo, fhi = np.maximum(flo, glo), np.minimum(fhi, ghi)
+            okc &= okm
         return c, flo, fhi, jlo, jhi, ok & okc
 
 
