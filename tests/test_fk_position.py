@@ -11,7 +11,7 @@ import pytest
 
 from certsolve.kinematics import inverse_kinematics
 from certsolve.kinematics.fk import FKSolver, with_tau_max
-from certsolve.kinematics.fk_position import PositionNewton, unit_vector_bounds
+from certsolve.kinematics.fk_position import PositionNewton, norm_bounds, unit_vector_bounds
 from certsolve.robot import Robot
 from certsolve.robot.elastic import tension
 from certsolve.solver import SearchStatus
@@ -58,7 +58,7 @@ def t16():
     return fk, csys, u, np.array([np.mean(s.box, axis=1) for s in res.solutions])
 
 
-def test_unit_vector_bounds_hold_and_are_tight():
+def test_direction_and_length_bounds_hold_and_are_tight():
     rng = np.random.default_rng(3)
     c = rng.uniform(-50, 50, (200, 3))
     r = rng.uniform(0.01, 20, (200, 3))
@@ -70,6 +70,9 @@ def test_unit_vector_bounds_hold_and_are_tight():
     ok = ~np.isnan(nlo).any(axis=1)
     assert ok.sum() > 150
     assert np.all(n[ok] >= nlo[ok, None]) and np.all(n[ok] <= nhi[ok, None])
+    rlo, rhi = norm_bounds(lo, hi)
+    norms = np.linalg.norm(pts, axis=2)
+    assert np.all(norms >= rlo[:, None]) and np.all(norms <= rhi[:, None])
     # where no component changes sign, the bounds are reached at vertices (up to rounding)
     corners = np.stack(np.meshgrid(*[[0, 1]] * 3, indexing="ij"), -1).reshape(-1, 3)
     v = np.where(corners[None], hi[:, None], lo[:, None])
@@ -115,9 +118,9 @@ def test_step_keeps_every_equilibrium_and_refutes_boxes_off_the_balance(t16):
     pose = np.zeros(n, dtype=bool)
     pose[: fk.forces.edges.max() + 1] = True
     # boxes of many widths holding an equilibrium, which is anywhere in them: kept, and
-    # the equilibrium stays in the narrowed box
+    # the equilibrium (its pose and its wire lengths) stays in the narrowed box
     x = np.repeat(sols, 400, axis=0)
-    r = np.where(pose, 10.0 ** rng.uniform(-3, 1, x.shape), 1e-9)
+    r = np.where(pose, 10.0 ** rng.uniform(-3, 1, x.shape), 1e-6)
     lo = x - r * rng.uniform(0.0, 1.0, x.shape)
     hi = x + r * rng.uniform(0.0, 1.0, x.shape)
     nlo, nhi, empty = step.contract(lo, hi)

@@ -22,7 +22,10 @@ box; writing ``ρ_i`` as ``|p + b_i - A_i|`` keeps the coupling ``τ_i' n_i n_i�
 formulation's variables with position part ``[p]`` and orientation part ``[E]``, ``c`` the
 midpoint of ``[p]``, ``g(c; [E], [u])`` and ``∂g/∂p([p]; [E], [u])`` are enclosed
 (:class:`ForceBalance`), and one preconditioned interval Gauss-Seidel sweep
-(:func:`.newton.hansen_sengupta`) narrows ``[p]``; an empty image empties the box.
+(:func:`.newton.hansen_sengupta`) narrows ``[p]``; an empty image empties the box.  The
+wire lengths follow: ``ρ_i ∈ |[B_i - A_i]|`` over the narrowed box (at an equilibrium
+``ρ_i = |B_i - A_i|``; T-16 at 60 N, u = IK(P): 259,883 -> 252,808 boxes, 19.2 -> 17.0
+CPU s, one run each).
 
 *Soundness*: let ``(p*, E*)`` be an equilibrium in ``X``.  Then ``g(p*; E*) = 0`` and, by
 the mean value theorem on the segment from ``c`` to ``p*`` (inside ``[p]``, with ``E*``
@@ -67,7 +70,7 @@ from ..solver.batch import Batch
 from ..solver.newton import hansen_sengupta, linearization_from_bounds
 from .fk_formulation import FKFormulation
 
-__all__ = ["ForceBalance", "PositionNewton", "unit_vector_bounds"]
+__all__ = ["ForceBalance", "PositionNewton", "norm_bounds", "unit_vector_bounds"]
 
 #: the coefficients the platform frame drops from ``b_i = Σ_j l_ij E_j`` (``fk_points``)
 _TINY = 1e-14
@@ -87,6 +90,14 @@ def _magnitudes(alo: np.ndarray, ahi: np.ndarray) -> tuple[np.ndarray, np.ndarra
     mag = np.maximum(np.abs(alo), np.abs(ahi))
     mig = np.where((alo <= 0.0) & (ahi >= 0.0), 0.0, np.minimum(np.abs(alo), np.abs(ahi)))
     return mig, mag
+
+
+def norm_bounds(alo: np.ndarray, ahi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of ``|a|`` over boxes ``[alo, ahi]`` ``(..., d)``: ``[|mig a|, |mag a|]``."""
+    mig, mag = _magnitudes(alo, ahi)
+    lo = arith.sqrt(*_sum(*arith.sqr(mig, mig), axis=-1))[0]
+    hi = arith.sqrt(*_sum(*arith.sqr(mag, mag), axis=-1))[1]
+    return lo, hi
 
 
 def unit_vector_bounds(alo: np.ndarray, ahi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -120,8 +131,8 @@ def unit_vector_bounds(alo: np.ndarray, ahi: np.ndarray) -> tuple[np.ndarray, np
 
 
 def _pull(tau, nlo, nhi) -> tuple[np.ndarray, np.ndarray]:
-    """``[τ_i][n_i]`` ``(B, m, d)``: each wire's pull on the platform, towards ``A_i``
-    negated (``n_i`` points from ``A_i`` to ``B_i``)."""
+    """``[τ_i][n_i]`` ``(B, m, d)``: minus each wire's force on the platform (``n_i`` points
+    from ``A_i`` to ``B_i``)."""
     return arith.mul(tau[0][..., None], tau[1][..., None], nlo, nhi)
 
 
@@ -152,6 +163,8 @@ class ForceBalance:
         #: the columns of the reference point ``P_1`` ``(d,)`` and of the edge vectors
         #: ``E_2..E_k`` ``(k - 1, d)``
         self.position = np.array([names.index(f"{a}1") for a in axes])
+        #: the columns of the wire lengths, in wire order
+        self.rho = np.array([names.index(f"rho{i + 1}") for i in range(robot.m)])
         self.edges = np.array([[names.index(v) for v in row] for row in edges], dtype=np.int64)
         coef = np.asarray(L, dtype=float)[:, 1:]
         #: ``l_ij`` of ``b_i = Σ_j l_ij E_j`` ``(m, k - 1)``, as the system writes them
@@ -178,10 +191,7 @@ class ForceBalance:
         ``[w_i]`` ``(B, m)``, and whether every ``ρ_i`` and ``L_i`` is positive."""
         alo, ahi = self.arms(lo, hi)
         nlo, nhi = unit_vector_bounds(alo, ahi)
-        mig, mag = _magnitudes(alo, ahi)
-        rho = arith.sqrt(
-            _sum(*arith.sqr(mig, mig), axis=-1)[0], _sum(*arith.sqr(mag, mag), axis=-1)[1]
-        )
+        rho = norm_bounds(alo, ahi)
         off = arith.add(*self.V, *arith.mul(*self.K, ulo, uhi))
         Llo, Lhi = arith.add(*rho, *off)
         with np.errstate(all="ignore"):
@@ -282,4 +292,11 @@ class PositionNewton:
         lo, hi = lo.copy(), hi.copy()
         lo[:, pos] = plo
         hi[:, pos] = phi
+        # the wire lengths through the pose: ρ_i ∈ |[B_i - A_i]| over the narrowed box
+        rho = self.forces.rho
+        live = ~empty
+        rlo, rhi = norm_bounds(*self.forces.arms(lo[live], hi[live]))
+        lo[np.ix_(live, rho)] = np.fmax(lo[np.ix_(live, rho)], rlo)
+        hi[np.ix_(live, rho)] = np.fmin(hi[np.ix_(live, rho)], rhi)
+        empty |= np.any(lo > hi, axis=1)
         return lo, hi, empty
