@@ -175,9 +175,9 @@ class FKSolver:
     ``position_newton`` (platform-frame formulations): a parametric interval Newton step
     on the force balance in the reference point, the wire lengths taken from the pose,
     over each box's orientations (:mod:`.fk_position`), before the full Newton step.  Off
-    by default, as it does not win everywhere (docs/fk-cost.md, medians of 3): T-16 at
-    60 N, u = IK(P), 331,313 -> 259,883 boxes, 20.5 -> 19.0 CPU s; general-19 at 10 N
-    128,721 -> 125,399, 11.3 -> 10.5 s; T-16 at 10 N 1,694 -> 1,606, 0.65 -> 0.78 s.
+    by default: fewer boxes for about the same CPU (docs/fk-cost.md, medians of 3): T-16
+    at 60 N, u = IK(P), 331,313 -> 252,808 boxes, 19.6 -> 20.3 CPU s; general-19 at 10 N
+    128,721 -> 124,428, 12.0 -> 12.3 s; T-16 at 10 N 1,694 -> 1,569, 0.65 -> 0.75 s.
     """
 
     def __init__(
