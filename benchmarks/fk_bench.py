@@ -5,6 +5,7 @@ and IK Algorithm 2.
                                   [--only PATTERN]
                                   [--formulation auto|general-19|T-16|...] [--curve]
                                   [--startup] [--skip-fk] [--skip-realtime]
+                                  [--position-newton]
 
 Searches: for each case (robot, tau_max, control vector u) the median wall and CPU time of a
 complete all-solutions search with each worker count, with the status, certified poses,
@@ -20,6 +21,9 @@ expression (``--only stable-only`` the stable-only cases).
 ``--where CASE``: where a stable-only search's boxes go (:func:`where_boxes`): every box
 that reaches the stable-only test, by distance to the nearest equilibrium, by width, by
 tension range, each split by the test's outcome (``--max-boxes`` stops the search early).
+
+``--position-newton``: the searches with the position's Newton step on
+(:mod:`certsolve.kinematics.fk_position`).
 
 ``--curve``: how time and boxes grow with tau_max (10, 20, 40, 60 N) and with the stroke
 range (u drawn in 1/4, 1/2 and all of the strokes, seed 1), for T-16 and general-19, one
@@ -158,7 +162,12 @@ def run_case(robot: Robot, u, args, workers: int, stable_only: bool = False):
     """Median wall and CPU over ``args.runs`` runs, and the last result."""
     walls, cpus, res = [], [], None
     for _ in range(args.runs):
-        fk = FKSolver(robot, args.formulation, stable_only=stable_only)
+        fk = FKSolver(
+            robot,
+            args.formulation,
+            stable_only=stable_only,
+            position_newton=args.position_newton,
+        )
         t, c = time.perf_counter(), time.process_time()
         res = fk.solve(u, timeout=args.timeout, workers=workers)
         walls.append(time.perf_counter() - t)
@@ -380,12 +389,17 @@ def main() -> None:
         "--formulation", default="auto", help="auto (platform frame) or a paper system name"
     )
     ap.add_argument("--skip-fk", action="store_true")
+    ap.add_argument(
+        "--position-newton",
+        action="store_true",
+        help="the searches with FKSolver(position_newton=True) (kinematics/fk_position.py)",
+    )
     args = ap.parse_args()
     args.workers = [int(w) for w in args.workers.split(",")]
     print(
         f"# {platform.machine()}, {os.cpu_count()} cores, python "
         f"{platform.python_version()}; median of {args.runs} runs; "
-        f"formulation {args.formulation}"
+        f"formulation {args.formulation}" + ("; position Newton on" if args.position_newton else "")
     )
     if args.where:
         where_boxes(args)

@@ -29,6 +29,7 @@ from ..solver.pipeline import FixPoint, Inflate, Sequence, core
 from ..solver.result import SolveResult
 from .energy_minima import energy_minima
 from .fk_formulation import FKFormulation
+from .fk_position import ForceBalance, PositionNewton
 from .fk_systems import build_formulation
 from .stability import EnergyHessian, Stability, StabilityVerdict
 from .stable_only import StableOnly
@@ -170,6 +171,13 @@ class FKSolver:
     domain (:meth:`seeded_boxes`: the answer is the same, and as complete); the stable
     equilibria -- where a robot at rest is -- come first, in the
     first rounds, and a search stopped by a limit still reports them.
+
+    ``position_newton`` (platform-frame formulations): a parametric interval Newton step
+    on the force balance in the reference point, the wire lengths taken from the pose,
+    over each box's orientations (:mod:`.fk_position`), before the full Newton step.  Off
+    by default: fewer boxes for about the same CPU (docs/fk-cost.md, medians of 3): T-16
+    at 60 N, u = IK(P), 331,313 -> 252,808 boxes, 19.6 -> 20.3 CPU s; general-19 at 10 N
+    128,721 -> 124,428, 12.0 -> 12.3 s; T-16 at 10 N 1,694 -> 1,569, 0.65 -> 0.75 s.
     """
 
     def __init__(
@@ -181,6 +189,7 @@ class FKSolver:
         batch_size: int = 2048,
         stable_only: bool = False,
         seed_minima: bool = True,
+        position_newton: bool = False,
         prepare_search: bool = True,
     ):
         # batch_size: boxes per numpy call.  The FK systems' batches are large enough for
@@ -198,6 +207,9 @@ class FKSolver:
         self.stable_only = stable_only
         #: search around the energy's local minima first (spatial robots only)
         self.seed_minima = seed_minima and robot.dof == 6
+        #: the position's Newton step over each box's orientations (:mod:`.fk_position`;
+        #: platform-frame formulations only), before the full Newton step
+        self.position_newton = position_newton
         # the parts' compiled programs (Newton's columns, the sub-systems', the energy's
         # Hessian for stable_only) are made now, once, and shared by every search's copy;
         # prepare_search=False: the formulation and its compiled system only (a tracker
@@ -239,6 +251,8 @@ class FKSolver:
             subsystems=form.subsystems(),
             newton_groups=form.newton_groups(),
         )
+        if self.position_newton:
+            newton.insert(-1, PositionNewton(self.forces, csys))
         if self.stable_only:
             newton.insert(-1, StableOnly(self.hessian, csys, self.robot, form.rho_columns()))
         newton[-1:-1] = list(extra)  # e.g. the set's Krawczyk (:mod:`.fk_tolerance`)
@@ -344,6 +358,12 @@ class FKSolver:
             "time": time.perf_counter() - t0,
         }
         return (np.vstack([domain[:, 0], slo]), np.vstack([domain[:, 1], shi])), info
+
+    @functools.cached_property
+    def forces(self) -> ForceBalance:
+        """The force balance with the wire lengths taken from the pose, and its Jacobian in
+        the position (compiled on first use; :mod:`.fk_position`)."""
+        return ForceBalance(self.form)
 
     @functools.cached_property
     def hessian(self) -> EnergyHessian:
