@@ -163,3 +163,19 @@ def test_search_finds_the_same_poses(name, tau, pose):
 
     assert key(newton) == key(plain)
     assert newton.stats.boxes <= plain.stats.boxes
+
+
+def test_a_robot_with_tolerances_is_refused_by_name():
+    """The step's interval path (the robot's numbers as intervals) is not tested: refused."""
+    import json
+    from pathlib import Path
+
+    from certsolve.inputs import InputError
+    from certsolve.kinematics import FKSolver
+    from certsolve.robot import Robot
+
+    spec = json.loads((Path(__file__).parents[1] / "examples/robots/marionet-t.json").read_text())
+    spec["tolerances"] = [{"path": "wires[*].k", "relative": 0.01}]
+    with pytest.raises(InputError) as err:
+        FKSolver(Robot.load(spec), position_newton=True, prepare_search=False)
+    assert err.value.field == "position_newton"
