@@ -38,7 +38,7 @@ def _draw_map(ax, res: IsotropicMap, vmax=None, title=None, cmap="jet", colorbar
     plt = _plt()
     # a robot with tolerances: the certified lower bound over its set (NaN where not proven)
     over_set = res.set_force_lo is not None
-    values = res.set_force_lo if over_set else res.values
+    values = res.values if res.set_force_lo is None else res.set_force_lo
     v = np.where(values >= 0, values, np.nan)
     masked = np.ma.masked_invalid(v)
     cm = plt.get_cmap(cmap).with_extremes(bad="white")
