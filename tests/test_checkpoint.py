@@ -138,6 +138,9 @@ def test_learnt_cid_count_is_saved_with_the_search():
     assert state.acid.count < solver.n
     task = solver.start(solver.known(state))
     assert task.acid == state.acid and task.acid is not state.acid
+    # so is the polytope hull's share (relaxation.HullShare)
+    assert state.hull is not None and state.hull.boxes > 0
+    assert task.hull == state.hull and task.hull is not state.hull
 
 
 def test_resume_from_snapshots_taken_mid_search(k5):

@@ -6,7 +6,8 @@
   only given for programs HiGHS also finds infeasible.
 * :class:`certsolve.solver.relaxation.PolytopeHull` is checked like every contractor on the
   reference solutions of the Minibex systems (``test_solver_contractors``).
-* The solver finds the same solutions with and without it.
+* The solver finds the same solutions with and without it, and with it on every box or
+  on the boxes :class:`~certsolve.solver.relaxation.HullShare` plans.
 """
 
 from __future__ import annotations
@@ -24,9 +25,15 @@ from test_solver_contractors import (
 
 from certsolve.expr.compiled import CompiledSystem
 from certsolve.expr.minibex import load_minibex
-from certsolve.solver import solve
+from certsolve.solver import Solver, solve
 from certsolve.solver.lp import StallRule, dual_active_set
-from certsolve.solver.relaxation import PolytopeHull, proven_lower_bounds, xtaylor_rows
+from certsolve.solver.pipeline import find
+from certsolve.solver.relaxation import (
+    HullShare,
+    PolytopeHull,
+    proven_lower_bounds,
+    xtaylor_rows,
+)
 
 
 def _programs(rng, S, n, m, slack_low):
@@ -275,3 +282,52 @@ def test_solver_with_and_without_relaxation(name):
         assert len(res.solutions) == len(pts)
         for p in pts:
             assert sum(holds(s.lo, s.hi, p) for s in res.solutions) == 1
+
+
+def test_hull_share_samples_while_the_hull_is_useless_and_comes_back():
+    """:class:`HullShare`: every box while the share is high; below the threshold one box
+    in ``sample``, by position in the count of boxes offered; useful samples switch the
+    hull back on.  The plan is a function of the state."""
+    share = HullShare(window=8, threshold=0.5, sample=4)
+    assert share.plan(6).all()
+    share.done(np.zeros(6, dtype=bool), 6)  # six useless contractions: share (7/8)^6
+    assert share.share < 0.5
+    plan = share.plan(10)
+    assert np.flatnonzero(plan).tolist() == [2, 6]  # boxes 8 and 12 of the search
+    assert HullShare(**vars(share)).plan(10).tolist() == plan.tolist()
+    share.done(np.zeros(2, dtype=bool), 10)
+    low = share.share
+    for _ in range(20):
+        if share.share >= 0.5:
+            break
+        plan = share.plan(4)
+        assert plan.sum() == 1
+        share.done(np.ones(1, dtype=bool), 4)
+    assert share.share >= 0.5 > low and share.plan(3).all()
+
+
+def test_adaptive_hull_keeps_every_solution_and_skips_boxes():
+    """eco-6: the hull rarely halves a box in the first rounds, so the search contracts a
+    sample of them; deeper it pays again and contracts every box.  The solutions are those
+    of the hull on every box, and two runs take the same boxes."""
+    system = load_minibex(SYSTEMS / "eco-6.mbx")
+    solver = Solver.default(system)
+    state = solver.start()
+    dom = solver.domain
+    state.stack.push(dom[:, 0][None], dom[:, 1][None])
+    shares = []
+    while len(state.stack):
+        solver.process(*state.stack.pop(solver.batch_size), state)
+        shares.append(state.hull.share)
+    low = [s < state.hull.threshold for s in shares]
+    assert any(low) and not low[-1]
+    adaptive = solve(system)
+    hull = find(solver.contractor, PolytopeHull)
+    solver.contractor = solver.contractor.replace(hull, PolytopeHull(solver.csys, adaptive=False))
+    always = solver.solve()
+    pts = np.array([[float(v) for v in s] for s in REFERENCE["eco-6"]["solutions"]])
+    for res in (adaptive, always):
+        assert res.status == "complete" and not res.undecided
+        assert len(res.solutions) == len(pts)
+        assert all(sum(holds(s.lo, s.hi, p) for s in res.solutions) == 1 for p in pts)
+    assert solve(system).stats.boxes == adaptive.stats.boxes

@@ -14,7 +14,8 @@ through its contractor, a composition of parts (:mod:`.pipeline`).  The record h
 * the variable the bisector splits in each box (:meth:`choice`), chosen once per round;
 * what a part may do besides contracting: prove a solution (:meth:`prove`), send a box
   back to the buffer for another round (:meth:`send_back`, :meth:`push_back`), and the
-  search's learnt state (``acid``, see :class:`.shaving.AdaptiveCount`).
+  search's learnt states (``acid``, see :class:`.shaving.AdaptiveCount`; ``hull``, see
+  :class:`.relaxation.HullShare`).
 
 **Order.** What a part sends back waits on the batch and reaches the buffer when the round
 ends (:meth:`flush`), *after* the halves of the round's bisections: the buffer pops its last
@@ -115,6 +116,7 @@ class Batch:
     stack: BoxStack | None = None  # the buffer: boxes sent back reach it at :meth:`flush`
     prove: Prove | None = None  # record proven solutions (existence, unicity boxes)
     acid: Any = None  # the search's learnt state (:class:`.shaving.AdaptiveCount`), if any
+    hull: Any = None  # the search's learnt state (:class:`.relaxation.HullShare`), if any
     empty: np.ndarray = field(init=False)
     ids: np.ndarray = field(init=False)  # each row's position in the round's first batch
     #: the boxes as the round received them (row ``ids[r]`` is row ``r``'s), and the

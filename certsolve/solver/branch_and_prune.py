@@ -68,6 +68,7 @@ from .executors import resolve_executor
 from .nonsquare import ManifoldPaver, overdetermined
 from .options_schema import SOLVE_OPTIONS_SCHEMA
 from .pipeline import default_pipeline, parts_of
+from .relaxation import HullShare
 from .result import Certificate, Solution, SolveResult, Stats, Undecided
 from .search import Limits, Progress, SearchRun, SearchStatus, Tally, run_search
 from .shaving import AdaptiveCount
@@ -174,6 +175,11 @@ class Solver:
         #: the part whose learnt state the search keeps (:attr:`SearchState.acid`), if any
         self._learner: Any = next(
             (p for p in parts_of(contractor) if callable(getattr(p, "learner", None))), None
+        )
+        #: the part whose learnt state is :attr:`SearchState.hull`, if any
+        self._hull_learner: Any = next(
+            (p for p in parts_of(contractor) if callable(getattr(p, "hull_learner", None))),
+            None,
         )
 
     @classmethod
@@ -416,28 +422,33 @@ class Solver:
         return "\n".join(parts)
 
     def start(self, known: bytes | None = None) -> SearchState:
-        """An empty search state, with the solutions and the learnt state (the CID count)
-        in ``known`` (see :meth:`known`)."""
+        """An empty search state, with the solutions and the learnt states (the CID count,
+        the polytope hull's share) in ``known`` (see :meth:`known`)."""
         if known is None:
-            learner = self._learner
-            sols, acid = SolutionSet(self.n), None if learner is None else learner.learner()
+            learner, hull = self._learner, self._hull_learner
+            sols = SolutionSet(self.n)
+            acid = None if learner is None else learner.learner()
+            share = None if hull is None else hull.hull_learner()
         else:
-            sols, acid = pickle.loads(known)
-        return SearchState(self.buffer(self.n), sols, [], Stats(), mark=len(sols), acid=acid)
+            sols, acid, share = pickle.loads(known)
+        return SearchState(
+            self.buffer(self.n), sols, [], Stats(), mark=len(sols), acid=acid, hull=share
+        )
 
     def tally(self, state: SearchState) -> Tally:
         sols = sum(state.solutions.count(kind) for kind in _PROVEN)
         return Tally(solutions=sols, undecided=len(state.undecided))
 
     def known(self, state: SearchState) -> bytes:
-        """The solution set and the learnt CID count, pickled (for tasks: unpickling is
+        """The solution set and the learnt states, pickled (for tasks: unpickling is
         ~100x faster than adding the solutions one by one, and the copy is the task's
-        own; a task goes on with the count its search has learnt)."""
-        return pickle.dumps((state.solutions, state.acid), protocol=pickle.HIGHEST_PROTOCOL)
+        own; a task goes on with the CID count and hull share its search has learnt)."""
+        known = (state.solutions, state.acid, state.hull)
+        return pickle.dumps(known, protocol=pickle.HIGHEST_PROTOCOL)
 
     def found(self, state: SearchState):
         """Solutions recorded since :meth:`start`, undecided boxes, counters and the learnt
-        CID count."""
+        states (the CID count, the hull's share)."""
         sols = state.solutions
         new = range(state.mark, len(sols))
         entries = [
@@ -445,13 +456,14 @@ class Solver:
         ]
         st = state.stats
         counters = (st.bisections, st.certified, st.duplicates)
-        return entries, state.undecided, counters, copy.copy(state.acid)
+        return entries, state.undecided, counters, copy.copy(state.acid), copy.copy(state.hull)
 
     def merge(self, state: SearchState, found) -> None:
         """Add a task's findings; a solution two tasks proved is recorded once.  The learnt
-        CID count is the task's (the latest a task brings home; a checkpoint's on restore)."""
+        states are the task's (the latest a task brings home; a checkpoint's on restore)."""
         entries, undecided, (bisections, certified, duplicates), *rest = found
-        acid = rest[0] if rest else None  # absent from checkpoints written before it was kept
+        # absent from checkpoints written before they were kept
+        acid, hull = (*rest, None, None)[:2]
         for e0, e1, u0, u1, kind in entries:
             if kind == "alias":
                 state.solutions.add(e0, e1, u0, u1, "alias")
@@ -463,6 +475,8 @@ class Solver:
         state.stats.duplicates += duplicates
         if acid is not None and state.acid is not None:
             state.acid = copy.copy(acid)
+        if hull is not None and state.hull is not None:
+            state.hull = copy.copy(hull)
 
     def listed(self, state: SearchState, start: int) -> tuple[list[Solution], int]:
         """The solutions recorded from position ``start`` of the solution set on (for
@@ -495,6 +509,7 @@ class Solver:
             stack=state.stack,
             prove=prove,
             acid=state.acid,
+            hull=state.hull,
         )
         self.contractor.apply(batch)
         batch.drop_empty()
@@ -615,6 +630,7 @@ class SearchState:
     stats: Stats  # the step's counters: bisections, certified, duplicates
     mark: int = 0  # solutions[:mark] were known when the state started
     acid: AdaptiveCount | None = None  # the learnt CID count (:class:`.shaving.Shave`)
+    hull: HullShare | None = None  # the hull's learnt share (:class:`.relaxation.PolytopeHull`)
 
 
 def solve(
