@@ -70,17 +70,34 @@ class Group:
 
 
 def _layers(idx: np.ndarray) -> tuple:
-    """Split positions of ``idx`` into layers where each node id occurs at most once."""
-    count: dict[int, int] = {}
+    """Split positions of ``idx`` into layers where each node id occurs at most once.
+
+    Layer ``r`` holds, in increasing position, the ``r``-th occurrence of every id (the rank
+    of a position among the equal ids before it, from a stable sort)."""
+    if len(set(idx.tolist())) == len(idx):  # the common case: one layer (or none)
+        return ((np.arange(len(idx)), idx),) if len(idx) else ()
+    by_id = np.argsort(idx, kind="stable")
+    ids = idx[by_id]
+    starts = np.zeros(len(ids), dtype=np.int64)  # where the run of each id starts
+    starts[1:] = np.where(ids[1:] != ids[:-1], np.arange(1, len(ids)), 0)
     rank = np.empty(len(idx), dtype=np.int64)
-    for p, v in enumerate(idx.tolist()):
-        rank[p] = count.get(v, 0)
-        count[v] = rank[p] + 1
-    out = []
-    for r in range(int(rank.max()) + 1 if len(idx) else 0):
-        pos = np.flatnonzero(rank == r)
-        out.append((pos, idx[pos]))
-    return tuple(out)
+    rank[by_id] = np.arange(len(ids)) - np.maximum.accumulate(starts)
+    by_rank = np.argsort(rank, kind="stable")  # layer by layer, positions increasing
+    stops = np.cumsum(np.bincount(rank)).tolist()
+    layers = (by_rank[a:b] for a, b in zip([0, *stops[:-1]], stops))
+    return tuple((pos, idx[pos]) for pos in layers)
+
+
+def _levels(has_args: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Depth of every node: 0 for a leaf, else ``1 + max`` over its children (positions
+    ``a``, ``b``; ``b = a`` for a unary node, anything for a leaf).  A fixpoint of whole-array
+    steps, one per level: after step ``d`` every node of depth ``<= d`` has its depth."""
+    level = np.zeros(len(a), dtype=np.int64)
+    while True:
+        new = np.where(has_args, 1 + np.maximum(level[a], level[b]), 0)
+        if np.array_equal(new, level):
+            return level
+        level = new
 
 
 #: operations whose forward kernel works element by element with a rounding rule that does
@@ -89,24 +106,23 @@ def _layers(idx: np.ndarray) -> tuple:
 _MERGEABLE = frozenset({"add", "sub", "mul", "cadd", "neg"})
 
 
-def _schedule(units: list[list[int]], graph: Graph) -> list[list[int]]:
-    """Forward order of the level groups ``units``, merging independent ones of one operation.
+def _schedule(deps: list[set[int]], ops: list[str]) -> list[list[int]]:
+    """Forward order of the level groups, merging independent ones of one operation.
 
+    ``deps[u]``: the groups whose nodes group ``u``'s children are; ``ops[u]``: its operation.
     List scheduling: repeatedly take the first group whose children are all computed and,
     if its operation is in :data:`_MERGEABLE`, every other ready group of that operation;
     they are evaluated together (one set of numpy calls).  Nodes of one batch never depend
     on each other, so each node gets exactly the value the level-by-level order gives it.
     """
-    owner = {x: u for u, members in enumerate(units) for x in members}
-    deps = [{owner[a] for x in members for a in graph.args[x] if a in owner} for members in units]
     done: set[int] = set()
-    remaining = list(range(len(units)))
+    remaining = list(range(len(deps)))
     batches = []
     while remaining:
         ready = [u for u in remaining if deps[u] <= done]
-        op = graph.op[units[ready[0]][0]]
+        op = ops[ready[0]]
         if op in _MERGEABLE:
-            batch = [u for u in ready if graph.op[units[u][0]] == op]
+            batch = [u for u in ready if ops[u] == op]
         else:
             batch = ready[:1]
         batches.append(batch)
@@ -119,70 +135,93 @@ class Program:
     """Batched evaluator for the sub-DAG of ``graph`` that computes ``outputs``."""
 
     def __init__(self, graph: Graph, outputs: Sequence[int]):
+        """Compile: the needed nodes sorted by (level, operation, power, id), cut into runs
+        of equal (level, operation, power) -- the HC4 groups --, then scheduled forward
+        (:func:`_schedule`).  Whole-array steps over the nodes; Python loops only over the
+        groups (and a list per node to read the graph's tables)."""
         n = len(graph.variables)
         npar = len(graph.parameters)
         self.n_vars = n
         self.n_params = npar
         outputs = [int(o) for o in outputs]
-        # every variable and parameter has a row, used or not
-        needed = set(range(n + npar)) | set(graph.ancestors(outputs))
-        level: dict[int, int] = {}
-        for x in sorted(needed):  # ids are topologically ordered
-            args = graph.args[x]
-            level[x] = 0 if not args else 1 + max(level[a] for a in args)
-        consts = sorted(x for x in needed if graph.op[x] == "const")
+        # every variable and parameter has a row, used or not; ids are topologically ordered
+        ids = np.array(sorted(set(range(n + npar)) | set(graph.ancestors(outputs))), dtype=np.int64)
+        gops = [graph.op[x] for x in ids.tolist()]
+        gargs = [graph.args[x] for x in ids.tolist()]
+        code = {name: i for i, name in enumerate(sorted(set(gops)))}  # ordered as the names
+        opc = np.array([code[o] for o in gops], dtype=np.int64)
+        arity = np.array([len(t) for t in gargs], dtype=np.int64)
+        first = np.array([t[0] if t else x for x, t in zip(ids.tolist(), gargs)], dtype=np.int64)
+        second = np.array(
+            [t[1] if len(t) > 1 else f for t, f in zip(gargs, first.tolist())], dtype=np.int64
+        )
+        a_pos = np.searchsorted(ids, first)  # children as positions in ``ids``
+        b_pos = np.searchsorted(ids, second)
+        level = _levels(arity > 0, a_pos, b_pos)
+        power = np.zeros(len(ids))
+        pow_at = [i for i, o in enumerate(gops) if o == "pow"]
+        power[pow_at] = [graph.param[int(ids[i])] for i in pow_at]
 
-        def gkey(x):
-            op = graph.op[x]
-            p = graph.param[x] if op == "pow" else None
-            return (level[x], op, p if p is not None else 0)
+        consts = np.flatnonzero(np.array([o == "const" for o in gops], dtype=bool))
+        inner = np.flatnonzero(level > 0)
+        inner = inner[np.lexsort((ids[inner], power[inner], opc[inner], level[inner]))]
+        key = np.stack([level[inner], opc[inner], power[inner]])  # a group: one key
+        cut = np.flatnonzero(np.any(key[:, 1:] != key[:, :-1], axis=0)) + 1
+        units = np.split(inner, cut) if len(inner) else []  # the HC4 groups (positions)
+        owner = np.full(len(ids), -1, dtype=np.int64)
+        for u, members in enumerate(units):
+            owner[members] = u
+        unit_of = owner[inner]
+        kids = np.concatenate([owner[a_pos[inner]], owner[b_pos[inner]]])
+        pairs = (np.concatenate([unit_of, unit_of]) * len(units) + kids)[kids >= 0]
+        deps: list[set[int]] = [set() for _ in units]
+        for pair in set(pairs.tolist()):
+            deps[pair // len(units)].add(pair % len(units))
+        unit_ops = [gops[int(m[0])] for m in units]
+        batches = _schedule(deps, unit_ops)
 
-        inner = sorted((x for x in needed if level[x] > 0), key=lambda x: (gkey(x), x))
-        units: list[list[int]] = []  # the HC4 groups: runs of equal (level, op)
-        for x in inner:
-            if units and gkey(units[-1][0]) == gkey(x):
-                units[-1].append(x)
-            else:
-                units.append([x])
-        batches = _schedule(units, graph)
-        order = list(range(n + npar)) + consts + [x for bt in batches for u in bt for x in units[u]]
-        local = {g: i for i, g in enumerate(order)}
-        self.global_ids = np.array(order, dtype=np.int64)
+        order = np.concatenate(
+            [np.arange(n + npar), consts, *[units[u] for bt in batches for u in bt]]
+        ).astype(np.int64)
+        local = np.empty(len(ids), dtype=np.int64)  # position in ``ids`` -> local row
+        local[order] = np.arange(len(order))
+        self.global_ids = ids[order]
         self.n_nodes = len(order)
         self.param_slice = slice(n, n + npar)
         self.const_slice = slice(n + npar, n + npar + len(consts))
-        self.const_lo = np.array([graph.param[c][0] for c in consts], dtype=np.float64)[:, None]
-        self.const_hi = np.array([graph.param[c][1] for c in consts], dtype=np.float64)[:, None]
+        cvals = [graph.param[int(ids[c])] for c in consts]
+        self.const_lo = np.array([v[0] for v in cvals], dtype=np.float64)[:, None]
+        self.const_hi = np.array([v[1] for v in cvals], dtype=np.float64)[:, None]
         self.const_mid = 0.5 * self.const_lo + 0.5 * self.const_hi
-        self.outputs = np.array([local[o] for o in outputs], dtype=np.int64)
+        self.outputs = local[np.searchsorted(ids, np.array(outputs, dtype=np.int64))]
 
-        def group(members: list[int]) -> Group:
-            op = graph.op[members[0]]
-            a = np.array([local[graph.args[m][0]] for m in members], dtype=np.int64)
-            b = None
-            if len(graph.args[members[0]]) == 2:
-                b = np.array([local[graph.args[m][1]] for m in members], dtype=np.int64)
+        def group(members: np.ndarray) -> Group:
+            lead = int(members[0])
+            op = gops[lead]
+            a = local[a_pos[members]]
+            b = local[b_pos[members]] if arity[lead] == 2 else None
             param: np.ndarray | int | None
             if op in ("cadd", "cmul"):
-                param = np.array([graph.param[m] for m in members], dtype=np.float64)[:, None]
+                values = [graph.param[x] for x in ids[members].tolist()]
+                param = np.array(values, dtype=np.float64)[:, None]
             elif op == "pow":
-                param = int(graph.param[members[0]])
+                param = int(graph.param[int(ids[lead])])
             else:
                 param = None
-            kids = a if b is None else np.concatenate([a, b])
-            unique = len(set(kids.tolist())) == len(kids)  # (np.unique imports numpy.ma)
+            kids = (a if b is None else np.concatenate([a, b])).tolist()
+            unique = len(set(kids)) == len(kids)  # (np.unique imports numpy.ma)
             la = () if unique else _layers(a)
             lb = () if unique or b is None else _layers(b)
-            start = local[members[0]]
+            start = int(local[lead])
             return Group(op, start, start + len(members), a, b, param, unique, la, lb)
 
         #: backward (HC4) groups, by level: the order and grouping define what revise computes
         self.groups = [group(members) for members in units]
         #: forward groups: the same nodes, fewer numpy calls (see :func:`_schedule`)
-        self.fwd_groups = [group([x for u in bt for x in units[u]]) for bt in batches]
+        self.fwd_groups = [group(np.concatenate([units[u] for u in bt])) for bt in batches]
         # groups whose operation is not smooth everywhere (domain restriction, poles, kinks)
         self._restricted = [g for g in self.fwd_groups if g.op in SMOOTH]
-        self.n_levels = 1 + max([level[x] for x in needed], default=0)
+        self.n_levels = 1 + int(level.max(initial=0))
 
     # -- evaluation ------------------------------------------------------------------------
     def eval_interval(
