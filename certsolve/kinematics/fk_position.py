@@ -70,7 +70,13 @@ from ..solver.batch import Batch
 from ..solver.newton import hansen_sengupta, linearization_from_bounds
 from .fk_formulation import FKFormulation
 
-__all__ = ["ForceBalance", "PositionNewton", "norm_bounds", "unit_vector_bounds"]
+__all__ = [
+    "ForceBalance",
+    "PositionNewton",
+    "norm_bounds",
+    "symmetric_pairs",
+    "unit_vector_bounds",
+]
 
 #: the coefficients the platform frame drops from ``b_i = Σ_j l_ij E_j`` (``fk_points``)
 _TINY = 1e-14
@@ -130,6 +136,17 @@ def unit_vector_bounds(alo: np.ndarray, ahi: np.ndarray) -> tuple[np.ndarray, np
     return nlo, nhi
 
 
+def symmetric_pairs(d: int) -> tuple[np.ndarray, np.ndarray]:
+    """The entries of a symmetric ``d x d`` matrix stored once: ``pairs`` ``(S, 2)`` the
+    diagonal ``(c, c)`` first, then ``(c, e)`` for ``c < e``, and ``full`` ``(d, d)`` the
+    entry of each ``(c, e)`` (``matrix = stored[..., full]``)."""
+    pairs = [(c, c) for c in range(d)] + [(c, e) for c in range(d) for e in range(c + 1, d)]
+    full = np.empty((d, d), dtype=np.int64)
+    for k, (c, e) in enumerate(pairs):
+        full[c, e] = full[e, c] = k
+    return np.array(pairs, dtype=np.int64), full
+
+
 def _pull(tau, nlo, nhi) -> tuple[np.ndarray, np.ndarray]:
     """``[τ_i][n_i]`` ``(B, m, d)``: minus each wire's force on the platform (``n_i`` points
     from ``A_i`` to ``B_i``)."""
@@ -160,6 +177,8 @@ class ForceBalance:
                 "(the position Newton step needs the platform frame)"
             )
         self.d, self.m = d, robot.m
+        #: the stored entries of the symmetric blocks ``H_i`` (:func:`symmetric_pairs`)
+        self.pairs, self.full = symmetric_pairs(d)
         #: the columns of the reference point ``P_1`` ``(d,)`` and of the edge vectors
         #: ``E_2..E_k`` ``(k - 1, d)``
         self.position = np.array([names.index(f"{a}1") for a in axes])
@@ -202,20 +221,24 @@ class ForceBalance:
         return (nlo, nhi), tau, dtau, w, ok
 
     def stiffness(self, lo, hi, ulo, uhi):
-        """Each wire's ``H_i = w_i I + (τ_i' - w_i) n_i n_iᵀ`` over the boxes ``(B, m, d, d)``
-        (``∂(τ_i n_i)/∂a_i``), ``[τ_i][n_i]`` ``(B, m, d)``, and where every ``ρ_i`` and
+        """Each wire's ``H_i = w_i I + (τ_i' - w_i) n_i n_iᵀ`` over the boxes ``(B, m, S)``
+        (``∂(τ_i n_i)/∂a_i``, symmetric: its ``S = d(d + 1)/2`` entries in the order of
+        :func:`symmetric_pairs`), ``[τ_i][n_i]`` ``(B, m, d)``, and where every ``ρ_i`` and
         ``L_i`` is positive."""
         d = self.d
         (nlo, nhi), tau, dtau, w, ok = self.wires(lo, hi, ulo, uhi)
         clo, chi = arith.sub(*dtau, *w)
+        rows, cols = self.pairs[:, 0], self.pairs[:, 1]
+        # n_ic n_ie for c < e as products, n_ic² as squares (tighter: a square is >= 0)
         olo, ohi = arith.mul(
-            nlo[..., :, None], nhi[..., :, None], nlo[..., None, :], nhi[..., None, :]
+            nlo[..., rows[d:]], nhi[..., rows[d:]], nlo[..., cols[d:]], nhi[..., cols[d:]]
         )
-        diag = np.arange(d)
-        olo[..., diag, diag], ohi[..., diag, diag] = arith.sqr(nlo, nhi)
-        hlo, hhi = arith.mul(clo[..., None, None], chi[..., None, None], olo, ohi)
-        eye = np.eye(d)
-        hlo, hhi = arith.add(hlo, hhi, w[0][..., None, None] * eye, w[1][..., None, None] * eye)
+        qlo, qhi = arith.sqr(nlo, nhi)
+        olo, ohi = np.concatenate((qlo, olo), axis=-1), np.concatenate((qhi, ohi), axis=-1)
+        hlo, hhi = arith.mul(clo[..., None], chi[..., None], olo, ohi)
+        hlo[..., :d], hhi[..., :d] = arith.add(
+            hlo[..., :d], hhi[..., :d], w[0][..., None], w[1][..., None]
+        )
         return (hlo, hhi), _pull(tau, nlo, nhi), ok
 
     def balance(self, lo, hi, ulo, uhi):
@@ -236,7 +259,8 @@ class ForceBalance:
         pos = self.position
         ulo, uhi = plo[self.u_index], phi[self.u_index]
         (hlo, hhi), _, ok = self.stiffness(lo, hi, ulo, uhi)
-        jlo, jhi = arith.neg(*_sum(hlo, hhi, axis=1))  # ∂g/∂p = -Σ_i H_i
+        jlo, jhi = _sum(hlo, hhi, axis=1)  # Σ_i H_i, its S entries
+        jlo, jhi = -jhi[:, self.full], -jlo[:, self.full]  # ∂g/∂p = -Σ_i H_i
         c = midpoint(lo[:, pos], hi[:, pos])
         at_c = lo.copy(), hi.copy()
         for x in at_c:
@@ -253,7 +277,8 @@ class ForceBalance:
             dhi = arith.sub(hi[:, self.edges], hi[:, self.edges], em, em)[1]
             for j in range(self.edges.shape[0]):
                 # ∂g/∂E_j [E_j - E_m,j] = -Σ_i l_ij H_i [E_j - E_m,j]
-                slo, shi = _sum(*arith.scale(klo, khi, self.coef[None, :, j, None, None]), axis=1)
+                slo, shi = _sum(*arith.scale(klo, khi, self.coef[None, :, j, None]), axis=1)
+                slo, shi = slo[:, self.full], shi[:, self.full]
                 tlo, thi = arith.mul(slo, shi, dlo[:, j, None, :], dhi[:, j, None, :])
                 glo, ghi = arith.sub(glo, ghi, *_sum(tlo, thi, axis=-1))
             flo, fhi = np.maximum(flo, glo), np.minimum(fhi, ghi)
