@@ -197,18 +197,24 @@ class ForceBalance:
             [list(form.system.parameters).index(f"u{i + 1}") for i in range(robot.m)]
         )
 
-    def arms(self, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``[B_i - A_i]`` ``(B, m, d)`` over boxes of the variables."""
+    def turns(self, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``[b_i] = Σ_j l_ij [E_j]`` ``(B, m, d)`` over boxes of the variables: the part of
+        ``B_i - A_i`` the orientation gives (the same for every position in the box)."""
         elo, ehi = lo[:, self.edges], hi[:, self.edges]  # (B, k - 1, d)
         c = self.coef[None, :, :, None]
-        blo, bhi = _sum(*arith.scale(elo[:, None], ehi[:, None], c), axis=2)  # (B, m, d)
+        return _sum(*arith.scale(elo[:, None], ehi[:, None], c), axis=2)  # (B, m, d)
+
+    def arms(self, lo: np.ndarray, hi: np.ndarray, turn=None) -> tuple[np.ndarray, np.ndarray]:
+        """``[B_i - A_i]`` ``(B, m, d)`` over boxes of the variables (``turn``: their
+        :meth:`turns`, if known)."""
+        blo, bhi = self.turns(lo, hi) if turn is None else turn
         plo, phi = lo[:, None, self.position], hi[:, None, self.position]
         return arith.sub(*arith.add(plo, phi, blo, bhi), *self.A)
 
-    def wires(self, lo, hi, ulo, uhi):
+    def wires(self, lo, hi, ulo, uhi, turn=None):
         """Per wire over the boxes: ``[n_i]`` ``(B, m, d)`` and ``[τ_i]``, ``[τ_i']``,
         ``[w_i]`` ``(B, m)``, and whether every ``ρ_i`` and ``L_i`` is positive."""
-        alo, ahi = self.arms(lo, hi)
+        alo, ahi = self.arms(lo, hi, turn)
         nlo, nhi = unit_vector_bounds(alo, ahi)
         rho = norm_bounds(alo, ahi)
         off = arith.add(*self.V, *arith.mul(*self.K, ulo, uhi))
@@ -220,13 +226,13 @@ class ForceBalance:
         ok = np.all((rho[0] > 0.0) & (Llo > 0.0), axis=1)
         return (nlo, nhi), tau, dtau, w, ok
 
-    def stiffness(self, lo, hi, ulo, uhi):
+    def stiffness(self, lo, hi, ulo, uhi, turn=None):
         """Each wire's ``H_i = w_i I + (τ_i' - w_i) n_i n_iᵀ`` over the boxes ``(B, m, S)``
         (``∂(τ_i n_i)/∂a_i``, symmetric: its ``S = d(d + 1)/2`` entries in the order of
         :func:`symmetric_pairs`), ``[τ_i][n_i]`` ``(B, m, d)``, and where every ``ρ_i`` and
         ``L_i`` is positive."""
         d = self.d
-        (nlo, nhi), tau, dtau, w, ok = self.wires(lo, hi, ulo, uhi)
+        (nlo, nhi), tau, dtau, w, ok = self.wires(lo, hi, ulo, uhi, turn)
         clo, chi = arith.sub(*dtau, *w)
         rows, cols = self.pairs[:, 0], self.pairs[:, 1]
         # n_ic n_ie for c < e as products, n_ic² as squares (tighter: a square is >= 0)
@@ -246,7 +252,7 @@ class ForceBalance:
         (nlo, nhi), tau, _, _, ok = self.wires(lo, hi, ulo, uhi)
         return arith.sub(*self.W, *_sum(*_pull(tau, nlo, nhi), axis=1)), ok
 
-    def enclose(self, lo, hi, plo, phi):
+    def enclose(self, lo, hi, plo, phi, turn=None):
         """``(c, flo, fhi, jlo, jhi, defined)`` for boxes ``lo, hi`` ``(B, n)`` and parameters
         in ``[plo, phi]``: ``c`` ``(B, d)`` the position's midpoint, ``g(c)`` over the box's
         orientations ``(B, d)``, ``∂g/∂p`` over the box ``(B, d, d)``, and where ``g`` is
@@ -255,17 +261,19 @@ class ForceBalance:
         ``g(c)`` is the intersection of two enclosures: ``W - Σ_i [τ_i][n_i]`` directly, and
         the mean-value form in the orientation, ``g(c, E_m) + Σ_j ∂g/∂E_j ([E_j] - E_m,j)``
         with ``∂g/∂E_j = -Σ_i l_ij H_i`` over ``{c} × [E]`` (``E_m`` the orientation's
-        midpoint), which keeps the wires' first-order coupling."""
+        midpoint), which keeps the wires' first-order coupling.  ``turn``: the boxes'
+        :meth:`turns`, if known (the box and ``{c} × [E]`` share them)."""
         pos = self.position
         ulo, uhi = plo[self.u_index], phi[self.u_index]
-        (hlo, hhi), _, ok = self.stiffness(lo, hi, ulo, uhi)
+        turn = self.turns(lo, hi) if turn is None else turn
+        (hlo, hhi), _, ok = self.stiffness(lo, hi, ulo, uhi, turn)
         jlo, jhi = _sum(hlo, hhi, axis=1)  # Σ_i H_i, its S entries
         jlo, jhi = -jhi[:, self.full], -jlo[:, self.full]  # ∂g/∂p = -Σ_i H_i
         c = midpoint(lo[:, pos], hi[:, pos])
         at_c = lo.copy(), hi.copy()
         for x in at_c:
             x[:, pos] = c
-        (klo, khi), pull, okc = self.stiffness(*at_c, ulo, uhi)
+        (klo, khi), pull, okc = self.stiffness(*at_c, ulo, uhi, turn)
         flo, fhi = arith.sub(*self.W, *_sum(*pull, axis=1))  # W - Σ_i [τ_i][n_i]
         if self.centred:
             em = midpoint(lo[:, self.edges], hi[:, self.edges])  # (B, k - 1, d)
@@ -294,9 +302,13 @@ class PositionNewton:
     at each call, so the step is built per search on that search's system.
     """
 
-    def __init__(self, forces: ForceBalance, csys: CompiledSystem):
+    def __init__(self, forces: ForceBalance, csys: CompiledSystem, max_turn: float = np.inf):
         self.forces = forces
         self.csys = csys
+        #: boxes whose edge vectors are wider than this (their widest component) are left
+        #: as they are: over a wide orientation the force-balanced position moves more than
+        #: the enclosure can refute
+        self.max_turn = max_turn
 
     def apply(self, batch: Batch) -> None:
         """The solver's contractor protocol (:mod:`certsolve.solver.batch`)."""
@@ -305,12 +317,25 @@ class PositionNewton:
 
     def describe(self) -> str:
         """Its entry in the solver's fingerprint."""
-        return "PositionNewton()"
+        return f"PositionNewton(max_turn={self.max_turn})"
 
     def contract(self, lo: np.ndarray, hi: np.ndarray):
+        edges = self.forces.edges
+        turn = np.max(hi[:, edges] - lo[:, edges], axis=(1, 2))
+        take = turn <= self.max_turn
+        if take.all():
+            return self._contract(lo, hi)
+        lo, hi = lo.copy(), hi.copy()
+        empty = np.zeros(lo.shape[0], dtype=bool)
+        if take.any():
+            lo[take], hi[take], empty[take] = self._contract(lo[take], hi[take])
+        return lo, hi, empty
+
+    def _contract(self, lo: np.ndarray, hi: np.ndarray):
         pos = self.forces.position
+        turn = self.forces.turns(lo, hi)
         c, flo, fhi, jlo, jhi, defined = self.forces.enclose(
-            lo, hi, self.csys.param_lo, self.csys.param_hi
+            lo, hi, self.csys.param_lo, self.csys.param_hi, turn
         )
         lin = linearization_from_bounds(lo[:, pos], hi[:, pos], c, flo, fhi, jlo, jhi, defined)
         plo, phi, empty = hansen_sengupta(lin)
@@ -320,7 +345,9 @@ class PositionNewton:
         # the wire lengths through the pose: ρ_i ∈ |[B_i - A_i]| over the narrowed box
         rho = self.forces.rho
         live = ~empty
-        rlo, rhi = norm_bounds(*self.forces.arms(lo[live], hi[live]))
+        rlo, rhi = norm_bounds(
+            *self.forces.arms(lo[live], hi[live], (turn[0][live], turn[1][live]))
+        )
         lo[np.ix_(live, rho)] = np.fmax(lo[np.ix_(live, rho)], rlo)
         hi[np.ix_(live, rho)] = np.fmin(hi[np.ix_(live, rho)], rhi)
         empty |= np.any(lo > hi, axis=1)
