@@ -30,7 +30,7 @@ from ..solver.pipeline import FixPoint, Inflate, Sequence, core
 from ..solver.result import SolveResult
 from .energy_minima import energy_minima
 from .fk_formulation import FKFormulation
-from .fk_position import ForceBalance, PositionNewton
+from .fk_position import ForceBalance, PositionNewton, applies
 from .fk_systems import build_formulation
 from .stability import EnergyHessian, Stability, StabilityVerdict
 from .stable_only import StableOnly
@@ -190,7 +190,7 @@ class FKSolver:
         batch_size: int = 2048,
         stable_only: bool = False,
         seed_minima: bool = True,
-        position_newton: bool = False,
+        position_newton: bool | None = None,
         prepare_search: bool = True,
     ):
         # batch_size: boxes per numpy call.  The FK systems' batches are large enough for
@@ -212,6 +212,8 @@ class FKSolver:
         #: platform-frame formulations only), before the full Newton step
         if position_newton and robot.toleranced:  # its interval path is not tested yet
             raise InputError("position_newton", "not available for a robot with tolerances")
+        if position_newton is None:  # on where it applies: the platform frame, exact numbers
+            position_newton = not robot.toleranced and applies(self.form)
         self.position_newton = position_newton
         # the parts' compiled programs (Newton's columns, the sub-systems', the energy's
         # Hessian for stable_only) are made now, once, and shared by every search's copy;
