@@ -23,7 +23,7 @@ that reaches the stable-only test, by distance to the nearest equilibrium, by wi
 tension range, each split by the test's outcome (``--max-boxes`` stops the search early).
 
 ``--position-newton on|off``: the searches with the position's Newton step on or off
-(:mod:`certsolve.kinematics.fk_position`; by default FKSolver's: on for the platform frame).
+(:mod:`certsolve.kinematics.fk_position`; off by default, as in FKSolver).
 
 ``--curve``: how time and boxes grow with tau_max (10, 20, 40, 60 N) and with the stroke
 range (u drawn in 1/4, 1/2 and all of the strokes, seed 1), for T-16 and general-19, one
@@ -166,7 +166,7 @@ def run_case(robot: Robot, u, args, workers: int, stable_only: bool = False):
             robot,
             args.formulation,
             stable_only=stable_only,
-            position_newton=None if args.position_newton is None else args.position_newton == "on",
+            position_newton=args.position_newton == "on",
         )
         t, c = time.perf_counter(), time.process_time()
         res = fk.solve(u, timeout=args.timeout, workers=workers)
@@ -392,17 +392,16 @@ def main() -> None:
     ap.add_argument(
         "--position-newton",
         choices=("on", "off"),
-        default=None,
+        default="off",
         help="the searches with FKSolver(position_newton=True / False) "
-        "(kinematics/fk_position.py; default: FKSolver's, on for the platform frame)",
+        "(kinematics/fk_position.py; default off, FKSolver's default)",
     )
     args = ap.parse_args()
     args.workers = [int(w) for w in args.workers.split(",")]
     print(
         f"# {platform.machine()}, {os.cpu_count()} cores, python "
         f"{platform.python_version()}; median of {args.runs} runs; "
-        f"formulation {args.formulation}"
-        + (f"; position Newton {args.position_newton}" if args.position_newton else "")
+        f"formulation {args.formulation}" + f"; position Newton {args.position_newton}"
     )
     if args.where:
         where_boxes(args)

@@ -25,7 +25,9 @@ midpoint of ``[p]``, ``g(c; [E], [u])`` and ``∂g/∂p([p]; [E], [u])`` are enc
 (:func:`.newton.hansen_sengupta`) narrows ``[p]``; an empty image empties the box.  The
 wire lengths follow: ``ρ_i ∈ |[B_i - A_i]|`` over the narrowed box (at an equilibrium
 ``ρ_i = |B_i - A_i|``; T-16 at 60 N, u = IK(P): 259,883 -> 252,808 boxes, 19.2 -> 17.0
-CPU s, one run each).
+CPU s, one run each).  Boxes whose edge vectors are wider than ``max_turn`` (10 cm,
+:data:`MAX_TURN`) are left as they are: there ``p*(E)`` moves by more than the enclosure
+can refute (leaving a box alone is always sound).
 
 *Soundness*: let ``(p*, E*)`` be an equilibrium in ``X``.  Then ``g(p*; E*) = 0`` and, by
 the mean value theorem on the segment from ``c`` to ``p*`` (inside ``[p]``, with ``E*``

@@ -30,7 +30,7 @@ from ..solver.pipeline import FixPoint, Inflate, Sequence, core
 from ..solver.result import SolveResult
 from .energy_minima import energy_minima
 from .fk_formulation import FKFormulation
-from .fk_position import ForceBalance, PositionNewton, applies
+from .fk_position import ForceBalance, PositionNewton
 from .fk_systems import build_formulation
 from .stability import EnergyHessian, Stability, StabilityVerdict
 from .stable_only import StableOnly
@@ -176,9 +176,10 @@ class FKSolver:
     ``position_newton`` (platform-frame formulations): a parametric interval Newton step
     on the force balance in the reference point, the wire lengths taken from the pose,
     over each box's orientations (:mod:`.fk_position`), before the full Newton step.  Off
-    by default: fewer boxes for about the same CPU (docs/fk-cost.md, medians of 3): T-16
-    at 60 N, u = IK(P), 331,313 -> 252,808 boxes, 19.6 -> 20.3 CPU s; general-19 at 10 N
-    128,721 -> 124,428, 12.0 -> 12.3 s; T-16 at 10 N 1,694 -> 1,569, 0.65 -> 0.75 s.
+    by default: fewer boxes, and more CPU but on T-16 at 60 N (docs/fk-cost.md, its last
+    section, medians of 3 interleaved): T-16 at 60 N, u = IK(P), 331,313 -> 257,034 boxes,
+    22.4 -> 22.2 CPU s; general-19 at 10 N 128,721 -> 124,533, 11.3 -> 13.5 s; T-16 at
+    10 N 1,694 -> 1,570, 0.71 -> 0.76 s.
     """
 
     def __init__(
@@ -190,7 +191,7 @@ class FKSolver:
         batch_size: int = 2048,
         stable_only: bool = False,
         seed_minima: bool = True,
-        position_newton: bool | None = None,
+        position_newton: bool = False,
         prepare_search: bool = True,
     ):
         # batch_size: boxes per numpy call.  The FK systems' batches are large enough for
@@ -212,8 +213,6 @@ class FKSolver:
         #: platform-frame formulations only), before the full Newton step
         if position_newton and robot.toleranced:  # its interval path is not tested yet
             raise InputError("position_newton", "not available for a robot with tolerances")
-        if position_newton is None:  # on where it applies: the platform frame, exact numbers
-            position_newton = not robot.toleranced and applies(self.form)
         self.position_newton = position_newton
         # the parts' compiled programs (Newton's columns, the sub-systems', the energy's
         # Hessian for stable_only) are made now, once, and shared by every search's copy;
