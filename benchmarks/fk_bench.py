@@ -5,7 +5,7 @@ and IK Algorithm 2.
                                   [--only PATTERN]
                                   [--formulation auto|general-19|T-16|...] [--curve]
                                   [--startup] [--skip-fk] [--skip-realtime]
-                                  [--position-newton]
+                                  [--position-newton on|off]
 
 Searches: for each case (robot, tau_max, control vector u) the median wall and CPU time of a
 complete all-solutions search with each worker count, with the status, certified poses,
@@ -22,8 +22,8 @@ expression (``--only stable-only`` the stable-only cases).
 that reaches the stable-only test, by distance to the nearest equilibrium, by width, by
 tension range, each split by the test's outcome (``--max-boxes`` stops the search early).
 
-``--position-newton``: the searches with the position's Newton step on
-(:mod:`certsolve.kinematics.fk_position`).
+``--position-newton on|off``: the searches with the position's Newton step on or off
+(:mod:`certsolve.kinematics.fk_position`; off by default, as in FKSolver).
 
 ``--curve``: how time and boxes grow with tau_max (10, 20, 40, 60 N) and with the stroke
 range (u drawn in 1/4, 1/2 and all of the strokes, seed 1), for T-16 and general-19, one
@@ -166,7 +166,7 @@ def run_case(robot: Robot, u, args, workers: int, stable_only: bool = False):
             robot,
             args.formulation,
             stable_only=stable_only,
-            position_newton=args.position_newton,
+            position_newton=args.position_newton == "on",
         )
         t, c = time.perf_counter(), time.process_time()
         res = fk.solve(u, timeout=args.timeout, workers=workers)
@@ -391,15 +391,17 @@ def main() -> None:
     ap.add_argument("--skip-fk", action="store_true")
     ap.add_argument(
         "--position-newton",
-        action="store_true",
-        help="the searches with FKSolver(position_newton=True) (kinematics/fk_position.py)",
+        choices=("on", "off"),
+        default="off",
+        help="the searches with FKSolver(position_newton=True / False) "
+        "(kinematics/fk_position.py; default off, FKSolver's default)",
     )
     args = ap.parse_args()
     args.workers = [int(w) for w in args.workers.split(",")]
     print(
         f"# {platform.machine()}, {os.cpu_count()} cores, python "
         f"{platform.python_version()}; median of {args.runs} runs; "
-        f"formulation {args.formulation}" + ("; position Newton on" if args.position_newton else "")
+        f"formulation {args.formulation}" + f"; position Newton {args.position_newton}"
     )
     if args.where:
         where_boxes(args)

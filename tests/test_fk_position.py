@@ -179,3 +179,30 @@ def test_a_robot_with_tolerances_is_refused_by_name():
     with pytest.raises(InputError) as err:
         FKSolver(Robot.load(spec), position_newton=True, prepare_search=False)
     assert err.value.field == "position_newton"
+
+
+def test_off_by_default_and_named_in_the_fingerprint():
+    """The step is part of the search's fingerprint (a checkpoint of a search with it is
+    not resumed without it), with its ``max_turn``."""
+    robot = Robot.load(ROBOTS / "marionet-t.json")
+    u = np.zeros(robot.m)
+    on = FKSolver(robot, position_newton=True, prepare_search=False)
+    assert "PositionNewton(max_turn=10.0)" in on.search(u).solver.fingerprint()
+    off = FKSolver(robot, prepare_search=False)
+    assert not off.position_newton
+    assert "PositionNewton" not in off.search(u).solver.fingerprint()
+
+
+def test_boxes_turning_more_than_max_turn_are_left_alone(t16):
+    fk, csys, u, sols = t16
+    pos, edges = fk.forces.position, fk.forces.edges
+    # the orientation of the equilibrium, the position 5 cm off: refuted (test above) unless
+    # the edge vectors are wider than max_turn
+    lo, hi = np.repeat(sols[:1], 2, axis=0), np.repeat(sols[:1], 2, axis=0)
+    lo[:, pos] += 4.5
+    hi[:, pos] += 5.5
+    hi[1, edges[0, 0]] += 0.02
+    step = PositionNewton(fk.forces, csys, max_turn=0.01)
+    nlo, nhi, empty = step.contract(lo, hi)
+    assert empty.tolist() == [True, False]
+    assert np.array_equal(nlo[1], lo[1]) and np.array_equal(nhi[1], hi[1])

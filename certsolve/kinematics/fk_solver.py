@@ -176,9 +176,10 @@ class FKSolver:
     ``position_newton`` (platform-frame formulations): a parametric interval Newton step
     on the force balance in the reference point, the wire lengths taken from the pose,
     over each box's orientations (:mod:`.fk_position`), before the full Newton step.  Off
-    by default: fewer boxes for about the same CPU (docs/fk-cost.md, medians of 3): T-16
-    at 60 N, u = IK(P), 331,313 -> 252,808 boxes, 19.6 -> 20.3 CPU s; general-19 at 10 N
-    128,721 -> 124,428, 12.0 -> 12.3 s; T-16 at 10 N 1,694 -> 1,569, 0.65 -> 0.75 s.
+    by default: fewer boxes, and more CPU but on T-16 at 60 N (docs/fk-cost.md, its last
+    section, medians of 3 interleaved): T-16 at 60 N, u = IK(P), 331,313 -> 257,034 boxes,
+    22.4 -> 22.2 CPU s; general-19 at 10 N 128,721 -> 124,533, 11.3 -> 13.5 s; T-16 at
+    10 N 1,694 -> 1,570, 0.71 -> 0.76 s.
     """
 
     def __init__(
