@@ -288,10 +288,20 @@ def test_nesting_limit_is_clean_and_configurable():
             parse_minibex(text)
 
 
+HUGE_LOOP = "Variables\n  x;\nConstraints\n  for i = 1:1000000000; x <= i; end\n x = 0;\nend"
+
+
 def test_work_limit_stops_huge_loops():
-    text = "Variables\n  x;\nConstraints\n  for i = 1:1000000000; x <= i; end\n x = 0;\nend"
+    """A loop past ``max_work`` is refused (a small limit: the same path as the default's)."""
+    with pytest.raises(MinibexError, match="too large: more than 20000 "):
+        parse_minibex(HUGE_LOOP, limits=Limits(max_work=20_000))
+
+
+@pytest.mark.slow
+def test_the_default_work_limit_stops_huge_loops():
+    """The default limits stop it too (~15 s of parsing: 5 million steps)."""
     with pytest.raises(MinibexError, match="too large"):
-        parse_minibex(text)
+        parse_minibex(HUGE_LOOP)
     assert LIMITS.max_work >= 1_000_000
 
 
