@@ -27,7 +27,7 @@ of undecided boxes around every pose.  So the search is done in three steps:
    ``E ← K(E) ∩ E``, until it stops shrinking: every equilibrium of every robot of the set
    in ``U`` stays in ``E``;
 3. the rest of the search box -- the domain less the interiors of the proven ``U``
-   (:func:`.box_difference`, closed pieces that meet no ``int U``) -- is searched by the
+   (:func:`.boxes_minus`, closed pieces that meet no ``int U``) -- is searched by the
    set's own FK search (the nominal pipeline on the interval system, with the set's
    Krawczyk operator as one more contractor, :class:`SetNewton`): it proves its own pose
    boxes where a robot of the set has another equilibrium, and reports
@@ -75,7 +75,7 @@ from ..interval.linalg import (
 from ..interval.reductions import all_last, any_last
 from ..interval.rounding import down, up
 from ..robot.model import Robot
-from ..solver.certify import SolutionSet, box_difference
+from ..solver.certify import SolutionSet, boxes_minus
 from ..solver.result import Solution, SolveResult
 from ..solver.search import SearchStatus
 from .fk_equations import tolerance_parameters
@@ -528,24 +528,6 @@ def _regular_box(test: SetKrawczyk, seed: np.ndarray, elo: np.ndarray, ehi: np.n
     return ulo[k], uhi[k]
 
 
-def _outside(domain: np.ndarray, ulo: np.ndarray, uhi: np.ndarray):
-    """Closed boxes covering the domain less the interiors of the unicity boxes."""
-    pieces = [(domain[:, 0].copy(), domain[:, 1].copy())]
-    for a, b in zip(ulo, uhi, strict=True):
-        nxt = []
-        for lo, hi in pieces:
-            if np.any(hi <= a) or np.any(lo >= b):  # meets no interior point of U
-                nxt.append((lo, hi))
-            else:
-                nxt.extend(box_difference(lo, hi, a, b))
-        pieces = nxt
-    n = domain.shape[0]
-    return (
-        np.array([p[0] for p in pieces]).reshape(-1, n),
-        np.array([p[1] for p in pieces]).reshape(-1, n),
-    )
-
-
 def tolerant_forward_kinematics(
     robot: Robot,
     u,
@@ -602,7 +584,7 @@ def tolerant_forward_kinematics(
     known = SolutionSet(solver.n)
     for a, b, c, d, kind in zip(elo[held], ehi[held], ulo[held], uhi[held], kinds):
         known.add(a, b, c, d, kind)
-    plo, phi = _outside(tsearch.domain, ulo[held], uhi[held])
+    plo, phi = boxes_minus(tsearch.domain[:, 0], tsearch.domain[:, 1], ulo[held], uhi[held])
     left = None if timeout is None else max(timeout - (time.perf_counter() - t0), 0.0)
     boxes_left = None if max_boxes is None else max(max_boxes - first.stats.boxes, 1)
     rest = solver.solve(
