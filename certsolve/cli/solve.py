@@ -4,9 +4,10 @@ The options are the ``solve`` job's params (:class:`~certsolve.jobs.kinds.solve.
 SolveParams`), refused as the job refuses them.  The model is imported (with pydantic and
 the job kinds: ~0.08 s of CPU, a third of the start-up) only when :data:`PARAMS_SCHEMA`
 does not surely accept them (:func:`certsolve.lazy.surely_valid`); otherwise they are the
-model's own values.  The search is the job's operation, :func:`~certsolve.jobs.kinds.solve.
-run_solve`: the same call of :func:`certsolve.solve` (``tests/test_cli_solve.py`` checks
-both give it the same arguments).
+model's own values.  The search is the call of :func:`certsolve.solve` that the job's
+operation, :func:`~certsolve.jobs.kinds.solve.run_solve`, makes: both take the params'
+keywords from :func:`~certsolve.solver.options_schema.solve_keywords`
+(``tests/test_cli_solve_options.py`` checks the two calls are the same).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from ..lazy import surely_valid
-from ..solver.options_schema import SOLVE_OPTIONS_SCHEMA
+from ..solver.options_schema import SOLVE_OPTIONS_SCHEMA, solve_keywords
 from ..solver.summary import MAX_LISTED
 from .common import (
     Deadline,
@@ -132,18 +133,13 @@ def run(args: argparse.Namespace) -> int:
         with saving as (checkpoint, cancel):
             result = solve(  # as the solve job's operation, run_solve, calls it
                 system,
-                eps=params["eps"],
                 timeout=deadline.solver_timeout(),
                 max_boxes=params["max_boxes"],
                 executor=executor,
                 cancel=cancel,
-                verify=params["verify"],
                 progress=deadline.progress(show),
-                max_solutions=params["max_solutions"],
-                max_undecided=params["max_undecided"],
-                max_pending=params["max_pending"],
-                cid_vars=None if params["cid_vars"] == "all" else params["cid_vars"],
                 checkpoint=checkpoint,
+                **solve_keywords(params),
             )
             saving.status = str(result.status)
     finally:

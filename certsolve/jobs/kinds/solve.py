@@ -7,6 +7,7 @@ from typing import Annotated, Any, Literal
 from pydantic import Field, ValidationInfo, field_validator
 
 from ...solver.options import SolveOptions
+from ...solver.options_schema import solve_keywords
 from .base import Job, Kind, Params, RunContext, trusted
 
 __all__ = ["KIND", "MAX_SYSTEM_CHARS", "MAX_VARIABLES", "SolveJob", "SolveParams", "run_solve"]
@@ -44,9 +45,7 @@ class SolveParams(SolveOptions, Params):  # the library's options, and the answe
 
     def solver_cid_vars(self) -> int | str | None:
         """``cid_vars`` as :class:`~certsolve.solver.Solver` takes it (None: all)."""
-        if self.cid_vars == "all":
-            return None
-        return self.cid_vars if self.cid_vars == "auto" else int(self.cid_vars)
+        return solve_keywords(self.model_dump())["cid_vars"]
 
 
 def check_system(text: str) -> str:
@@ -88,22 +87,16 @@ def run_solve(p: SolveParams, system: Any, ctx: RunContext) -> Any:
     from ...expr.minibex import parse_minibex
     from ...solver.branch_and_prune import solve
 
-    result = solve(
+    return solve(
         parse_minibex(system) if isinstance(system, str) else system,
-        eps=p.eps,
         timeout=ctx.time_limit,
         max_boxes=ctx.max_boxes,
         executor=ctx.executor,
         cancel=ctx.cancel,
-        verify=p.verify,
         progress=ctx.progress,
-        max_solutions=p.max_solutions,
-        max_undecided=p.max_undecided,
-        max_pending=p.max_pending,
-        cid_vars=p.solver_cid_vars(),
         checkpoint=ctx.checkpoint,
+        **solve_keywords(p.model_dump()),
     )
-    return result
 
 
 KIND = Kind(
