@@ -676,6 +676,11 @@ function figure(path, alt) {
   return f;
 }
 
+// A job's picture beside the table of its facts (maps, pavings, paths).
+function pictureWithFacts(job, name, alt, rows) {
+  return el("div", { class: "pose-body" }, figure(picturePath(job.id, name), alt), kv(rows));
+}
+
 function renderFk(job, r, out) {
   const poses = r.solutions || [];
   out.append(el("p", {}, `formulation ${r.formulation}, u = ${vec(r.u, 6)}, ${num((r.stats || {}).boxes)} boxes`));
@@ -841,56 +846,41 @@ function renderSolve(job, r, out) {
 function renderMap(job, r, out) {
   const s = r.summary || {};
   out.append(
-    el(
-      "div",
-      { class: "pose-body" },
-      figure(picturePath(job.id, "map.png"), "isotropic force map"),
-      kv([
-        ["robot", r.robot],
-        ["grid", `${(r.xs || []).length} × ${(r.ys || []).length} points` + (r.z !== null && r.z !== undefined ? `, z = ${num(r.z)} cm` : "")],
-        ["inside / outside / degenerate", `${num(s.inside)} / ${num(s.outside)} / ${num(s.degenerate)}`],
-        ["maximum", s.max === null ? "–" : `${num(s.max, 6)} N at ${vec(s.argmax, 6)}`],
-        ["inside area (estimate)", s.inside_area_estimate === undefined ? "–" : `${num(s.inside_area_estimate, 5)} cm²`],
-      ])
-    )
+    pictureWithFacts(job, "map.png", "isotropic force map", [
+      ["robot", r.robot],
+      ["grid", `${(r.xs || []).length} × ${(r.ys || []).length} points` + (r.z !== null && r.z !== undefined ? `, z = ${num(r.z)} cm` : "")],
+      ["inside / outside / degenerate", `${num(s.inside)} / ${num(s.outside)} / ${num(s.degenerate)}`],
+      ["maximum", s.max === null ? "–" : `${num(s.max, 6)} N at ${vec(s.argmax, 6)}`],
+      ["inside area (estimate)", s.inside_area_estimate === undefined ? "–" : `${num(s.inside_area_estimate, 5)} cm²`],
+    ])
   );
 }
 
 function renderWorkspace(job, r, out) {
   const c = r.counts || {};
   out.append(
-    el(
-      "div",
-      { class: "pose-body" },
-      figure(picturePath(job.id, "paving.png"), "certified paving"),
-      kv([
-        ["robot", r.robot],
-        ["required force", `${num(r.min_force)} N`],
-        ["status", r.status],
-        ["boxes inside / outside / boundary / pending", `${num(c.inside)} / ${num(c.outside)} / ${num(c.boundary)} / ${num(c.pending)}`],
-        ["proven inside", `${num(r.inside_measure, 5)} ${r.unit} (${num(100 * r.inside_share, 4)} % of the box)`],
-        ["boxes processed", num(r.boxes)],
-      ])
-    )
+    pictureWithFacts(job, "paving.png", "certified paving", [
+      ["robot", r.robot],
+      ["required force", `${num(r.min_force)} N`],
+      ["status", r.status],
+      ["boxes inside / outside / boundary / pending", `${num(c.inside)} / ${num(c.outside)} / ${num(c.boundary)} / ${num(c.pending)}`],
+      ["proven inside", `${num(r.inside_measure, 5)} ${r.unit} (${num(100 * r.inside_share, 4)} % of the box)`],
+      ["boxes processed", num(r.boxes)],
+    ])
   );
 }
 
 function renderTrajectory(job, r, out) {
   const st = r.stats || {};
   out.append(
-    el(
-      "div",
-      { class: "pose-body" },
-      figure(picturePath(job.id, "path.png"), "pose and tensions along the path"),
-      kv([
-        ["robot", r.robot],
-        ["status", r.status],
-        ["certified and joined", `${num(r.certified)} step(s)`],
-        ["lost at", r.lost_at === null || r.lost_at === undefined ? "–" : `step ${r.lost_at}: ${r.reason}`],
-        ["chunks proven / split", `${num(st.chunks)} / ${num(st.chunk_failures)}`],
-        ["time", duration(st.time)],
-      ])
-    )
+    pictureWithFacts(job, "path.png", "pose and tensions along the path", [
+      ["robot", r.robot],
+      ["status", r.status],
+      ["certified and joined", `${num(r.certified)} step(s)`],
+      ["lost at", r.lost_at === null || r.lost_at === undefined ? "–" : `step ${r.lost_at}: ${r.reason}`],
+      ["chunks proven / split", `${num(st.chunks)} / ${num(st.chunk_failures)}`],
+      ["time", duration(st.time)],
+    ])
   );
 }
 
