@@ -5,7 +5,7 @@ and IK Algorithm 2.
                                   [--only PATTERN]
                                   [--formulation auto|general-19|T-16|...] [--curve]
                                   [--startup] [--skip-fk] [--skip-realtime]
-                                  [--position-newton on|off]
+                                  [--position-newton on|off] [--relax on|off|default]
 
 Searches: for each case (robot, tau_max, control vector u) the median wall and CPU time of a
 complete all-solutions search with each worker count, with the status, certified poses,
@@ -23,7 +23,9 @@ that reaches the stable-only test, by distance to the nearest equilibrium, by wi
 tension range, each split by the test's outcome (``--max-boxes`` stops the search early).
 
 ``--position-newton on|off``: the searches with the position's Newton step on or off
-(:mod:`certsolve.kinematics.fk_position`; off by default, as in FKSolver).
+(:mod:`certsolve.kinematics.fk_position`; off by default, as in FKSolver).  ``--relax
+on|off``: with or without the polytope hull once a round (``FKSolver(relax=...)``; by
+default FKSolver's default: on for spatial robots).
 
 ``--curve``: how time and boxes grow with tau_max (10, 20, 40, 60 N) and with the stroke
 range (u drawn in 1/4, 1/2 and all of the strokes, seed 1), for T-16 and general-19, one
@@ -167,6 +169,7 @@ def run_case(robot: Robot, u, args, workers: int, stable_only: bool = False):
             args.formulation,
             stable_only=stable_only,
             position_newton=args.position_newton == "on",
+            relax=None if args.relax == "default" else args.relax == "on",
         )
         t, c = time.perf_counter(), time.process_time()
         res = fk.solve(u, timeout=args.timeout, workers=workers)
@@ -396,12 +399,20 @@ def main() -> None:
         help="the searches with FKSolver(position_newton=True / False) "
         "(kinematics/fk_position.py; default off, FKSolver's default)",
     )
+    ap.add_argument(
+        "--relax",
+        choices=("on", "off", "default"),
+        default="default",
+        help="the searches with FKSolver(relax=True / False): the polytope hull once a round "
+        "(default: FKSolver's, on for spatial robots)",
+    )
     args = ap.parse_args()
     args.workers = [int(w) for w in args.workers.split(",")]
     print(
         f"# {platform.machine()}, {os.cpu_count()} cores, python "
         f"{platform.python_version()}; median of {args.runs} runs; "
-        f"formulation {args.formulation}" + f"; position Newton {args.position_newton}"
+        f"formulation {args.formulation}; position Newton {args.position_newton}; "
+        f"relax {args.relax}"
     )
     if args.where:
         where_boxes(args)

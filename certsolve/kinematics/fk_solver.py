@@ -27,6 +27,7 @@ from ..solver import SearchStatus, Solver, SolverLimits
 from ..solver.certify import Certifier
 from ..solver.contractors import HC4
 from ..solver.pipeline import FixPoint, Inflate, Sequence, core
+from ..solver.relaxation import PolytopeHull
 from ..solver.result import SolveResult
 from .energy_minima import energy_minima
 from .fk_formulation import FKFormulation
@@ -180,6 +181,15 @@ class FKSolver:
     section, medians of 3 interleaved): T-16 at 60 N, u = IK(P), 331,313 -> 257,034 boxes,
     22.4 -> 22.2 CPU s; general-19 at 10 N 128,721 -> 124,533, 11.3 -> 13.5 s; T-16 at
     10 N 1,694 -> 1,570, 0.71 -> 0.76 s.
+
+    ``relax``: the polytope hull of the X-Taylor and affine relaxation
+    (:class:`.PolytopeHull`, one direction) once a round, after the contraction fixpoint,
+    on the boxes its learnt share plans (:class:`.HullShare`: every box while it halves
+    enough of them, one in 16 otherwise).  By default on for the general-19 system, off
+    for the others (docs/fk-cost.md, its last section; CPU s, medians of 3 interleaved):
+    general-19 at 10 N, u = 0, 128,721 -> 42,620 boxes, 10.6 -> 5.2 s; at 60 N, u drawn
+    in the strokes, 156,877 -> 41,174 boxes, 9.9 -> 7.7 s; T-16 at 60 N, u = IK(P),
+    331,313 -> 321,994 boxes but 21.2 -> 24.3 s.
     """
 
     def __init__(
@@ -192,6 +202,7 @@ class FKSolver:
         stable_only: bool = False,
         seed_minima: bool = True,
         position_newton: bool = False,
+        relax: bool | None = None,
         prepare_search: bool = True,
     ):
         # batch_size: boxes per numpy call.  The FK systems' batches are large enough for
@@ -214,6 +225,9 @@ class FKSolver:
         if position_newton and robot.toleranced:  # its interval path is not tested yet
             raise InputError("position_newton", "not available for a robot with tolerances")
         self.position_newton = position_newton
+        #: the polytope hull once a round (default: the general-19 system only; on the
+        #: smaller systems its LPs cost more than the boxes they save)
+        self.relax = "general-19" in self.form.name if relax is None else bool(relax)
         # the parts' compiled programs (Newton's columns, the sub-systems', the energy's
         # Hessian for stable_only) are made now, once, and shared by every search's copy;
         # prepare_search=False: the formulation and its compiled system only (a tracker
@@ -233,10 +247,10 @@ class FKSolver:
     def search(self, u, extra: tuple = ()) -> FKSearch:
         """The search for control ``u``: ``u`` checked, its search box, and the solver.
 
-        The solver is assembled from the formulation's parts: the pipeline without the
-        relaxation (fewer boxes, more CPU: see :meth:`.Solver.default`'s ``relax``) and
-        without CID -- HC4, partial Newton on the formulation's sub-systems, Newton with
-        its mixed Jacobian, in a fixpoint, then inflated proofs -- on the compiled system
+        The solver is assembled from the formulation's parts, without CID: HC4, partial
+        Newton on the formulation's sub-systems, Newton with its mixed Jacobian, in a
+        fixpoint, then (``relax``) the polytope hull once, then inflated proofs -- on the
+        compiled system
         with ``u`` as its parameter values (``extra`` contractors go before the full Newton
         step) (:meth:`.CompiledSystem.with_parameters`), the
         formulation's bisector for the box and its bisection mask.
@@ -260,9 +274,12 @@ class FKSolver:
         if self.stable_only:
             newton.insert(-1, StableOnly(self.hessian, csys, self.robot, form.rho_columns()))
         newton[-1:-1] = list(extra)  # e.g. the set's Krawczyk (:mod:`.fk_tolerance`)
+        rounds: list[Any] = [FixPoint(Sequence(*newton))]
+        if self.relax:
+            rounds.append(PolytopeHull(csys, directions=1))
         solver = Solver(
             csys,
-            Sequence(FixPoint(Sequence(*newton)), Inflate()),
+            Sequence(*rounds, Inflate()),
             Certifier(csys),
             form.bisector(dom),
             limits=SolverLimits(
