@@ -204,6 +204,17 @@ class CompiledSystem:
             return stacked.eval(lo, hi, c, self.param_lo, self.param_hi)
         return self._mixed_by_group(lo, hi, c, groups)
 
+    def eval_f_mixed(self, lo, hi, c, groups):
+        """``f(c)`` (rigorous, ``(B, n)`` bounds) and :meth:`eval_fj_mixed`, in one call of
+        the stacked program at small batches (its copy of ``f`` at ``c``): the floats of
+        :meth:`eval_f_at` and :meth:`eval_fj_mixed`.  Returns ``(flo, fhi, jlo, jhi,
+        defined)``."""
+        key = tuple(tuple(int(j) for j in np.flatnonzero(g)) for g in groups)
+        stacked = self._mixed_program(key)
+        if lo.shape[0] * stacked.program.n_nodes <= STACK_ELEMENTS:
+            return stacked.eval_with_f(lo, hi, c, self.param_lo, self.param_hi)
+        return (*self.eval_f_at(c), *self._mixed_by_group(lo, hi, c, groups))
+
     def _mixed_by_group(self, lo, hi, c, groups):
         """:meth:`eval_fj_mixed` one column program per group."""
         B, n = lo.shape

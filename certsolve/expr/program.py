@@ -262,13 +262,16 @@ class Program:
                 HI[g.start : g.stop] = rhi
         return LO, HI
 
-    def defined_mask(self, LO: np.ndarray, HI: np.ndarray) -> np.ndarray:
+    def defined_mask(
+        self, LO: np.ndarray, HI: np.ndarray, skip: np.ndarray | None = None
+    ) -> np.ndarray:
         """Boxes on which every node is defined, continuous and differentiable everywhere.
 
         The tests are :data:`.ops.SMOOTH` (``sqrt`` of a non-negative argument, ``log`` of a
         positive one, no divisor or negative power over 0, no pole of ``tan``, no kink of
         ``abs``/``min``/``max``, ...).  Certification requires this: the Krawczyk and Newton
-        theorems need ``f`` continuously differentiable on the whole box.
+        theorems need ``f`` continuously differentiable on the whole box.  ``skip``: a mask
+        of the local rows whose test is left out.
         """
         ok = np.ones(LO.shape[1], dtype=bool)
         for g in self._restricted:
@@ -276,6 +279,8 @@ class Program:
             b_hi = None if g.b is None else HI[g.b]
             z = slice(g.start, g.stop)
             test = SMOOTH[g.op](LO[g.a], HI[g.a], b_lo, b_hi, LO[z], HI[z], g.param)
+            if skip is not None and skip[z].any():
+                test = test | skip[z, None]
             ok &= np.all(test, axis=0)
         return ok
 
