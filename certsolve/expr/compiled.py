@@ -30,6 +30,15 @@ __all__ = ["CompileTimeout", "CompiledSystem"]
 STACK_ELEMENTS = 1 << 20
 
 
+def _group_key(groups) -> tuple[tuple[int, ...], ...]:
+    """The variables of each group (boolean masks) as tuples: one ``nonzero`` for all."""
+    rows, cols = np.nonzero(np.asarray(groups, dtype=bool))
+    key: list[list[int]] = [[] for _ in range(len(groups))]
+    for r, j in zip(rows.tolist(), cols.tolist()):
+        key[r].append(j)
+    return tuple(tuple(k) for k in key)
+
+
 class CompiledSystem:
     def __init__(self, system: System, *, deadline: float | None = None):
         """``deadline`` (a :func:`time.monotonic` value): compiling past it raises
@@ -184,7 +193,7 @@ class CompiledSystem:
 
     def prepare_mixed(self, groups) -> None:
         """Build the programs :meth:`eval_fj_mixed` uses for ``groups`` (at load time)."""
-        self._mixed_program(tuple(tuple(int(j) for j in np.flatnonzero(g)) for g in groups))
+        self._mixed_program(_group_key(groups))
 
     def eval_fj_mixed(self, lo, hi, c, groups):
         """Hansen's mixed Jacobian: the columns of group ``k`` (boolean masks partitioning
@@ -197,7 +206,7 @@ class CompiledSystem:
         one column program per group (:meth:`eval_fj_columns`, built on first use): the
         same floats.
         """
-        key = tuple(tuple(int(j) for j in np.flatnonzero(g)) for g in groups)
+        key = _group_key(groups)
         stacked = self._mixed_program(key)
         B, n = lo.shape
         if B * stacked.program.n_nodes <= STACK_ELEMENTS:
@@ -209,7 +218,7 @@ class CompiledSystem:
         the stacked program at small batches (its copy of ``f`` at ``c``): the floats of
         :meth:`eval_f_at` and :meth:`eval_fj_mixed`.  Returns ``(flo, fhi, jlo, jhi,
         defined)``."""
-        key = tuple(tuple(int(j) for j in np.flatnonzero(g)) for g in groups)
+        key = _group_key(groups)
         stacked = self._mixed_program(key)
         if lo.shape[0] * stacked.program.n_nodes <= STACK_ELEMENTS:
             return stacked.eval_with_f(lo, hi, c, self.param_lo, self.param_hi)
