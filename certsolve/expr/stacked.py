@@ -18,11 +18,12 @@ Each copy applies the same operations to the same inputs as group ``k``'s own pr
 whatever the size of the arrays (:func:`certsolve.interval.rounding.up`), so the two give
 the same floats.  Copy ``k`` holds the nodes of its columns only; ``f`` itself, which the
 column programs evaluate over every ``X_k`` for their domain test, is in the last copy
-alone, over ``X_K = X``: every ``X_k`` lies in ``X`` and the enclosures are inclusion-
-isotone (a bound is a monotone function of the operands' bounds, then rounded outward), so
-``f`` passes the test over ``X_k`` wherever it passes over ``X``, and the ``n`` copies of
-``f`` a dense or banded system had cost most of the program's elements for nothing
-(Trigexp1-024: 9,940 nodes, 2,094 without them, the copy at ``c`` included).
+alone, over ``X_K`` (``X`` itself: the groups partition the variables), which holds every
+``X_k``.  The enclosures are inclusion-isotone (a bound is a monotone function of the
+operands' bounds, then rounded outward), so ``f`` passes the test over ``X_k`` wherever it
+passes over ``X_K``; and the ``n`` copies of ``f`` of a dense or banded system had cost
+most of the program's elements for nothing (Trigexp1-024: 9,940 nodes, 2,094 without
+them, the copy at ``c`` included).
 
 One more copy, of ``f`` alone over the point ``c``, gives Newton's ``f(c)`` in the same
 call (:meth:`StackedColumns.eval_with_f`): the floats of ``f``'s own program at ``c``, for
