@@ -73,7 +73,7 @@ def random_boxes(domain, B, rng, scale):
 @pytest.mark.parametrize(
     "name", ["katsura-5", "eco-6", "brown-5", "trig-exp", "broyden-banded-10", "kin2-6r"]
 )
-@pytest.mark.parametrize("B", [1, 7, 300])
+@pytest.mark.parametrize("B", [1, 7, 600])
 def test_same_floats_as_the_plain_sweep(name, B):
     system = load_minibex(SYSTEMS / f"{name}.mbx")
     csys = CompiledSystem(system)
