@@ -313,10 +313,11 @@ class CompiledSystem:
         """
         p = self.hc4
         LO, HI = p.eval_interval(lo, hi, self.param_lo, self.param_hi)
+        forward = (LO.copy(), HI.copy())
         out = self.hc4_out
         LO[out] = np.fmax(LO[out], self.hc4_target_lo)
         HI[out] = np.fmin(HI[out], self.hc4_target_hi)
-        p.revise(LO, HI)
+        p.revise(LO, HI, forward)
         empty = np.any(~(LO <= HI), axis=0)
         n = self.n
         new_lo = np.fmax(LO[:n].T, lo)
