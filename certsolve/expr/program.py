@@ -67,6 +67,20 @@ class Group:
     #: node id occurs at most once, so the intersection is written with plain fancy indexing
     layers_a: tuple = ()
     layers_b: tuple = ()
+    #: the rows of ``a`` and ``b`` as a slice where they are consecutive (a view to read, a
+    #: block to write: no index array to walk), else ``a`` and ``b`` themselves
+    ra: slice | np.ndarray | None = None
+    rb: slice | np.ndarray | None = None
+
+
+def _rows(idx: np.ndarray | None) -> slice | np.ndarray | None:
+    """``idx`` as a slice when it is ``k, k + 1, ...``, else ``idx``."""
+    if idx is None or not len(idx):
+        return idx
+    first = int(idx[0])
+    if np.array_equal(idx, np.arange(first, first + len(idx))):
+        return slice(first, first + len(idx))
+    return idx
 
 
 def _layers(idx: np.ndarray) -> tuple:
@@ -213,7 +227,9 @@ class Program:
             la = () if unique else _layers(a)
             lb = () if unique or b is None else _layers(b)
             start = int(local[lead])
-            return Group(op, start, start + len(members), a, b, param, unique, la, lb)
+            return Group(
+                op, start, start + len(members), a, b, param, unique, la, lb, _rows(a), _rows(b)
+            )
 
         #: backward (HC4) groups, by level: the order and grouping define what revise computes
         self.groups = [group(members) for members in units]
@@ -245,19 +261,21 @@ class Program:
         HI[self.const_slice] = self.const_hi
         with np.errstate(all="ignore"):
             for g in self.fwd_groups:
+                # the children's rows are read in place where consecutive (the kernels
+                # never write their operands, and a group never feeds itself)
                 into = _FWD_INTO.get(g.op)
                 if into is not None:
-                    b_lo = None if g.b is None else LO[g.b]
-                    b_hi = None if g.b is None else HI[g.b]
+                    b_lo = None if g.rb is None else LO[g.rb]
+                    b_hi = None if g.rb is None else HI[g.rb]
                     into(
-                        LO[g.a], HI[g.a], b_lo, b_hi, g.param,
+                        LO[g.ra], HI[g.ra], b_lo, b_hi, g.param,
                         LO[g.start : g.stop], HI[g.start : g.stop],
                     )  # fmt: skip
                     continue
-                if g.b is None:
-                    rlo, rhi = _FWD[g.op](LO[g.a], HI[g.a], None, None, g.param)
+                if g.rb is None:
+                    rlo, rhi = _FWD[g.op](LO[g.ra], HI[g.ra], None, None, g.param)
                 else:
-                    rlo, rhi = _FWD[g.op](LO[g.a], HI[g.a], LO[g.b], HI[g.b], g.param)
+                    rlo, rhi = _FWD[g.op](LO[g.ra], HI[g.ra], LO[g.rb], HI[g.rb], g.param)
                 LO[g.start : g.stop] = rlo
                 HI[g.start : g.stop] = rhi
         return LO, HI
@@ -296,7 +314,9 @@ class Program:
         V[self.const_slice] = self.const_mid
         with np.errstate(all="ignore"):
             for g in self.fwd_groups:
-                V[g.start : g.stop] = _FLT[g.op](V[g.a], None if g.b is None else V[g.b], g.param)
+                V[g.start : g.stop] = _FLT[g.op](
+                    V[g.ra], None if g.rb is None else V[g.rb], g.param
+                )
         return V
 
     def revise(
@@ -328,15 +348,16 @@ class Program:
                     z = slice(g.start, g.stop)
                     if not ((zlo != flo[z]).any() or (zhi != fhi[z]).any()):
                         continue
-                if g.b is None:
-                    nxlo, nxhi = bwd(zlo, zhi, LO[g.a], HI[g.a], None, None, g.param)
-                    self._write(LO, HI, g.a, nxlo, nxhi, g.unique_children, g.layers_a)
+                # distinct children: their rows read in place where consecutive (a
+                # projection may return an operand as it is; no write meets another's rows)
+                a, b = (g.ra, g.rb) if g.unique_children else (g.a, g.b)
+                if b is None:
+                    nxlo, nxhi = bwd(zlo, zhi, LO[a], HI[a], None, None, g.param)
+                    self._write(LO, HI, a, nxlo, nxhi, g.unique_children, g.layers_a)
                 else:
-                    nxlo, nxhi, nylo, nyhi = bwd(
-                        zlo, zhi, LO[g.a], HI[g.a], LO[g.b], HI[g.b], g.param
-                    )
-                    self._write(LO, HI, g.a, nxlo, nxhi, g.unique_children, g.layers_a)
-                    self._write(LO, HI, g.b, nylo, nyhi, g.unique_children, g.layers_b)
+                    nxlo, nxhi, nylo, nyhi = bwd(zlo, zhi, LO[a], HI[a], LO[b], HI[b], g.param)
+                    self._write(LO, HI, a, nxlo, nxhi, g.unique_children, g.layers_a)
+                    self._write(LO, HI, b, nylo, nyhi, g.unique_children, g.layers_b)
 
     @staticmethod
     def _write(LO, HI, idx, lo, hi, unique: bool, layers) -> None:
