@@ -15,6 +15,10 @@ domain (seeded; widths 1/64 of the domain, so that many straddle zeros), then th
 * ``mixed``    -- Hansen's mixed Jacobian over the solver's groups (one variable per group,
   FK: its own), one stacked program at small batches,
 * ``newton``   -- the interval Newton contractor (linearisation, Krawczyk, Hansen–Sengupta),
+  with the solver's groups (FK: its own; a file: the plain Jacobian),
+* ``mnewton``  -- the same with Hansen's mixed Jacobian, one variable per group (the solver's
+  default on a file: ``f(c)``, the stacked program, Krawczyk, Hansen–Sengupta),
+* ``hc4fix``   -- the HC4 contractor: HC4-revise repeated while a box shrinks (up to 4 passes),
 * ``round``    -- an HC4 + Newton round as the solver runs it: HC4 (up to 4 passes), then
   interval Newton with the mixed Jacobian on HC4's boxes,
 * ``relax``    -- the polytope-hull contractor (X-Taylor rows + batched dual LPs).
@@ -101,6 +105,8 @@ def kernels(csys, groups):
         "columns": lambda lo, hi: csys.eval_fj_columns(lo, hi, cols),
         "mixed": lambda lo, hi: csys.eval_fj_mixed(lo, hi, midpoint(lo, hi), mixed),
         "newton": newton.contract,
+        "mnewton": newton_mixed.contract,
+        "hc4fix": hc4.contract,
         "round": lambda lo, hi: newton_mixed.contract(*hc4.contract(lo, hi)[:2]),
         "relax": relax.contract,
     }

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from certsolve.expr import System, sqrt, var
 from certsolve.expr.compiled import STACK_ELEMENTS, CompiledSystem
 from certsolve.expr.minibex import load_minibex
 from certsolve.interval.core import midpoint
@@ -84,3 +85,44 @@ def test_large_batches_take_one_program_per_group():
     want = csys._mixed_by_group(lo, hi, c, groups)
     for a, b in zip(got, want):
         assert np.array_equal(a, b, equal_nan=True)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_f_at_the_centre_comes_with_the_mixed_jacobian(name):
+    """``eval_f_mixed``: the stacked program's copy of ``f`` at ``c`` gives the floats of
+    ``f``'s own program at ``c``, and the Jacobian and domain test are those of
+    ``eval_fj_mixed`` (the copy at ``c`` is not tested: the boxes reaching outside the
+    domain, here too, are those of the ``n`` copies)."""
+    system = load_minibex(SYSTEMS / f"{name}.mbx")
+    csys = CompiledSystem(system)
+    rng = np.random.default_rng(11)
+    for groups in partitions(csys.n):
+        csys.prepare_mixed(groups)
+        for B, scale in [(1, 1 / 8), (5, 1e-3), (40, 1 / 4)]:
+            lo, hi = boxes(system.domain, B, rng, scale)
+            c = midpoint(lo, hi)
+            got = csys.eval_f_mixed(lo, hi, c, groups)
+            want = (*csys.eval_f_at(c), *csys._mixed_by_group(lo, hi, c, groups))
+            for a, b in zip(got, want):
+                assert np.array_equal(a, b, equal_nan=True)
+
+
+def test_the_copy_at_the_centre_is_left_out_of_the_domain_test():
+    """``sqrt(x)`` over ``X = [-1, 1]``: not defined on the box, defined at ``c = 0``; over
+    ``[1, 2]`` defined everywhere.  The test says so for the stacked program with the copy
+    at ``c`` (whose own test would pass at ``c = 0`` and must not hide the box's failure)."""
+    x, y = var("x"), var("y")
+    system = System.build({"x": (-1, 2), "y": (-1, 2)}, [sqrt(x) + y - 1.0, x - y])
+    csys = CompiledSystem(system)
+    groups = list(np.eye(2, dtype=bool))
+    lo = np.array([[-1.0, -1.0], [1.0, 1.0]])
+    hi = np.array([[1.0, 1.0], [2.0, 2.0]])
+    c = midpoint(lo, hi)
+    flo, fhi, _, _, defined = csys.eval_f_mixed(lo, hi, c, groups)
+    assert defined.tolist() == [False, True]
+    assert np.array_equal(flo, csys.eval_f_at(c)[0]) and np.array_equal(fhi, csys.eval_f_at(c)[1])
+    # the rows a domain test skips are those given
+    p = csys.f
+    LO, HI = p.eval_interval(lo, hi, csys.param_lo, csys.param_hi)
+    assert p.defined_mask(LO, HI).tolist() == [False, True]
+    assert p.defined_mask(LO, HI, skip=np.ones(p.n_nodes, dtype=bool)).tolist() == [True, True]

@@ -14,7 +14,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 from strategies import finite, interval_and_point, wide
 
-from certsolve.interval import arith, elementary, linalg, projections
+from certsolve.interval import arith, elementary, linalg, projections, rounding
 
 mpmath.mp.dps = 60
 
@@ -141,16 +141,46 @@ def test_vectorised_and_scalar_paths_both_enclose():
     """Large arrays round arithmetically, small ones with nextafter: both enclose the exact
     endpoint products and agree to a few ulps."""
     rng = np.random.default_rng(0)
-    a = np.sort(rng.normal(size=(2, 500)) * 10, axis=0)
-    b = np.sort(rng.normal(size=(2, 500)) * 10, axis=0)
+    a = np.sort(rng.normal(size=(2, 2000)) * 10, axis=0)
+    b = np.sort(rng.normal(size=(2, 2000)) * 10, axis=0)
     lo, hi = arith.mul(a[0], a[1], b[0], b[1])
-    for k in range(0, 500, 37):
+    for k in range(0, 2000, 149):
         slo, shi = arith.mul(a[0, k], a[1, k], b[0, k], b[1, k])
         ends = [M(p) * M(q) for p in (a[0, k], a[1, k]) for q in (b[0, k], b[1, k])]
         for L, H in ((lo[k], hi[k]), (slo, shi)):
             assert M(L) <= min(ends) and max(ends) <= M(H)
         assert abs(lo[k] - slo) <= 4 * np.spacing(abs(slo)) + 1e-300
         assert abs(hi[k] - shi) <= 4 * np.spacing(abs(shi)) + 1e-300
+
+
+@pytest.mark.parametrize("size", [5, 511, 512, 3000])
+def test_rounding_is_nextafter_at_every_size(size):
+    """Small arrays step with ``nextafter``, large ones on the bit patterns (the size
+    threshold is a speed choice): the same floats on both sides of it, the special values
+    (signed zeros, subnormals, the largest float, infinities, NaN) included."""
+    rng = np.random.default_rng(size)
+    special = [0.0, -0.0, 5e-324, -5e-324, 2.0**-1022, -(2.0**-1022), 1.7976931348623157e308,
+               -1.7976931348623157e308, np.inf, -np.inf, np.nan, 1.0, -1.0]  # fmt: skip
+    x = rng.standard_normal(size) * 10.0 ** rng.integers(-300, 300, size)
+    x[: min(size, len(special))] = special[:size]
+    with np.errstate(over="ignore"):
+        up_x, down_x = np.nextafter(x, np.inf), np.nextafter(x, -np.inf)
+        pairs = _roundings(x, up_x, down_x)
+    for got, want in pairs:
+        assert np.array_equal(got.view(np.int64), want.view(np.int64))
+
+
+def _roundings(x, up_x, down_x):
+    """(the package's rounding, nextafter's) pairs for every rounding function."""
+    tiny = ~(np.abs(x) >= 2.0**-1022)  # left alone by the in-place roundings of sums
+    return (
+        (rounding.up(x), up_x),
+        (rounding.down(x), down_x),
+        (rounding.up_inplace(x.copy()), up_x),
+        (rounding.down_inplace(x.copy()), down_x),
+        (rounding.up_inplace(x.copy(), exact_tiny=True), np.where(tiny, x, up_x)),
+        (rounding.down_inplace(x.copy(), exact_tiny=True), np.where(tiny, x, down_x)),
+    )
 
 
 # --- projections: never remove a point that satisfies the relation -------------------

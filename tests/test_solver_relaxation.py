@@ -331,3 +331,27 @@ def test_adaptive_hull_keeps_every_solution_and_skips_boxes():
         assert len(res.solutions) == len(pts)
         assert all(sum(holds(s.lo, s.hi, p) for s in res.solutions) == 1 for p in pts)
     assert solve(system).stats.boxes == adaptive.stats.boxes
+
+
+@pytest.mark.parametrize("name", ["katsura-5", "trig-exp", "kin2-6r", "troesch-10"])
+def test_corners_in_one_call_give_the_same_rows(name, monkeypatch):
+    """Small batches evaluate ``f`` at the corners in the ``f + J`` call with the boxes;
+    the rows are the floats of the separate calls (``f``'s own program at the corners)."""
+    import certsolve.solver.relaxation as relaxation
+
+    system = load_minibex(SYSTEMS / f"{name}.mbx")
+    csys = CompiledSystem(system)
+    rng = np.random.default_rng(5)
+    dom = np.clip(system.domain, -10.0, 10.0)
+    for B, scale in [(1, 1 / 4), (3, 1e-3)]:
+        w = (dom[:, 1] - dom[:, 0]) * scale
+        lo = dom[:, 0] + rng.random((B, csys.n)) * (dom[:, 1] - dom[:, 0] - w)
+        hi = lo + w
+        assert B * csys.fj.n_nodes <= relaxation._CORNERS_WITH_J  # the one-call path
+        one = xtaylor_rows(csys, lo, hi)
+        with monkeypatch.context() as m:
+            m.setattr(relaxation, "_CORNERS_WITH_J", 0)
+            apart = xtaylor_rows(csys, lo, hi)
+        for a, b in zip(one, apart):
+            assert np.array_equal(a, b, equal_nan=True)
+        assert one[3].any()  # some rows are valid

@@ -30,6 +30,15 @@ __all__ = ["CompileTimeout", "CompiledSystem"]
 STACK_ELEMENTS = 1 << 20
 
 
+def _group_key(groups) -> tuple[tuple[int, ...], ...]:
+    """The variables of each group (boolean masks) as tuples: one ``nonzero`` for all."""
+    rows, cols = np.nonzero(np.asarray(groups, dtype=bool))
+    key: list[list[int]] = [[] for _ in range(len(groups))]
+    for r, j in zip(rows.tolist(), cols.tolist()):
+        key[r].append(j)
+    return tuple(tuple(k) for k in key)
+
+
 class CompiledSystem:
     def __init__(self, system: System, *, deadline: float | None = None):
         """``deadline`` (a :func:`time.monotonic` value): compiling past it raises
@@ -184,7 +193,7 @@ class CompiledSystem:
 
     def prepare_mixed(self, groups) -> None:
         """Build the programs :meth:`eval_fj_mixed` uses for ``groups`` (at load time)."""
-        self._mixed_program(tuple(tuple(int(j) for j in np.flatnonzero(g)) for g in groups))
+        self._mixed_program(_group_key(groups))
 
     def eval_fj_mixed(self, lo, hi, c, groups):
         """Hansen's mixed Jacobian: the columns of group ``k`` (boolean masks partitioning
@@ -197,12 +206,23 @@ class CompiledSystem:
         one column program per group (:meth:`eval_fj_columns`, built on first use): the
         same floats.
         """
-        key = tuple(tuple(int(j) for j in np.flatnonzero(g)) for g in groups)
+        key = _group_key(groups)
         stacked = self._mixed_program(key)
         B, n = lo.shape
         if B * stacked.program.n_nodes <= STACK_ELEMENTS:
             return stacked.eval(lo, hi, c, self.param_lo, self.param_hi)
         return self._mixed_by_group(lo, hi, c, groups)
+
+    def eval_f_mixed(self, lo, hi, c, groups):
+        """``f(c)`` (rigorous, ``(B, n)`` bounds) and :meth:`eval_fj_mixed`, in one call of
+        the stacked program at small batches (its copy of ``f`` at ``c``): the floats of
+        :meth:`eval_f_at` and :meth:`eval_fj_mixed`.  Returns ``(flo, fhi, jlo, jhi,
+        defined)``."""
+        key = _group_key(groups)
+        stacked = self._mixed_program(key)
+        if lo.shape[0] * stacked.program.n_nodes <= STACK_ELEMENTS:
+            return stacked.eval_with_f(lo, hi, c, self.param_lo, self.param_hi)
+        return (*self.eval_f_at(c), *self._mixed_by_group(lo, hi, c, groups))
 
     def _mixed_by_group(self, lo, hi, c, groups):
         """:meth:`eval_fj_mixed` one column program per group."""
@@ -293,10 +313,11 @@ class CompiledSystem:
         """
         p = self.hc4
         LO, HI = p.eval_interval(lo, hi, self.param_lo, self.param_hi)
+        forward = (LO.copy(), HI.copy())
         out = self.hc4_out
         LO[out] = np.fmax(LO[out], self.hc4_target_lo)
         HI[out] = np.fmin(HI[out], self.hc4_target_hi)
-        p.revise(LO, HI)
+        p.revise(LO, HI, forward)
         empty = np.any(~(LO <= HI), axis=0)
         n = self.n
         new_lo = np.fmax(LO[:n].T, lo)

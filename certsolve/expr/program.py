@@ -67,6 +67,20 @@ class Group:
     #: node id occurs at most once, so the intersection is written with plain fancy indexing
     layers_a: tuple = ()
     layers_b: tuple = ()
+    #: the rows of ``a`` and ``b`` as a slice where they are consecutive (a view to read, a
+    #: block to write: no index array to walk), else ``a`` and ``b`` themselves
+    ra: slice | np.ndarray | None = None
+    rb: slice | np.ndarray | None = None
+
+
+def _rows(idx: np.ndarray | None) -> slice | np.ndarray | None:
+    """``idx`` as a slice when it is ``k, k + 1, ...``, else ``idx``."""
+    if idx is None or not len(idx):
+        return idx
+    first = int(idx[0])
+    if np.array_equal(idx, np.arange(first, first + len(idx))):
+        return slice(first, first + len(idx))
+    return idx
 
 
 def _layers(idx: np.ndarray) -> tuple:
@@ -213,7 +227,9 @@ class Program:
             la = () if unique else _layers(a)
             lb = () if unique or b is None else _layers(b)
             start = int(local[lead])
-            return Group(op, start, start + len(members), a, b, param, unique, la, lb)
+            return Group(
+                op, start, start + len(members), a, b, param, unique, la, lb, _rows(a), _rows(b)
+            )
 
         #: backward (HC4) groups, by level: the order and grouping define what revise computes
         self.groups = [group(members) for members in units]
@@ -245,30 +261,35 @@ class Program:
         HI[self.const_slice] = self.const_hi
         with np.errstate(all="ignore"):
             for g in self.fwd_groups:
+                # the children's rows are read in place where consecutive (the kernels
+                # never write their operands, and a group never feeds itself)
                 into = _FWD_INTO.get(g.op)
                 if into is not None:
-                    b_lo = None if g.b is None else LO[g.b]
-                    b_hi = None if g.b is None else HI[g.b]
+                    b_lo = None if g.rb is None else LO[g.rb]
+                    b_hi = None if g.rb is None else HI[g.rb]
                     into(
-                        LO[g.a], HI[g.a], b_lo, b_hi, g.param,
+                        LO[g.ra], HI[g.ra], b_lo, b_hi, g.param,
                         LO[g.start : g.stop], HI[g.start : g.stop],
                     )  # fmt: skip
                     continue
-                if g.b is None:
-                    rlo, rhi = _FWD[g.op](LO[g.a], HI[g.a], None, None, g.param)
+                if g.rb is None:
+                    rlo, rhi = _FWD[g.op](LO[g.ra], HI[g.ra], None, None, g.param)
                 else:
-                    rlo, rhi = _FWD[g.op](LO[g.a], HI[g.a], LO[g.b], HI[g.b], g.param)
+                    rlo, rhi = _FWD[g.op](LO[g.ra], HI[g.ra], LO[g.rb], HI[g.rb], g.param)
                 LO[g.start : g.stop] = rlo
                 HI[g.start : g.stop] = rhi
         return LO, HI
 
-    def defined_mask(self, LO: np.ndarray, HI: np.ndarray) -> np.ndarray:
+    def defined_mask(
+        self, LO: np.ndarray, HI: np.ndarray, skip: np.ndarray | None = None
+    ) -> np.ndarray:
         """Boxes on which every node is defined, continuous and differentiable everywhere.
 
         The tests are :data:`.ops.SMOOTH` (``sqrt`` of a non-negative argument, ``log`` of a
         positive one, no divisor or negative power over 0, no pole of ``tan``, no kink of
         ``abs``/``min``/``max``, ...).  Certification requires this: the Krawczyk and Newton
-        theorems need ``f`` continuously differentiable on the whole box.
+        theorems need ``f`` continuously differentiable on the whole box.  ``skip``: a mask
+        of the local rows whose test is left out.
         """
         ok = np.ones(LO.shape[1], dtype=bool)
         for g in self._restricted:
@@ -276,6 +297,8 @@ class Program:
             b_hi = None if g.b is None else HI[g.b]
             z = slice(g.start, g.stop)
             test = SMOOTH[g.op](LO[g.a], HI[g.a], b_lo, b_hi, LO[z], HI[z], g.param)
+            if skip is not None and skip[z].any():
+                test = test | skip[z, None]
             ok &= np.all(test, axis=0)
         return ok
 
@@ -291,11 +314,29 @@ class Program:
         V[self.const_slice] = self.const_mid
         with np.errstate(all="ignore"):
             for g in self.fwd_groups:
-                V[g.start : g.stop] = _FLT[g.op](V[g.a], None if g.b is None else V[g.b], g.param)
+                V[g.start : g.stop] = _FLT[g.op](
+                    V[g.ra], None if g.rb is None else V[g.rb], g.param
+                )
         return V
 
-    def revise(self, LO: np.ndarray, HI: np.ndarray) -> None:
-        """Backward pass of HC4, in place, on forward values whose outputs were narrowed."""
+    def revise(
+        self,
+        LO: np.ndarray,
+        HI: np.ndarray,
+        forward: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> None:
+        """Backward pass of HC4, in place, on forward values whose outputs were narrowed.
+
+        ``forward``: the values of the forward pass, before the outputs were narrowed.  A
+        group whose nodes all still hold them, in every box, is skipped: a node ``z = x ∘ y``
+        whose enclosure was not narrowed encloses ``x ∘ y`` over the children's forward
+        enclosures, which hold their present ones, so the inverse image of ``z`` holds the
+        children and the projection ``x ∩ ...`` gives ``x`` back (the bounds of every
+        projection are rounded outward).  Skipping it changes no bound and saves its numpy
+        calls: 35-47 % of the groups' projections on Trigexp1-024 and BroydenBanded-014
+        searches, 10 % on Kin1.  (A NaN is never equal: such a group is projected.)
+        """
+        flo, fhi = forward if forward is not None else (None, None)
         with np.errstate(all="ignore"):
             for g in reversed(self.groups):
                 bwd = _BWD.get(g.op)
@@ -303,15 +344,20 @@ class Program:
                     continue
                 zlo = LO[g.start : g.stop]
                 zhi = HI[g.start : g.stop]
-                if g.b is None:
-                    nxlo, nxhi = bwd(zlo, zhi, LO[g.a], HI[g.a], None, None, g.param)
-                    self._write(LO, HI, g.a, nxlo, nxhi, g.unique_children, g.layers_a)
+                if flo is not None and fhi is not None:
+                    z = slice(g.start, g.stop)
+                    if not ((zlo != flo[z]).any() or (zhi != fhi[z]).any()):
+                        continue
+                # distinct children: their rows read in place where consecutive (a
+                # projection may return an operand as it is; no write meets another's rows)
+                a, b = (g.ra, g.rb) if g.unique_children else (g.a, g.b)
+                if b is None:
+                    nxlo, nxhi = bwd(zlo, zhi, LO[a], HI[a], None, None, g.param)
+                    self._write(LO, HI, a, nxlo, nxhi, g.unique_children, g.layers_a)
                 else:
-                    nxlo, nxhi, nylo, nyhi = bwd(
-                        zlo, zhi, LO[g.a], HI[g.a], LO[g.b], HI[g.b], g.param
-                    )
-                    self._write(LO, HI, g.a, nxlo, nxhi, g.unique_children, g.layers_a)
-                    self._write(LO, HI, g.b, nylo, nyhi, g.unique_children, g.layers_b)
+                    nxlo, nxhi, nylo, nyhi = bwd(zlo, zhi, LO[a], HI[a], LO[b], HI[b], g.param)
+                    self._write(LO, HI, a, nxlo, nxhi, g.unique_children, g.layers_a)
+                    self._write(LO, HI, b, nylo, nyhi, g.unique_children, g.layers_b)
 
     @staticmethod
     def _write(LO, HI, idx, lo, hi, unique: bool, layers) -> None:

@@ -95,9 +95,19 @@ def half_pi_multiple(m: np.ndarray) -> Pair:
     return down(np.minimum(a, b)), up(np.maximum(a, b))
 
 
-def _may_hold(alo, ahi, first: int, step: int):
+def _scaled(alo, ahi, mag=None):
+    """``(slack, (alo - slack) / (π/2))``: what :func:`_may_hold` computes first, the same for
+    every candidate (``sin`` and ``cos`` ask twice of one interval).  ``mag``: ``max(|alo|,
+    |ahi|)`` if computed already."""
+    if mag is None:
+        mag = np.maximum(np.abs(alo), np.abs(ahi))
+    slack = 1e-9 * np.maximum(1.0, mag)
+    return slack, (alo - slack) / (0.5 * np.pi)
+
+
+def _may_hold(alo, ahi, first: int, step: int, scaled=None):
     """May ``[alo, ahi]`` (narrower than ``step π/2``) contain ``(first + step k) π/2`` for an
-    integer ``k``?
+    integer ``k``?  (``scaled``: :func:`_scaled` of the interval, if computed already.)
 
     The nearest candidate above ``alo`` is computed in floats and compared with a relative
     slack of 1e-9 (far more than its rounding error): that settles every interval except
@@ -107,8 +117,8 @@ def _may_hold(alo, ahi, first: int, step: int):
     not taken for the pole.
     """
     # the callers ignore invalid operations (inf - inf at unbounded bounds: no hit)
-    slack = 1e-9 * np.maximum(1.0, np.maximum(np.abs(alo), np.abs(ahi)))
-    k = np.ceil(((alo - slack) / (0.5 * np.pi) - first) / step)
+    slack, q = _scaled(alo, ahi) if scaled is None else scaled
+    k = np.ceil((q - first) / step)
     p = (first + step * k) * (0.5 * np.pi)
     hit = p <= ahi + slack
     near = hit & ((p < alo + slack) | (p > ahi - slack))
@@ -134,9 +144,11 @@ def cos(alo: np.ndarray, ahi: np.ndarray) -> Pair:
         cb = np.cos(ahi)
         lo = widen_down(np.minimum(ca, cb))
         hi = widen_up(np.maximum(ca, cb))
-        wide = ~(ahi - alo < _TWO_PI) | ~(np.maximum(np.abs(alo), np.abs(ahi)) < _HUGE)
-        has_max = wide | _may_hold(alo, ahi, 0, 4)  # 2kπ
-        has_min = wide | _may_hold(alo, ahi, 2, 4)  # π + 2kπ
+        mag = np.maximum(np.abs(alo), np.abs(ahi))
+        wide = ~(ahi - alo < _TWO_PI) | ~(mag < _HUGE)
+        scaled = _scaled(alo, ahi, mag)
+        has_max = wide | _may_hold(alo, ahi, 0, 4, scaled)  # 2kπ
+        has_min = wide | _may_hold(alo, ahi, 2, 4, scaled)  # π + 2kπ
     lo = np.where(has_min, -1.0, np.maximum(lo, -1.0))
     hi = np.where(has_max, 1.0, np.minimum(hi, 1.0))
     return _keep_empty(lo, hi, alo, ahi)
@@ -148,9 +160,11 @@ def sin(alo: np.ndarray, ahi: np.ndarray) -> Pair:
         sb = np.sin(ahi)
         lo = widen_down(np.minimum(sa, sb))
         hi = widen_up(np.maximum(sa, sb))
-        wide = ~(ahi - alo < _TWO_PI) | ~(np.maximum(np.abs(alo), np.abs(ahi)) < _HUGE)
-        has_max = wide | _may_hold(alo, ahi, 1, 4)  # π/2 + 2kπ
-        has_min = wide | _may_hold(alo, ahi, 3, 4)  # -π/2 + 2kπ
+        mag = np.maximum(np.abs(alo), np.abs(ahi))
+        wide = ~(ahi - alo < _TWO_PI) | ~(mag < _HUGE)
+        scaled = _scaled(alo, ahi, mag)
+        has_max = wide | _may_hold(alo, ahi, 1, 4, scaled)  # π/2 + 2kπ
+        has_min = wide | _may_hold(alo, ahi, 3, 4, scaled)  # -π/2 + 2kπ
     lo = np.where(has_min, -1.0, np.maximum(lo, -1.0))
     hi = np.where(has_max, 1.0, np.minimum(hi, 1.0))
     return _keep_empty(lo, hi, alo, ahi)

@@ -160,8 +160,11 @@ def _mul_inverse_zero(zlo, zhi, ylo, yhi, xlo, xhi):
 
     Each half-line is met with ``[x]`` (the infinite end leaves that bound of ``[x]``), then
     the hull of the non-empty meets is taken; ``0 ∈ [z]`` gives ``[x]`` (take ``y = 0``).
+    Where that holds for every entry (most calls of HC4), ``[x]`` is returned at once.
     """
     z0 = (zlo <= 0.0) & (zhi >= 0.0)
+    if z0.all():
+        return xlo, xhi
     zpos = zlo > 0.0
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         e = np.where(zpos, zlo, zhi)

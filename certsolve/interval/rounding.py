@@ -42,7 +42,7 @@ TINY = 2.0**-1074
 LIBM_ULPS = 8
 
 
-_SMALL = 64  # below this many elements numpy's nextafter is cheaper (one call)
+_SMALL = 512  # below this many elements numpy's nextafter is cheaper (one call, ~5 ns an element)
 _MIN_NORMAL = 2.0**-1022
 
 

@@ -107,20 +107,15 @@ class IntervalNewton:
         if self.groups is not None:  # compile the programs now, not in the search
             csys.prepare_mixed(self.groups)
 
-    def _mixed(self, lo, hi, c, flo, fhi):
-        """Mixed linearisation: group ``k``'s columns over ``(X_{1..k}, c_{k+1..})``
-        (:meth:`~certsolve.expr.compiled.CompiledSystem.eval_fj_mixed`)."""
-        mlo, mhi, defined = self.csys.eval_fj_mixed(lo, hi, c, self.groups)
-        return linearization_from_bounds(lo, hi, c, flo, fhi, mlo, mhi, defined)
-
     def contract(self, lo, hi) -> NewtonStep:
         if self.groups is None:
             lin = linearize(self.csys, lo, hi)
             klo, khi, proven = krawczyk(lin)
         else:
             c = midpoint(lo, hi)
-            flo, fhi = self.csys.eval_f_at(c)
-            lin = self._mixed(lo, hi, c, flo, fhi)
+            # f(c) and group k's columns over (X_{1..k}, c_{k+1..}), in one program call
+            flo, fhi, mlo, mhi, defined = self.csys.eval_f_mixed(lo, hi, c, self.groups)
+            lin = linearization_from_bounds(lo, hi, c, flo, fhi, mlo, mhi, defined)
             # K with the mixed matrix ⊂ int X proves existence only (it is a slope-like
             # enclosure); uniqueness needs J(X): run the full test on those boxes alone
             klo, khi, maybe = krawczyk(lin)

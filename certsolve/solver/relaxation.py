@@ -70,6 +70,9 @@ from .lp import StallRule, dual_active_set
 __all__ = ["HullShare", "PolytopeHull", "affine_rows", "xtaylor_rows", "proven_lower_bounds"]
 
 _TINY = 2.0**-1000
+#: up to this many node values a batch's corners are evaluated in the f + J program with
+#: the boxes (one call), above it in f's own program (J at points would cost more)
+_CORNERS_WITH_J = 4096
 #: when the programs stop before optimality (see the module doc, *Iterations*)
 _STALL = StallRule()
 
@@ -80,9 +83,20 @@ def xtaylor_rows(csys: CompiledSystem, lo, hi):
     Returns ``G`` ``(B, 4n, n)``, ``rho`` ``(B, 4n)`` (rounded up), ``w`` ``(B, n)`` (an upper
     bound of ``hi - lo``) and the ``(B,)`` mask of boxes where the relaxation is valid.
     """
-    _, _, jlo, jhi, defined = csys.eval_fj(lo, hi, check_domain=True)
-    flo_l, fhi_l = csys.eval_f_at(lo)
-    flo_h, fhi_h = csys.eval_f_at(hi)
+    B = lo.shape[0]
+    # every bound is rounded alone whatever the batch, so boxes evaluated side by side get
+    # the floats they get alone: the corners ride along in one call (numpy's per-call cost
+    # is the cost at small batches); in the f + J program while J at them costs little
+    if B * csys.fj.n_nodes <= _CORNERS_WITH_J:
+        both = csys.eval_fj(
+            np.concatenate([lo, lo, hi]), np.concatenate([hi, lo, hi]), check_domain=True
+        )
+        flo, fhi = both[0][B:], both[1][B:]
+        jlo, jhi, defined = both[2][:B], both[3][:B], both[4][:B]
+    else:
+        _, _, jlo, jhi, defined = csys.eval_fj(lo, hi, check_domain=True)
+        flo, fhi = csys.eval_f_at(np.concatenate([lo, hi]))
+    flo_l, fhi_l, flo_h, fhi_h = flo[:B], fhi[:B], flo[B:], fhi[B:]
     with np.errstate(all="ignore"):
         w = up(hi - lo)
         wl = np.maximum(down(hi - lo), 0.0)
