@@ -344,9 +344,11 @@ class FKSolver:
             left = len(res.solutions) - len(sols)
             notes.append(f"stable only: {left} unstable pose(s) left out")
         if self.stable_only and res.status != SearchStatus.COMPLETE:
+            # the status is the result's own (a command's deadline turns a cancelled
+            # search into a timeout after this): not repeated here
             notes.append(
-                f"stable only: the search stopped ({res.status}) before the rest of the "
-                "domain was refuted: another stable pose is not excluded"
+                "stable only: the search stopped before the rest of the domain was "
+                "refuted: another stable pose is not excluded"
             )
         return FKResult(
             self.robot.name, self.formulation, u, res.status, sols, res, seeding, notes=notes
