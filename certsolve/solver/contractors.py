@@ -25,7 +25,7 @@ import numpy as np
 from ..expr.compiled import CompiledSystem
 from ..interval.core import midpoint
 from ..interval.reductions import all_last
-from .batch import Batch, log_volume_ratio
+from .batch import Batch, log_volume_ratio, progress_gain
 from .newton import (
     Linearization,
     hansen_sengupta,
@@ -34,7 +34,19 @@ from .newton import (
     linearize,
 )
 
-__all__ = ["HC4", "IntervalNewton", "NewtonStep", "PartialNewton", "log_volume_ratio"]
+__all__ = [
+    "HC4",
+    "NEWTON_GAIN",
+    "IntervalNewton",
+    "NewtonStep",
+    "PartialNewton",
+    "informative",
+    "log_volume_ratio",
+]
+
+#: A box takes another Newton step in the same round while its last step shrank it at least
+#: this much (log-volume over the variables a bisection may split): as much as a bisection.
+NEWTON_GAIN = float(np.log(0.5))
 
 
 class HC4:
@@ -83,10 +95,15 @@ class NewtonStep:
     @property
     def regular(self) -> np.ndarray:
         """Preconditioned pivots ``M_ii`` all free of 0: Newton is informative there."""
-        lin = self.lin
-        d = np.einsum("bii->bi", lin.Mc)
-        r = np.einsum("bii->bi", lin.Mr)
-        return lin.ok & all_last(np.abs(d) > r)
+        return informative(self.lin)
+
+
+def informative(lin: Linearization) -> np.ndarray:
+    """``(B,)``: the linearisation is usable and its preconditioned pivots ``M_ii`` are all
+    free of 0 (Newton is informative on the box)."""
+    d = np.einsum("bii->bi", lin.Mc)
+    r = np.einsum("bii->bi", lin.Mr)
+    return lin.ok & all_last(np.abs(d) > r)
 
 
 class IntervalNewton:
@@ -101,9 +118,15 @@ class IntervalNewton:
     the midpoint.  The Krawczyk *uniqueness* proof keeps the ordinary ``J(X)``.
     """
 
-    def __init__(self, csys: CompiledSystem, groups=None):
+    def __init__(self, csys: CompiledSystem, groups=None, *, iterations: int = 1):
+        if iterations < 1:
+            raise ValueError("IntervalNewton needs at least 1 iteration")
         self.csys = csys
         self.groups = None if groups is None else [np.asarray(g, dtype=bool) for g in groups]
+        #: Newton steps a box may take in one :meth:`apply` (IBEX's ``CtcNewton`` iterates
+        #: until the box stops shrinking); a box takes another while its last step shrank
+        #: it as much as a bisection would (:data:`NEWTON_GAIN`)
+        self.iterations = int(iterations)
         if self.groups is not None:  # compile the programs now, not in the search
             csys.prepare_mixed(self.groups)
 
@@ -138,27 +161,65 @@ class IntervalNewton:
     def apply(self, batch: Batch) -> None:
         """Contract; a box proven to hold exactly one solution is recorded
         (``batch.prove``: existence box ``K(X) ∩ X``, unicity box ``X``) and leaves the
-        round; the others keep the linearisation (``batch.jacobian()``, ``batch.regular``)."""
-        lo, hi = batch.lo, batch.hi
-        step = self.contract(lo, hi)
+        round; the others keep the linearisation (``batch.jacobian()``, ``batch.regular``).
+
+        With ``iterations > 1`` the boxes whose step shrank them at least as much as a
+        bisection (progress gain ``<=`` :data:`NEWTON_GAIN`, :func:`.batch.progress_gain`)
+        take another step on the contracted box, up to ``iterations`` steps in all, as
+        IBEX's ``newton()`` loops while it gains: a converging box reaches its proof in
+        this round instead of one round (HC4, Newton, the hull, CID) per step.  Each step
+        is sound on its input box, hence on the round's box; a proof on a later step's box
+        ``X' ⊆ X`` proves ``X'`` holds exactly one solution, and ``X \\ X'`` none.  The
+        linearisation kept for a row is its last step's (its Jacobian encloses ``J`` over
+        the row's box, which lies inside that step's input box).
+        """
+        lo0, hi0 = batch.lo, batch.hi
+        step = self.contract(lo0, hi0)
+        self._prove(batch, lo0, hi0, step)
+        lo, hi, lin = step.lo, step.hi, step.lin
+        empty, proven = step.empty, step.proven
+        active = np.flatnonzero(~proven & ~empty)
+        xlo, xhi = lo0[active], hi0[active]  # the last step's input boxes of ``active``
+        for k in range(1, self.iterations):
+            gain = progress_gain(xlo, xhi, lo[active], hi[active], batch.eps, batch.mask)
+            active = active[gain <= NEWTON_GAIN]
+            if active.size == 0:
+                break
+            if k == 1:  # the first step's arrays become this round's, rows rewritten
+                lo, hi, empty, proven = lo.copy(), hi.copy(), empty.copy(), proven.copy()
+            xlo, xhi = lo[active], hi[active]
+            sub = self.contract(xlo, xhi)
+            self._prove(batch, xlo, xhi, sub)
+            lo[active], hi[active] = sub.lo, sub.hi
+            empty[active] |= sub.empty
+            proven[active] |= sub.proven
+            lin = lin.with_rows(active, sub.lin)
+            go = ~sub.proven & ~sub.empty
+            active, xlo, xhi = active[go], xlo[go], xhi[go]
+        batch.lo, batch.hi = lo, hi
+        batch.empty = batch.empty | empty
+        batch.linearization = lin
+        batch.share_jacobian(lin.jlo, lin.jhi)
+        batch.regular = informative(lin)
+        if np.any(proven):
+            batch.keep(~proven)
+
+    @staticmethod
+    def _prove(batch: Batch, lo, hi, step: NewtonStep) -> None:
+        """Record the boxes ``step`` proved (existence ``K(X) ∩ N(X)``, unicity ``X``)."""
         p = step.proven
-        if np.any(p):
-            if batch.prove is None:
-                raise RuntimeError("IntervalNewton proves solutions: the batch needs prove")
-            elo = np.fmax(step.klo[p], step.lo[p])
-            ehi = np.fmin(step.khi[p], step.hi[p])
-            batch.prove(elo, ehi, lo[p], hi[p])
-        batch.lo, batch.hi = step.lo, step.hi
-        batch.empty = batch.empty | step.empty
-        batch.linearization = step.lin
-        batch.share_jacobian(step.lin.jlo, step.lin.jhi)
-        batch.regular = step.regular
-        if np.any(p):
-            batch.keep(~p)
+        if not np.any(p):
+            return
+        if batch.prove is None:
+            raise RuntimeError("IntervalNewton proves solutions: the batch needs prove")
+        elo = np.fmax(step.klo[p], step.lo[p])
+        ehi = np.fmin(step.khi[p], step.hi[p])
+        batch.prove(elo, ehi, lo[p], hi[p])
 
     def describe(self) -> str:
         groups = None if self.groups is None else [g.tolist() for g in self.groups]
-        return f"IntervalNewton(groups={groups})"
+        steps = f", iterations={self.iterations}" if self.iterations > 1 else ""
+        return f"IntervalNewton(groups={groups}{steps})"
 
 
 class PartialNewton:

@@ -26,7 +26,7 @@ components, never over boxes.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -95,6 +95,16 @@ class Linearization:
     Mr: np.ndarray
     bc: np.ndarray  # (B, n) Y f(c), midpoint-radius
     br: np.ndarray
+
+    def with_rows(self, rows: np.ndarray, other: Linearization) -> Linearization:
+        """This linearisation with rows ``rows`` (indices) replaced by ``other``'s (one row
+        of ``other`` per index, in order); every array is copied, none is changed."""
+        out = {}
+        for f in fields(self):
+            a = getattr(self, f.name).copy()
+            a[rows] = getattr(other, f.name)
+            out[f.name] = a
+        return Linearization(**out)
 
 
 def linearize(csys: CompiledSystem, lo: np.ndarray, hi: np.ndarray) -> Linearization:

@@ -24,10 +24,14 @@ does every composition, so compositions nest:
 The solver's default pipeline (:func:`default_pipeline`) is::
 
     Sequence(
-        FixPoint(Sequence(HC4, PartialNewton..., IntervalNewton, PolytopeHull)),
+        FixPoint(Sequence(HC4, PartialNewton..., IntervalNewton(iterations=8), PolytopeHull)),
         Inflate(),
-        FixPoint(Shave(HC4, slices=4, count="auto")),
+        FixPoint(Shave(HC4, slices=4, count="auto", learn_first=True)),
     )
+
+(IBEX's ``DefaultSolver`` is ``CtcCompo(HC4, ACID, Newton)``: Newton loops inside its call,
+ACID learns on the first boxes; ``docs/solver.md``, *Contraction strength beside
+ibexsolve*.)
 
 then the solver bisects what is left (:meth:`.Solver.process`).  Forward kinematics
 composes its own (:class:`certsolve.kinematics.fk_solver.FKSolver`: no relaxation, no CID).
@@ -61,6 +65,10 @@ _LOG_HALF = float(np.log(0.5))
 #: files: minutes, and memory as ``n^3`` for a dense system).  Past this many nodes
 #: ``newton_groups="variables"`` uses the plain interval Jacobian.
 MIXED_NODES = 250_000
+
+#: Newton steps a box may take in one round of the solver's pipeline
+#: (:class:`~.contractors.IntervalNewton` ``iterations``); forward kinematics keeps 1.
+NEWTON_STEPS = 8
 
 
 class Sequence:
@@ -187,6 +195,7 @@ def core(
     hc4: HC4,
     subsystems: Seq[tuple[Any, Any]] = (),
     newton_groups: Any = "variables",
+    newton_steps: int = 1,
 ) -> list[Contractor]:
     """The contractors of a round before any LP: HC4, partial Newton on each sub-system,
     interval Newton (Hansen's mixed Jacobian over ``newton_groups``: ``"variables"``, one
@@ -199,7 +208,7 @@ def core(
         small = csys.n * csys.fj.n_nodes <= MIXED_NODES
         newton_groups = list(np.eye(csys.n, dtype=bool)) if small else None
     partial = [PartialNewton(csys, e, v) for e, v in subsystems]
-    return [hc4, *partial, IntervalNewton(csys, newton_groups)]
+    return [hc4, *partial, IntervalNewton(csys, newton_groups, iterations=newton_steps)]
 
 
 def default_pipeline(
@@ -211,10 +220,17 @@ def default_pipeline(
     relax: bool = True,
     cid_slices: int = 4,
     cid_vars: int | str | None = "auto",
+    newton_steps: int = NEWTON_STEPS,
 ) -> Sequence:
     """The solver's pipeline from its options (see :meth:`.Solver.default`)."""
     hc4 = HC4(csys, max_passes=hc4_passes)
-    parts = core(csys, hc4=hc4, subsystems=subsystems, newton_groups=newton_groups)
+    parts = core(
+        csys,
+        hc4=hc4,
+        subsystems=subsystems,
+        newton_groups=newton_groups,
+        newton_steps=newton_steps,
+    )
     if relax:
         parts.append(PolytopeHull(csys))
     pipeline: list[Contractor] = [FixPoint(Sequence(*parts)), Inflate()]

@@ -87,6 +87,15 @@ class AdaptiveCount:
     cost small systems up to 1.6x their time (brown-5-vector, 153 boxes: 0.32 -> 0.50 s),
     and a search of fewer than ``cycle - learn`` boxes now never pays for learning.
 
+    ``first=True`` (the solver's default since issue 30, :class:`Shave` ``learn_first``) is
+    IBEX's order again: the ``learn`` boxes that *open* each cycle learn, so the first
+    ``learn`` boxes of a search shave every variable and the count is learnt from box
+    ``learn`` on.  A search where shaving all the variables pays converges near the root
+    (IBEX's Trigexp1-020: 110 -> 34 boxes, 0.56 -> 0.34 s; BroydenBanded-014 334 -> 28
+    boxes, 0.55 -> 0.22 s); small searches where it does not pay the learning (Katsura-12,
+    98 boxes: 0.29 -> 0.52 s).  Measured in ``docs/solver.md`` (*Contraction strength beside
+    ibexsolve*).
+
     Counted in boxes, not in calls: a call is a whole batch, and with batches of up to 1024
     boxes most searches make fewer than 50 calls; learning in the first 5 calls of 50 meant
     learning on the first few dozen boxes near the root only, once.  Now every batch holds
@@ -104,6 +113,9 @@ class AdaptiveCount:
     ratio: float = 0.1
     double: bool = True  #: later learning phases shave twice the learnt count, not all
     start: int = 1  #: the count until the first learning phase ends
+    #: the learning boxes open each cycle (IBEX: the first 50 calls of every 1000), not
+    #: close it
+    first: bool = False
     count: int = -1  #: the count in use (-1: ``start``)
     boxes: int = 0  #: boxes seen so far
     phases: int = 0  #: learning phases ended
@@ -123,7 +135,8 @@ class AdaptiveCount:
 
     def plan(self, boxes: int) -> tuple[np.ndarray, np.ndarray]:
         """For the next ``boxes`` boxes: how many variables each shaves, and which learn."""
-        learns = (self.boxes + np.arange(boxes)) % self.cycle >= self.cycle - self.learn
+        at = (self.boxes + np.arange(boxes)) % self.cycle
+        learns = at < self.learn if self.first else at >= self.cycle - self.learn
         more = self.n if self.phases == 0 or not self.double else min(self.n, 2 * self.count)
         return np.where(learns, more, self.count), learns
 
@@ -133,7 +146,8 @@ class AdaptiveCount:
         self.needed_sum += int(np.sum(needed))
         self.needed_boxes += int(needed.size)
         self.boxes += int(boxes)
-        ended = self.boxes // self.cycle
+        end = self.learn if self.first else self.cycle  # where a phase ends in its cycle
+        ended = (self.boxes - end) // self.cycle + 1 if self.boxes >= end else 0
         if ended > self.phases:
             self.phases = ended
             if self.needed_boxes:
@@ -171,7 +185,15 @@ class Shave:
     time on ``examples/systems``.
     """
 
-    def __init__(self, inner, slices: int = 4, count: int | str | None = "auto", *, n: int):
+    def __init__(
+        self,
+        inner,
+        slices: int = 4,
+        count: int | str | None = "auto",
+        *,
+        n: int,
+        learn_first: bool = True,
+    ):
         check_count(count)
         #: the contractor of each slice (``contract(lo, hi) -> (lo, hi, empty)``)
         self.inner = inner
@@ -179,6 +201,9 @@ class Shave:
         self.n = int(n)
         #: learn the count (``"auto"``)
         self.auto = count == "auto"
+        #: ``"auto"`` learns on the first boxes of each cycle, as IBEX's ACID does
+        #: (:attr:`AdaptiveCount.first`)
+        self.learn_first = bool(learn_first)
         #: variables CID contracts (chosen first, then by smear score) when not learning
         self.count = self.n if count in (None, "auto") else min(int(count), self.n)
         #: a batch that plans at most this many (box, extra variable) CID calls shaves them
@@ -192,10 +217,10 @@ class Shave:
 
     def learner(self) -> AdaptiveCount | None:
         """A fresh learnt state for a search (``count="auto"``), else ``None``."""
-        return AdaptiveCount(self.n) if self.auto else None
+        return AdaptiveCount(self.n, first=self.learn_first) if self.auto else None
 
     def describe(self) -> str:
-        count = "auto" if self.auto else self.count
+        count = ("auto-first" if self.learn_first else "auto") if self.auto else self.count
         inner = getattr(self.inner, "describe", lambda: type(self.inner).__name__)()
         return f"Shave({inner}, slices={self.cid.slices}, count={count})"
 
