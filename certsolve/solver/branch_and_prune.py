@@ -529,7 +529,8 @@ class Solver:
             lo3, hi3 = batch.lo[big], batch.hi[big]
             (alo, ahi), (blo, bhi) = split(lo3, hi3, var[big], self.bisector.ratio)
             state.stats.bisections += lo3.shape[0]
-            state.stack.push(np.concatenate([alo, blo]), np.concatenate([ahi, bhi]))
+            # the lower halves on top: the next round dives into them (IBEX's order)
+            state.stack.push(np.concatenate([blo, alo]), np.concatenate([bhi, ahi]))
 
     def _choose(self, lo, hi, jlo, jhi) -> np.ndarray:
         """The bisector's variable for each box (``jlo, jhi``: its Jacobian enclosure)."""
