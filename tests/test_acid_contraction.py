@@ -100,16 +100,12 @@ def test_acid_learns_first_as_ibex():
     assert acid.phases == 2 and acid.count == 2  # mean 1.25 -> 2
 
 
-def test_the_solver_learns_last_and_iterates_newton():
-    """The solver's ACID learns at the end of each cycle (IBEX's rule, learning first, is
-    ``Shave(learn_first=True)``), its Newton iterates."""
+def test_the_solver_learns_first():
+    """The solver's ACID learns on the first boxes (IBEX's rule), its Newton iterates."""
     csys, _ = compiled("eco-6")
     solver = Solver.default(csys)
-    shave = find(solver.contractor, Shave)
-    learner = shave.learner()
-    assert not learner.first and learner.plan(1)[0].tolist() == [1]
-    first = Shave(shave.inner, count="auto", n=csys.n, learn_first=True).learner()
-    assert first.first and first.plan(1)[0].tolist() == [csys.n]
+    learner = find(solver.contractor, Shave).learner()
+    assert learner.first and learner.plan(1)[0].tolist() == [csys.n]
     assert find(solver.contractor, IntervalNewton).iterations == NEWTON_STEPS
 
 

@@ -26,13 +26,12 @@ The solver's default pipeline (:func:`default_pipeline`) is::
     Sequence(
         FixPoint(Sequence(HC4, PartialNewton..., IntervalNewton(iterations=8), PolytopeHull)),
         Inflate(),
-        FixPoint(Shave(HC4, slices=4, count="auto")),
+        FixPoint(Shave(HC4, slices=4, count="auto", learn_first=True)),
     )
 
 (IBEX's ``DefaultSolver`` is ``CtcCompo(HC4, ACID, Newton)``: Newton loops inside its call,
-ACID learns on the first boxes -- ``Shave(learn_first=True)`` here, not the default: it
-costs the Trigo1 files solutions at a time limit; ``docs/solver.md``, *Contraction strength
-beside ibexsolve*.)
+ACID learns on the first boxes; ``docs/solver.md``, *Contraction strength beside
+ibexsolve*.)
 
 then the solver bisects what is left (:meth:`.Solver.process`).  Forward kinematics
 composes its own (:class:`certsolve.kinematics.fk_solver.FKSolver`: no relaxation, no CID).

@@ -87,16 +87,14 @@ class AdaptiveCount:
     cost small systems up to 1.6x their time (brown-5-vector, 153 boxes: 0.32 -> 0.50 s),
     and a search of fewer than ``cycle - learn`` boxes now never pays for learning.
 
-    ``first=True`` (:class:`Shave` ``learn_first``; not the solver's default) is IBEX's
-    order: the ``learn`` boxes that *open* each cycle learn, so the first
+    ``first=True`` (the solver's default since issue 30, :class:`Shave` ``learn_first``) is
+    IBEX's order again: the ``learn`` boxes that *open* each cycle learn, so the first
     ``learn`` boxes of a search shave every variable and the count is learnt from box
     ``learn`` on.  A search where shaving all the variables pays converges near the root
     (IBEX's Trigexp1-020: 110 -> 34 boxes, 0.56 -> 0.34 s; BroydenBanded-014 334 -> 28
     boxes, 0.55 -> 0.22 s); small searches where it does not pay the learning (Katsura-12,
-    98 boxes: 0.29 -> 0.52 s); but at a time limit it sets the Trigo1 files back (Trigo1-0017
-    at 10 s: 27 -> 22 solutions, ibexsolve 31), where certsolve is behind ibexsolve, so the
-    default keeps learning at the end of each cycle.  Measured in ``docs/solver.md``
-    (*Contraction strength beside ibexsolve*).
+    98 boxes: 0.29 -> 0.52 s).  Measured in ``docs/solver.md`` (*Contraction strength beside
+    ibexsolve*).
 
     Counted in boxes, not in calls: a call is a whole batch, and with batches of up to 1024
     boxes most searches make fewer than 50 calls; learning in the first 5 calls of 50 meant
@@ -194,7 +192,7 @@ class Shave:
         count: int | str | None = "auto",
         *,
         n: int,
-        learn_first: bool = False,
+        learn_first: bool = True,
     ):
         check_count(count)
         #: the contractor of each slice (``contract(lo, hi) -> (lo, hi, empty)``)
