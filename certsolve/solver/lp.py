@@ -249,6 +249,14 @@ class _Lanes:
     beta_first: np.ndarray
     beta_twin: np.ndarray
     M: int
+    _scratch: np.ndarray | None = None
+
+    def scratch(self) -> np.ndarray:
+        """An ``(R, n, n)`` array to write into (one allocation per compaction, not one an
+        iteration: past a few MB each allocation is fresh pages from the system)."""
+        if self._scratch is None:
+            self._scratch = np.empty_like(self.Ns)
+        return self._scratch
 
     @classmethod
     def start(cls, Gf, bf, c, W0, lam0, Ninv0, cutoff, scale, price: _Pricing) -> _Lanes:
@@ -259,7 +267,7 @@ class _Lanes:
         at = (set_of * M)[:, None] + W
         Ns = np.linalg.inv(Gf[at]) if Ninv0 is None else Ninv0.astype(float)
         return cls(
-            prog=np.arange(L), set_of=set_of, x=np.einsum("lij,lj->li", Ns, bf[at]), Ns=Ns,
+            prog=np.arange(L), set_of=set_of, x=np.matmul(Ns, bf[at][:, :, None])[:, :, 0], Ns=Ns,
             sig=np.ones((L, n)), lam=lam0.astype(float), W=W, running=np.ones(L, dtype=bool),
             c=c, cutoff=np.full(L, np.inf) if cutoff is None else cutoff,
             scale=np.ones(L) if scale is None else scale, ar=np.arange(L), base=set_of * M,
@@ -329,7 +337,8 @@ def _pivot(lanes: _Lanes, out: _Results, t, delta, Gf, bf, gap, pair, proven) ->
     """One dual step on every lane: ``t`` enters, the ratio test picks what leaves."""
     ar = lanes.ar
     base = lanes.base
-    alpha = np.einsum("lij,li->lj", lanes.Ns, Gf[base + t])  # g_t = Σ_k α_k g_{W_k}
+    # g_t = Σ_k α_k g_{W_k}; numpy's matmul, not einsum: the same sums, 2-30x faster here
+    alpha = np.matmul(Gf[base + t][:, None, :], lanes.Ns)[:, 0, :]
     alpha *= lanes.sig
     pos = alpha > 1e-12 * max_last(np.abs(alpha))[:, None]
     ratio = np.where(pos, lanes.lam / alpha, np.inf)
@@ -361,8 +370,11 @@ def _pivot(lanes: _Lanes, out: _Results, t, delta, Gf, bf, gap, pair, proven) ->
     alpha[ar, k] -= 1.0
     r = alpha / ak[:, None]
     r *= lanes.sig
-    lanes.Ns -= col[:, :, None] * r[:, None, :]
-    lanes.x = np.einsum("lij,lj->li", lanes.Ns, bf[base[:, None] + lanes.W] * lanes.sig)
+    outer = lanes.scratch()
+    np.multiply(col[:, :, None], r[:, None, :], out=outer)
+    lanes.Ns -= outer
+    bW = bf[base[:, None] + lanes.W] * lanes.sig
+    lanes.x = np.matmul(lanes.Ns, bW[:, :, None])[:, :, 0]
     out.finish(lanes, ~all_last(np.isfinite(lanes.x)) & lanes.running)
 
 
