@@ -20,7 +20,7 @@ for its opposite, and the step goes on, while the dual objective still increases
 iteration then moves a vertex across a whole slab where the plain test needs one pivot per
 side; on katsura-6 flipping the bounds alone took the median program from ~11 iterations to
 ~7 (and the plain test cycles on some programs); flipping the rows' slabs too, more of FK's
-general-19 programs converge within the 40-pivot cap (its search 42,620 -> 19,236 boxes).
+general-19 programs converge within the 40-pivot cap (its search 42,620 -> 18,656 boxes).
 A pair is also priced once: one matmul column gives ``g·x`` for both of its constraints.
 With ``cutoff`` the programs of a set stop as soon as one of them proves it empty (a Farkas
 ray, or a dual objective past the cutoff). A :class:`StallRule` (with ``stall``) stops the
