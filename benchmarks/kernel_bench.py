@@ -1,6 +1,7 @@
 """Kernel micro-benchmarks: the solver's hot loops on fixed batches of boxes, CPU time.
 
-    python benchmarks/kernel_bench.py [--batch 256,1024] [--runs 5] [--calls 20] [systems...]
+    python benchmarks/kernel_bench.py [--batch 256,1024] [--runs 5] [--calls 20] [--search]
+                                      [systems...]
 
 For each system (``katsura-6``, ``eco-7`` from ``examples/systems``, ``T-16``: the MARIONET-T
 forward-kinematics system at tau <= 60 N, u = 2; or the path of a ``.mbx`` / ``.bch`` file,
@@ -22,6 +23,11 @@ domain (seeded; widths 1/64 of the domain, so that many straddle zeros), then th
 * ``round``    -- an HC4 + Newton round as the solver runs it: HC4 (up to 4 passes), then
   interval Newton with the mixed Jacobian on HC4's boxes,
 * ``relax``    -- the polytope-hull contractor (X-Taylor rows + batched dual LPs).
+
+``--search``: the boxes are those the polytope hull contracted in the system's own search
+(``Solver.default``, one process; FK: the case's search with ``relax=True``), a seeded
+sample, the calls cycling through them ``B`` at a time: random boxes are not the hull's (at
+batch 1 on Trigexp1-024 its programs stop after 2 pivots on them, ~11 in the search).
 
 Printed per call in milliseconds and per box in microseconds.  The same boxes are used for
 every run, so two checkouts can be compared (run each on an idle machine, or interleave).
@@ -85,6 +91,36 @@ def boxes(dom: np.ndarray, B: int, seed: int = 0):
     return lo, lo + w
 
 
+def search_boxes(csys, B: int, count: int = 64, seed: int = 0):
+    """Up to ``count`` batches of ``B`` boxes the polytope hull contracted in a search of
+    ``csys``'s system (a seeded sample of them)."""
+    from certsolve.solver import Solver
+    from certsolve.solver.pipeline import find
+    from certsolve.solver.relaxation import PolytopeHull
+
+    class Recording(PolytopeHull):
+        def __init__(self, csys):
+            super().__init__(csys)
+            self.seen: list = []
+
+        def contract(self, lo, hi):
+            self.seen.append((lo.copy(), hi.copy()))
+            return super().contract(lo, hi)
+
+    solver = Solver.default(csys.system)
+    hull = find(solver.contractor, PolytopeHull)
+    if hull is None:
+        raise SystemExit("--search: this search has no polytope hull")
+    rec = Recording(solver.csys)
+    solver.contractor = solver.contractor.replace(hull, rec)
+    solver.solve()
+    lo = np.concatenate([b[0] for b in rec.seen])
+    hi = np.concatenate([b[1] for b in rec.seen])
+    rng = np.random.default_rng(seed)
+    pick = rng.permutation(lo.shape[0])[: count * B]
+    return [(lo[pick[i : i + B]], hi[pick[i : i + B]]) for i in range(0, pick.size - B + 1, B)]
+
+
 def kernels(csys, groups):
     """name -> function(lo, hi) running one kernel call."""
     from certsolve.interval.core import midpoint
@@ -112,14 +148,15 @@ def kernels(csys, groups):
     }
 
 
-def cpu_per_call(fn, lo, hi, calls: int, runs: int) -> float:
-    """Median over ``runs`` of the CPU seconds of one call (``calls`` calls per run)."""
-    fn(lo, hi)  # warm-up: compiled column programs, caches
+def cpu_per_call(fn, batches, calls: int, runs: int) -> float:
+    """Median over ``runs`` of the CPU seconds of one call (``calls`` calls per run, cycling
+    through ``batches``, a list of ``(lo, hi)``)."""
+    fn(*batches[0])  # warm-up: compiled column programs, caches
     times = []
     for _ in range(runs):
         c = time.process_time()
-        for _ in range(calls):
-            fn(lo, hi)
+        for i in range(calls):
+            fn(*batches[i % len(batches)])
         times.append((time.process_time() - c) / calls)
     return statistics.median(times)
 
@@ -131,6 +168,9 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=5, help="runs per median (>= 3)")
     ap.add_argument("--calls", type=int, default=20, help="calls per run")
     ap.add_argument("--kernels", default="", help="comma-separated subset of the kernels")
+    ap.add_argument(
+        "--search", action="store_true", help="the boxes the hull saw in a search (not FK)"
+    )
     args = ap.parse_args()
     if args.runs < 3:
         sys.exit("--runs must be at least 3 (medians)")
@@ -150,9 +190,9 @@ def main() -> None:
         if args.kernels:
             ks = {k: v for k, v in ks.items() if k in args.kernels.split(",")}
         for B in (int(b) for b in args.batch.split(",")):
-            lo, hi = boxes(dom, B)
+            batches = search_boxes(csys, B) if args.search else [boxes(dom, B)]
             for kname, fn in ks.items():
-                t = cpu_per_call(fn, lo, hi, args.calls, args.runs)
+                t = cpu_per_call(fn, batches, args.calls, args.runs)
                 row = f"{name:<10} {kname:<8} {B:>5} {t * 1e3:>9.3f} {t / B * 1e6:>8.2f}"
                 print(row, flush=True)
 

@@ -45,11 +45,12 @@ def _programs(rng, S, n, m, slack_low):
     return G, rho, w
 
 
-def _solve_all(G, rho, w, max_iter, long_step=False, cutoff=False, stall=None):
+def _solve_all(G, rho, w, max_iter, long_step=False, cutoff=False, stall=None, slabs=()):
     """Both programs (min and max) of every variable, as PolytopeHull sets them up
-    (``long_step``: with the bound-flipping ratio test; ``cutoff``: a set stops once one of
-    its programs passes the far side of the box; ``stall``: a :class:`StallRule`, the
-    variable's width as each program's scale)."""
+    (``long_step``: with the bound-flipping ratio test, across the bounds and the row pairs
+    ``slabs`` (:meth:`PolytopeHull._pair`); ``cutoff``: a set stops once one of its programs
+    passes the far side of the box; ``stall``: a :class:`StallRule`, the variable's width as
+    each program's scale)."""
     S, m, n = G.shape
     eye = np.eye(n)
     GA = np.concatenate([G, np.broadcast_to(eye, (S, n, n)), np.broadcast_to(-eye, (S, n, n))], 1)
@@ -70,7 +71,7 @@ def _solve_all(G, rho, w, max_iter, long_step=False, cutoff=False, stall=None):
         c,
         W0,
         np.abs(c),
-        pair=PolytopeHull._pair(m, n) if long_step else None,
+        pair=PolytopeHull._pair(m, n, slabs) if long_step else None,
         cutoff=np.where(sign > 0, wj, 0.0) + 1e-9 * wj if cutoff else None,
         stall=stall,
         scale=wj,
@@ -80,13 +81,20 @@ def _solve_all(G, rho, w, max_iter, long_step=False, cutoff=False, stall=None):
     return lp, bound, j, sign
 
 
-@pytest.mark.parametrize("long_step", [False, True])
+@pytest.mark.parametrize("kind", ["plain", "long_step", "slabs"])
 @pytest.mark.parametrize("seed", range(3))
-def test_lp_bounds_never_exceed_the_optimum(seed, long_step):
-    rng = np.random.default_rng(seed)
-    S, n, m = 40, 5, 20
-    G, rho, w = _programs(rng, S, n, m, slack_low=-0.4)
-    lp, bound, j, sign = _solve_all(G, rho, w, max_iter=60, long_step=long_step)
+def test_lp_bounds_never_exceed_the_optimum(seed, kind):
+    """``slabs``: the rows are opposite pairs, as the relaxation's are, flipped like the
+    bounds and priced by one matmul column."""
+    if kind == "slabs":
+        S, n, q = 30, 6, 10
+        G, rho, w = _slab_programs(np.random.default_rng(200 + seed), S, n, q, slack_low=-0.08)
+        slabs: tuple = ((0, q, q),)
+    else:
+        S, n, m = 40, 5, 20
+        G, rho, w = _programs(np.random.default_rng(seed), S, n, m, slack_low=-0.4)
+        slabs = ()
+    lp, bound, j, sign = _solve_all(G, rho, w, max_iter=60, long_step=kind != "plain", slabs=slabs)
     K = 2 * n
     checked = infeasible = 0
     for s in range(S):
@@ -357,3 +365,54 @@ def test_corners_in_one_call_give_the_same_rows(name, monkeypatch):
         for a, b in zip(one, apart):
             assert np.array_equal(a, b, equal_nan=True)
         assert one[3].any()  # some rows are valid
+
+
+def _slab_programs(rng, S, n, q, slack_low):
+    """``S`` random programs whose ``2q`` rows are ``q`` slabs ``-ρ' <= g·d <= ρ``: rows
+    ``i`` and ``q + i`` opposite (``g_{q+i} = -g_i``), as the relaxation's rows are."""
+    G1 = rng.normal(size=(S, q, n))
+    w = rng.uniform(0.5, 2.0, (S, n))
+    d0 = rng.uniform(0.0, 1.0, (S, n)) * w
+    gd = np.einsum("smn,sn->sm", G1, d0)
+    G = np.concatenate([G1, -G1], axis=1)
+    rho = np.concatenate(
+        [gd + rng.uniform(slack_low, 1.0, (S, q)), -gd + rng.uniform(slack_low, 1.0, (S, q))], 1
+    )
+    return G, rho, w
+
+
+def test_lp_pair_must_be_an_involution():
+    pair = PolytopeHull._pair(6, 3, ((0, 4, 2),))  # rows 0, 1 <-> 4, 5; bounds 6-8 <-> 9-11
+    assert pair.tolist() == [4, 5, -1, -1, 0, 1, 9, 10, 11, 6, 7, 8]
+    G = np.zeros((1, 4, 2))
+    with pytest.raises(ValueError, match="pair"):
+        dual_active_set(
+            G, np.ones((1, 4)), np.ones((1, 2)), np.array([[0, 1]]), np.ones((1, 2)),
+            pair=np.array([1, 2, 0, -1]),
+        )  # fmt: skip
+
+
+@pytest.mark.parametrize("name", ["katsura-5", "trig-exp", "kin2-6r"])
+def test_hull_rows_paired_as_slabs_are_opposite(name, monkeypatch):
+    """The rows :class:`PolytopeHull` pairs (X-Taylor's corner rows, the affine forms' two
+    sides, the bounds) are exact opposites, as the LP's ``pair`` requires."""
+    import certsolve.solver.relaxation as relaxation
+
+    system = load_minibex(SYSTEMS / f"{name}.mbx")
+    csys = CompiledSystem(system)
+    dom = np.clip(system.domain, -10.0, 10.0)
+    rng = np.random.default_rng(1)
+    w = (dom[:, 1] - dom[:, 0]) / 8
+    lo = dom[:, 0] + rng.random((5, csys.n)) * (dom[:, 1] - dom[:, 0] - w)
+    seen = []
+
+    def spy(GA, *args, **kw):
+        seen.append((GA, kw["pair"]))
+        return dual_active_set(GA, *args, **kw)
+
+    monkeypatch.setattr(relaxation, "dual_active_set", spy)
+    PolytopeHull(csys).contract(lo, lo + w)
+    ((G, pair),) = seen
+    paired = np.flatnonzero(pair >= 0)
+    assert paired.size == G.shape[1]  # every row has its opposite
+    assert np.array_equal(G[:, pair[paired]], -G[:, paired])

@@ -18,7 +18,9 @@ so every solution in ``X`` satisfies all ``4n`` inequalities exactly, in real ar
 
 **Polytope hull.**  The smallest and largest ``d_j`` over ``{d ∈ [0, w] : G d <= ρ}`` are
 linear programs; :func:`.lp.dual_active_set` solves them for a whole batch of boxes at once,
-in floating point.  Its multipliers ``y >= 0`` are then turned into *proven* bounds
+in floating point.  The rows come in opposite pairs (the two rows of ``J̲_i`` are ``±J̲_i``,
+those of ``J̄_i`` and of an affine form likewise), slabs that its ratio test flips across as
+it flips a variable across the box.  Its multipliers ``y >= 0`` are then turned into *proven* bounds
 (Neumaier & Shcherbina 2004): for every feasible ``d``,
 
     ±d_j >= ±d_j + y·(G d - ρ) >= Σ_k min(0, g_k) w_k - y·ρ,   g = ±e_j + Gᵀ y,
@@ -300,11 +302,16 @@ class PolytopeHull:
         self.stall = stall
 
     @staticmethod
-    def _pair(m: int, n: int) -> np.ndarray:
-        """The opposite bound of every constraint (``d_k <= w_k`` <-> ``-d_k <= 0``), or -1."""
+    def _pair(m: int, n: int, slabs: tuple[tuple[int, int, int], ...] = ()) -> np.ndarray:
+        """The opposite constraint of every constraint (``g_pair = -g``), or -1: the bounds
+        (``d_k <= w_k`` <-> ``-d_k <= 0``, after the ``m`` rows) and, for each ``(a, b, q)``
+        of ``slabs``, rows ``a + i`` <-> ``b + i`` (``i < q``)."""
         pair = np.full(m + 2 * n, -1)
         pair[m : m + n] = m + n + np.arange(n)
         pair[m + n :] = m + np.arange(n)
+        for a, b, q in slabs:
+            pair[a : a + q] = b + np.arange(q)
+            pair[b : b + q] = a + np.arange(q)
         return pair
 
     def contract(self, lo, hi):
@@ -315,6 +322,9 @@ class PolytopeHull:
         if B == 0:
             return lo, hi, empty
         G, rho, w, ok = xtaylor_rows(self.csys, lo, hi)
+        q = G.shape[1] // 4
+        # the rows' slabs: J̲ at the lower corner <-> at the upper one, J̄ likewise
+        slabs: tuple[tuple[int, int, int], ...] = ((0, 3 * q, q), (q, 2 * q, q))
         if self.affine:
             # the affine rows hold wherever they are finite: a box without valid X-Taylor
             # rows (f not differentiable everywhere on it) keeps its affine rows alone
@@ -322,6 +332,7 @@ class PolytopeHull:
             rho = np.where(ok[:, None], rho, 0.0)
             GA, rhoA = affine_rows(self.csys, lo, hi)
             G, rho = np.concatenate([G, GA], 1), np.concatenate([rho, rhoA], 1)
+            slabs += ((4 * q, 5 * q, q),)  # c·d and -c·d of each affine form
             ok = all_last(np.isfinite(w)) & np.any(GA != 0.0, axis=(1, 2))
         idx = np.flatnonzero(ok)
         if idx.size == 0:
@@ -358,7 +369,7 @@ class PolytopeHull:
             wj = w[box, j]
             cutoff = np.where(sign > 0, wj, 0.0) + 1e-9 * wj
             lp = dual_active_set(
-                GA, betaA, c, W0, lam0, N0inv, pair=self._pair(m, n), cutoff=cutoff,
+                GA, betaA, c, W0, lam0, N0inv, pair=self._pair(m, n, slabs), cutoff=cutoff,
                 stall=self.stall, scale=wj,
                 max_iter=self.max_iter,
             )  # fmt: skip
