@@ -187,9 +187,9 @@ class FKSolver:
     on the boxes its learnt share plans (:class:`.HullShare`: every box while it halves
     enough of them, one in 16 otherwise).  By default on for the general-19 system, off
     for the others (docs/fk-cost.md, its last section; CPU s, medians of 3 interleaved):
-    general-19 at 10 N, u = 0, 128,721 -> 42,620 boxes, 10.6 -> 5.2 s; at 60 N, u drawn
-    in the strokes, 156,877 -> 41,174 boxes, 9.9 -> 7.7 s; T-16 at 60 N, u = IK(P),
-    331,313 -> 321,994 boxes but 21.2 -> 24.3 s.
+    general-19 at 10 N, u = 0, 128,721 -> 17,535 boxes, 10.1 -> 3.6 s; at 60 N, u drawn
+    in the strokes, 156,877 -> 35,511 boxes, 10.5 -> 5.7 s; T-16 at 60 N, u = IK(P),
+    331,313 -> 318,751 boxes, 20.1 -> 19.3 s, but more CPU at 10 N (0.67 -> 0.81 s).
     """
 
     def __init__(
