@@ -27,7 +27,7 @@ def _key(res) -> list[tuple[float, ...]]:
     [
         ("planar", 60.0, [90.0, 60.0, 0.0]),
         ("marionet-t", 10.0, REAL_POSE),
-        ("marionet-t", 60.0, None),
+        pytest.param("marionet-t", 60.0, None, marks=pytest.mark.slow),  # ~40 s
         pytest.param("marionet", 10.0, None, marks=pytest.mark.slow),
     ],
 )
