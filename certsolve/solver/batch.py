@@ -52,7 +52,11 @@ if TYPE_CHECKING:
     from .certify import Certifier
     from .newton import Linearization
 
-__all__ = ["Batch", "Contractor", "log_volume_ratio", "progress_gain"]
+__all__ = ["BISECTION_GAIN", "Batch", "Contractor", "log_volume_ratio", "progress_gain"]
+
+#: the progress gain of a bisection, ``log 1/2``: a contraction that shrank a box at least
+#: this much was worth as much as a split (the fixpoint's and Newton's repeat rule)
+BISECTION_GAIN = float(np.log(0.5))
 
 Choose = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 Prove = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], None]

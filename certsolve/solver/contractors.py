@@ -25,7 +25,7 @@ import numpy as np
 from ..expr.compiled import CompiledSystem
 from ..interval.core import midpoint
 from ..interval.reductions import all_last
-from .batch import Batch, log_volume_ratio, progress_gain
+from .batch import BISECTION_GAIN, Batch, log_volume_ratio, progress_gain
 from .newton import (
     Linearization,
     hansen_sengupta,
@@ -36,17 +36,12 @@ from .newton import (
 
 __all__ = [
     "HC4",
-    "NEWTON_GAIN",
     "IntervalNewton",
     "NewtonStep",
     "PartialNewton",
     "informative",
     "log_volume_ratio",
 ]
-
-#: A box takes another Newton step in the same round while its last step shrank it at least
-#: this much (log-volume over the variables a bisection may split): as much as a bisection.
-NEWTON_GAIN = float(np.log(0.5))
 
 
 class HC4:
@@ -125,7 +120,7 @@ class IntervalNewton:
         self.groups = None if groups is None else [np.asarray(g, dtype=bool) for g in groups]
         #: Newton steps a box may take in one :meth:`apply` (IBEX's ``CtcNewton`` iterates
         #: until the box stops shrinking); a box takes another while its last step shrank
-        #: it as much as a bisection would (:data:`NEWTON_GAIN`)
+        #: it as much as a bisection would (:data:`.batch.BISECTION_GAIN`)
         self.iterations = int(iterations)
         if self.groups is not None:  # compile the programs now, not in the search
             csys.prepare_mixed(self.groups)
@@ -164,10 +159,11 @@ class IntervalNewton:
         round; the others keep the linearisation (``batch.jacobian()``, ``batch.regular``).
 
         With ``iterations > 1`` the boxes whose step shrank them at least as much as a
-        bisection (progress gain ``<=`` :data:`NEWTON_GAIN`, :func:`.batch.progress_gain`)
-        take another step on the contracted box, up to ``iterations`` steps in all, as
-        IBEX's ``newton()`` loops while it gains: a converging box reaches its proof in
-        this round instead of one round (HC4, Newton, the hull, CID) per step.  Each step
+        bisection (progress gain ``<=`` :data:`.batch.BISECTION_GAIN`,
+        :func:`.batch.progress_gain`) take another step on the contracted box, up to
+        ``iterations`` steps in all, as IBEX's ``newton()`` loops while it gains: a
+        converging box reaches its proof in this round instead of one round (HC4, Newton,
+        the hull, CID) per step.  Each step
         is sound on its input box, hence on the round's box; a proof on a later step's box
         ``X' ⊆ X`` proves ``X'`` holds exactly one solution, and ``X \\ X'`` none.  The
         linearisation kept for a row is its last step's (its Jacobian encloses ``J`` over
@@ -182,7 +178,7 @@ class IntervalNewton:
         xlo, xhi = lo0[active], hi0[active]  # the last step's input boxes of ``active``
         for k in range(1, self.iterations):
             gain = progress_gain(xlo, xhi, lo[active], hi[active], batch.eps, batch.mask)
-            active = active[gain <= NEWTON_GAIN]
+            active = active[gain <= BISECTION_GAIN]
             if active.size == 0:
                 break
             if k == 1:  # the first step's arrays become this round's, rows rewritten

@@ -34,7 +34,8 @@ ACID learns on the first boxes; ``docs/solver.md``, *Contraction strength beside
 ibexsolve*.)
 
 then the solver bisects what is left (:meth:`.Solver.process`).  Forward kinematics
-composes its own (:class:`certsolve.kinematics.fk_solver.FKSolver`: no relaxation, no CID).
+composes its own (:class:`certsolve.kinematics.fk_solver.FKSolver`: no CID, one Newton step,
+the hull once a round after the fixpoint for the general-19 system).
 Adding a technique: a class with ``apply`` and ``describe``, and one line where the
 pipeline is assembled (``docs/architecture.md``, *Adding a contractor*).
 """
@@ -48,15 +49,13 @@ from typing import Any
 import numpy as np
 
 from ..expr.compiled import CompiledSystem
-from .batch import Batch, Contractor
+from .batch import BISECTION_GAIN, Batch, Contractor
 from .certify import box_difference
 from .contractors import HC4, IntervalNewton, PartialNewton
 from .relaxation import PolytopeHull
 from .shaving import Shave, check_count
 
 __all__ = ["FixPoint", "Inflate", "Sequence", "core", "default_pipeline", "find", "parts_of"]
-
-_LOG_HALF = float(np.log(0.5))
 
 #: Hansen's mixed Jacobian with one variable per group is one stacked program of ``n``
 #: copies of ``f`` and ``J`` (:mod:`certsolve.expr.stacked`): ``n`` times the nodes of the
@@ -100,7 +99,7 @@ class FixPoint:
     the buffer for another round (module docstring).  ``gain``: the log-volume change at
     or below which a box goes round again (default ``log 1/2``)."""
 
-    def __init__(self, inner: Contractor, gain: float = _LOG_HALF):
+    def __init__(self, inner: Contractor, gain: float = BISECTION_GAIN):
         if not gain < 0.0:
             raise ValueError("FixPoint gain must be negative (a log-volume ratio)")
         self.inner = inner
