@@ -250,10 +250,9 @@ class FKSolver:
         The solver is assembled from the formulation's parts, without CID: HC4, partial
         Newton on the formulation's sub-systems, Newton with its mixed Jacobian, in a
         fixpoint, then (``relax``) the polytope hull once, then inflated proofs -- on the
-        compiled system
-        with ``u`` as its parameter values (``extra`` contractors go before the full Newton
-        step) (:meth:`.CompiledSystem.with_parameters`), the
-        formulation's bisector for the box and its bisection mask.
+        compiled system with ``u`` as its parameter values
+        (:meth:`.CompiledSystem.with_parameters`; ``extra`` contractors go before the full
+        Newton step), the formulation's bisector for the box and its bisection mask.
         """
         u = np.asarray(u, dtype=float).ravel()
         if u.shape != (self.robot.m,):
