@@ -52,6 +52,32 @@ def test_boxes_sent_back_are_on_top_of_the_halves():
     assert top_lo[0].tolist() == [0.0, 0.0] and top_hi[0].tolist() == [1.5, 4.0]
 
 
+class Nothing:
+    """Leaves every box as it is."""
+
+    def apply(self, batch):
+        pass
+
+    def describe(self):
+        return "Nothing()"
+
+
+def test_the_lower_half_is_searched_first():
+    """A split box's lower half goes on top of the stack (IBEX's order): the next batch
+    dives into it, the upper half waits below."""
+    x, y = var("x"), var("y")
+    system = System(["x", "y"], np.array([[0.0, 4.0], [0.0, 2.0]]), [x * x - 2, y - 1])
+    csys = CompiledSystem(system)
+    solver = Solver(system, Nothing(), Certifier(csys), LargestFirst())
+    state = solver.start()
+    solver.process(np.array([[0.0, 0.0]]), np.array([[4.0, 2.0]]), state)
+    assert state.stats.bisections == 1
+    top_lo, top_hi = state.stack.pop(1)
+    below_lo, below_hi = state.stack.pop(1)
+    assert top_lo[0].tolist() == [0.0, 0.0] and below_hi[0].tolist() == [4.0, 2.0]
+    assert top_hi[0, 0] == below_lo[0, 0] < 4.0
+
+
 def test_progress_streams_each_solution_once():
     system = load_minibex(SYSTEMS / "katsura-5.mbx")
     streamed: list = []
