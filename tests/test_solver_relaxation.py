@@ -26,8 +26,9 @@ from test_solver_contractors import (
 from certsolve.expr.compiled import CompiledSystem
 from certsolve.expr.minibex import load_minibex
 from certsolve.solver import Solver, solve
+from certsolve.solver.batch import Batch
 from certsolve.solver.lp import StallRule, dual_active_set
-from certsolve.solver.pipeline import find
+from certsolve.solver.pipeline import HULL_SHARE, find
 from certsolve.solver.relaxation import (
     HullShare,
     PolytopeHull,
@@ -341,6 +342,57 @@ def test_adaptive_hull_keeps_every_solution_and_skips_boxes():
         assert len(res.solutions) == len(pts)
         assert all(sum(holds(s.lo, s.hi, p) for s in res.solutions) == 1 for p in pts)
     assert solve(system).stats.boxes == adaptive.stats.boxes
+
+
+def test_adaptive_hull_contracts_only_the_stalled_rows(monkeypatch):
+    """A row the round has already shrunk as much as a bisection (from the box it began
+    with) is not given to the hull: it goes back to the buffer anyway.  The other rows are,
+    as the share plans them; the learnt state counts every row offered."""
+    csys = CompiledSystem(load_minibex(SYSTEMS / "katsura-5.mbx"))
+    dom = csys.system.domain
+    lo = np.repeat(dom[:, 0][None], 3, axis=0)
+    hi = np.repeat(dom[:, 1][None], 3, axis=0)
+    hull = PolytopeHull(csys)
+    batch = Batch(lo, hi, csys=csys, eps=1e-8, hull=hull.hull_learner())
+    # row 1 has been halved along one variable in this round, row 2 shrank by a third
+    batch.lo, batch.hi = lo.copy(), hi.copy()
+    batch.hi[1, 0] = 0.5 * (lo[1, 0] + hi[1, 0])
+    batch.hi[2, 0] = lo[2, 0] + (2.0 / 3.0) * (hi[2, 0] - lo[2, 0])
+    seen = []
+    contract = hull.contract
+
+    def spy(a, b):
+        seen.append(a.copy())
+        return contract(a, b)
+
+    monkeypatch.setattr(hull, "contract", spy)
+    halved = batch.lo[1].copy(), batch.hi[1].copy()
+    hull.apply(batch)
+    assert len(seen) == 1 and seen[0].shape[0] == 2
+    assert np.array_equal(seen[0], batch.start_lo[[0, 2]])
+    assert batch.hull.boxes == 3
+    assert np.array_equal(batch.lo[1], halved[0]) and np.array_equal(batch.hi[1], halved[1])
+    # without a learnt state the hull is the plain contractor: every row
+    seen.clear()
+    hull.apply(Batch(lo.copy(), hi.copy(), csys=csys, eps=1e-8))
+    assert seen[0].shape[0] == 3
+
+
+def test_hull_share_settings_are_a_template():
+    """Each search starts from a fresh copy of the hull's ``share`` settings: the solver's
+    pipeline asks for 4x volume cuts over ~16 boxes (``HULL_SHARE``), a hull built without
+    settings (forward kinematics) keeps ``HullShare()``; the settings are in the fingerprint."""
+    csys = CompiledSystem(load_minibex(SYSTEMS / "katsura-5.mbx"))
+    solver = Solver.default(csys)
+    hull = find(solver.contractor, PolytopeHull)
+    first, second = hull.hull_learner(), hull.hull_learner()
+    assert first == HULL_SHARE and first is not second and first is not HULL_SHARE
+    assert (first.ratio, first.window) == (0.25, 16)
+    first.done(np.zeros(5, dtype=bool), 5)
+    assert second.share == 1.0 and HULL_SHARE.share == 1.0 and HULL_SHARE.boxes == 0
+    assert PolytopeHull(csys).hull_learner() == HullShare()
+    assert "ratio=0.25" in solver.fingerprint()
+    assert "ratio=0.5" in PolytopeHull(csys).describe()
 
 
 @pytest.mark.parametrize("name", ["katsura-5", "trig-exp", "kin2-6r", "troesch-10"])

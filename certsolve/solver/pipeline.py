@@ -24,7 +24,8 @@ does every composition, so compositions nest:
 The solver's default pipeline (:func:`default_pipeline`) is::
 
     Sequence(
-        FixPoint(Sequence(HC4, PartialNewton..., IntervalNewton(iterations=8), PolytopeHull)),
+        FixPoint(Sequence(HC4, PartialNewton..., IntervalNewton(iterations=8),
+                          PolytopeHull(share=HULL_SHARE))),
         Inflate(),
         FixPoint(Shave(HC4, slices=4, count="auto", learn_first=True)),
     )
@@ -52,7 +53,7 @@ from ..expr.compiled import CompiledSystem
 from .batch import BISECTION_GAIN, Batch, Contractor
 from .certify import box_difference
 from .contractors import HC4, IntervalNewton, PartialNewton
-from .relaxation import PolytopeHull
+from .relaxation import HullShare, PolytopeHull
 from .shaving import Shave, check_count
 
 __all__ = ["FixPoint", "Inflate", "Sequence", "core", "default_pipeline", "find", "parts_of"]
@@ -64,6 +65,14 @@ __all__ = ["FixPoint", "Inflate", "Sequence", "core", "default_pipeline", "find"
 #: files: minutes, and memory as ``n^3`` for a dense system).  Past this many nodes
 #: ``newton_groups="variables"`` uses the plain interval Jacobian.
 MIXED_NODES = 250_000
+
+#: the polytope hull's learnt share in the solver's pipeline (:class:`.relaxation.HullShare`;
+#: forward kinematics keeps the defaults): a contraction is useful when it cuts a box's
+#: volume by 4, the work of two bisections (on a batch of one box the hull's programs cost
+#: about two rounds of HC4 and Newton), and the share is the mean over the last ~16 boxes,
+#: so a small search of one-box rounds turns a hull that does not pay off within a few
+#: dozen rounds.  Measured in ``docs/solver.md`` (*The hull where it pays, on small files*).
+HULL_SHARE = HullShare(ratio=0.25, window=16)
 
 #: Newton steps a box may take in one round of the solver's pipeline
 #: (:class:`~.contractors.IntervalNewton` ``iterations``); forward kinematics keeps 1.
@@ -231,7 +240,7 @@ def default_pipeline(
         newton_steps=newton_steps,
     )
     if relax:
-        parts.append(PolytopeHull(csys))
+        parts.append(PolytopeHull(csys, share=HULL_SHARE))
     pipeline: list[Contractor] = [FixPoint(Sequence(*parts)), Inflate()]
     if cid_slices:
         pipeline.append(FixPoint(Shave(hc4, cid_slices, count=cid_vars, n=csys.n)))

@@ -33,8 +33,9 @@ evaluated with outward rounding, so an inaccurate multiplier only loosens a boun
 much it costs a round more than it saves, on another it is most of the pruning; the
 search learns which, as ACID learns its count: a running share of the boxes the hull
 halved (or proved empty), every box contracted while the share is high, a sample of the
-boxes while it is low (to notice when the hull becomes useful again).  Skipping a sound
-contractor is sound: the learnt state changes the work, never the answer.
+boxes while it is low (to notice when the hull becomes useful again); and only boxes the
+round has left stalled, a box HC4 and Newton halved going back to the buffer anyway.
+Skipping a sound contractor is sound: the learnt state changes the work, never the answer.
 
 Only the ``directions`` variables with the largest smear (IBEX ``SmearSumRelative``) get
 their two programs: every program can prove the box empty, and on ``examples/systems`` three
@@ -56,7 +57,7 @@ whose programs converge within 15 pivots do not change.
 
 from __future__ import annotations
 
-from dataclasses import KW_ONLY, dataclass
+from dataclasses import KW_ONLY, dataclass, replace
 
 import numpy as np
 
@@ -65,7 +66,7 @@ from ..expr.compiled import CompiledSystem
 from ..interval.linalg import gamma
 from ..interval.reductions import all_last, any_last, to_front
 from ..interval.rounding import down, up
-from .batch import Batch, progress_gain
+from .batch import BISECTION_GAIN, Batch, progress_gain
 from .bisectors import smear_scores
 from .lp import StallRule, dual_active_set
 
@@ -274,6 +275,13 @@ class HullShare:
             self.share = keep * self.share + (1.0 - keep) * float(np.mean(useful))
         self.boxes += int(boxes)
 
+    def describe(self) -> str:
+        """The settings (not the learnt state), for the checkpoint fingerprint."""
+        return (
+            f"HullShare(window={self.window}, threshold={self.threshold!r}, "
+            f"ratio={self.ratio!r}, sample={self.sample})"
+        )
+
 
 class PolytopeHull:
     """Contract boxes to the proven hull of their linear relaxation: the X-Taylor rows
@@ -281,7 +289,12 @@ class PolytopeHull:
     (:func:`affine_rows`).
 
     ``adaptive``: on the boxes a :class:`HullShare` plans, the search's (``batch.hull``,
-    created by :meth:`hull_learner`); without one, or with ``adaptive=False``, every box.
+    created by :meth:`hull_learner` from ``share``, its settings: default
+    ``HullShare()``), among the *stalled* ones -- the rows the round has not yet shrunk as
+    much as a bisection (:data:`.batch.BISECTION_GAIN`, from the boxes the round began
+    with): a row HC4 and Newton have halved goes back to the buffer whatever the hull
+    does (:class:`.pipeline.FixPoint`), and its next round contracts the smaller box.
+    Without a learnt state, or with ``adaptive=False``, every box.
     """
 
     def __init__(
@@ -292,9 +305,12 @@ class PolytopeHull:
         affine: bool = True,
         stall: StallRule | None = _STALL,
         adaptive: bool = True,
+        share: HullShare | None = None,
     ):
         self.csys = csys
         self.adaptive = bool(adaptive)
+        #: the settings of the learnt state a search starts from (:meth:`hull_learner`)
+        self.share = HullShare() if share is None else replace(share)
         self.affine = bool(affine)
         self.directions = int(directions)
         self.max_iter = int(max_iter)
@@ -396,8 +412,9 @@ class PolytopeHull:
         return lo, hi, empty
 
     def hull_learner(self) -> HullShare | None:
-        """A fresh learnt state for a search (``adaptive``), else ``None``."""
-        return HullShare() if self.adaptive else None
+        """A fresh learnt state for a search (``adaptive``: a copy of ``share``), else
+        ``None``."""
+        return replace(self.share) if self.adaptive else None
 
     def apply(self, batch: Batch) -> None:
         learnt: HullShare | None = batch.hull if self.adaptive else None
@@ -406,6 +423,9 @@ class PolytopeHull:
             batch.empty |= empty
             return
         rows = learnt.plan(batch.size)
+        if rows.any():  # the stalled rows (class docstring)
+            at = batch.ids
+            rows &= batch.gain(batch.start_lo[at], batch.start_hi[at]) > BISECTION_GAIN
         if not rows.any():
             learnt.done(np.zeros(0, dtype=bool), batch.size)
             return
@@ -418,5 +438,6 @@ class PolytopeHull:
     def describe(self) -> str:
         return (
             f"PolytopeHull(directions={self.directions}, max_iter={self.max_iter}, "
-            f"affine={self.affine}, stall={self.stall!r}, adaptive={self.adaptive})"
+            f"affine={self.affine}, stall={self.stall!r}, adaptive={self.adaptive}, "
+            f"share={self.share.describe()})"
         )
