@@ -231,8 +231,11 @@ class FKSolver:
 
     ``relax``: the polytope hull of the X-Taylor and affine relaxation
     (:class:`.PolytopeHull`, one direction) once a round, after the contraction fixpoint,
-    on the boxes its learnt share plans (:class:`.HullShare`: every box while it halves
-    enough of them, one in 16 otherwise).  By default on for the general-19 system, off
+    on every box narrower than the formulation's hull widths
+    (:meth:`.FKFormulation.hull_widths`: the orientation within ~0.2 of the longest edge,
+    where it empties half the boxes or more) and on the wider ones as its learnt share plans
+    (:class:`NarrowOrLearnt`, :class:`.HullShare`: every box while it halves enough of
+    them, one in 16 otherwise).  By default on for the general-19 system, off
     for the others (docs/fk-cost.md, its last section; CPU s, medians of 3 interleaved):
     general-19 at 10 N, u = 0, 128,721 -> 17,535 boxes, 10.1 -> 3.6 s; at 60 N, u drawn
     in the strokes, 156,877 -> 35,511 boxes, 10.5 -> 5.7 s; T-16 at 60 N, u = IK(P),
