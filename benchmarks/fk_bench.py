@@ -180,14 +180,16 @@ def run_case(robot: Robot, u, args, workers: int, stable_only: bool = False):
 
 HEAD = (
     f"{'case':<48} {'w':>2} {'status':<10} {'poses':>5} {'boxes':>8} {'bisect':>7} "
-    f"{'wall s':>8} {'cpu s':>8}"
+    f"{'wall s':>8} {'cpu s':>8} {'all cpu s':>9}"
 )
 
 
 def row(name, w, res, wall, cpu) -> str:
+    """One line of the table: ``cpu s`` is this process's (median), ``all cpu s`` the last
+    run's search with its workers' tasks (:attr:`.SearchStats.cpu`)."""
     return (
         f"{name:<48} {w:>2} {res.status:<10} {len(res.solutions):>5} {res.stats.boxes:>8} "
-        f"{res.stats.bisections:>7} {wall:>8.2f} {cpu:>8.2f}"
+        f"{res.stats.bisections:>7} {wall:>8.2f} {cpu:>8.2f} {res.stats.cpu:>9.2f}"
     )
 
 

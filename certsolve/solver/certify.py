@@ -68,6 +68,21 @@ def boxes_minus(lo, hi, cut_lo, cut_hi) -> tuple[np.ndarray, np.ndarray]:
     )
 
 
+def _meeting(lo, hi, ulo, uhi) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs ``(row, u)`` whose closed boxes meet, in row-major order: the first
+    variable on every pair, each next one on the pairs still meeting.  A box misses most
+    unicity boxes in its first variables, so this costs a few ``B × U`` comparisons where
+    the dense test costs ``2n`` of them (FK, ~400 unicity boxes: 8 % of the search)."""
+    meet = (lo[:, None, 0] <= uhi[None, :, 0]) & (hi[:, None, 0] >= ulo[None, :, 0])
+    rows, us = np.nonzero(meet)
+    for j in range(1, lo.shape[1]):
+        if rows.size == 0:
+            break
+        ok = (lo[rows, j] <= uhi[us, j]) & (hi[rows, j] >= ulo[us, j])
+        rows, us = rows[ok], us[ok]
+    return rows, us
+
+
 class SolutionSet:
     """Certified solutions ``(E, U, kind)``; ``kind`` is ``"ok"``, ``"boundary"``,
     ``"constraint"`` or ``"rejected"`` (proven, but outside the domain or violating a
@@ -138,9 +153,7 @@ class SolutionSet:
             return keep, none, none
         # only pairs whose closed boxes meet can be "inside" or overlap: most boxes meet
         # no unicity box, so the tests below run on those pairs only (row-major order kept)
-        near = lo[:, None, :] <= self._uhi[None]
-        near &= hi[:, None, :] >= self._ulo[None]
-        rows, us = np.nonzero(all_last(near))
+        rows, us = _meeting(lo, hi, self._ulo, self._uhi)
         if rows.size == 0:
             return keep, none, none
         blo, bhi, ulo, uhi = lo[rows], hi[rows], self._ulo[us], self._uhi[us]
