@@ -161,7 +161,7 @@ def test_under_a_time_limit_a_round_is_a_small_share_of_the_boxes_expected():
     sizer = BatchSizer(cap=1024, start=1024, front=64)
     _timed(sizer, (1, 2, 16, 64), o=0.010, c=0.001)
     assert sizer.cost() == pytest.approx((0.011, 0.001 * (1 - 4 / 83)))
-    assert sizer.next(10.0) == 128
+    assert sizer.next(10.0) == 128 and sizer._front(1.0, *sizer.cost()) == 128  # least
     assert sizer.next(1000.0) == 1024 and sizer.next(None) == 1024
     assert sizer.next(10.0, solutions=1) == 1024  # solutions come: the front is reached
     plain = BatchSizer(cap=1024, start=1024)
@@ -174,13 +174,23 @@ def test_the_front_grows_with_the_boxes_processed_and_stops_at_least():
     same 10 s allow the full size (64 x 1,024 <= 60,000 + 9,900); with 0.1 s left the
     front stops at ``least``, and only the cut to the time left goes below it (0.02 s fit
     8 boxes at twice the last round's 1.16 ms a box)."""
-    sizer = BatchSizer(cap=1024, start=1024, front=64)
+    sizer = BatchSizer(cap=1024, start=1024, front=64, least=32)
     _timed(sizer, (1, 2, 16, 64), o=0.010, c=0.001)
     assert sizer.next(0.1) == 32 and sizer.next(0.02) == 8
     _timed(sizer, (1024,) * 40, o=0.010, c=0.001)
     assert sizer.next(10.0) == 512
     _timed(sizer, (1024,) * 20, o=0.010, c=0.001)
     assert sizer.next(10.0) == 1024
+
+
+def test_the_front_costs_a_box_at_most_slower_times_its_time_at_the_full_size():
+    """Rounds costing ``100 ms + 1 ms a box`` (a large system: mostly fixed cost): 128 a
+    round would make a box 1.8 ms against 1.1 ms at 1,024, over 1.5 times, so the front
+    stops at 256 where the share alone asks for 32; allowed 4 times, it goes to 32."""
+    for slower, size in ((1.5, 256), (4.0, 32)):
+        sizer = BatchSizer(cap=1024, start=1024, front=64, least=32, slower=slower)
+        _timed(sizer, (1, 2, 16, 64), o=0.100, c=0.001)
+        assert sizer.next(10.0) == size
 
 
 def test_batch_sizer_refuses_bad_settings():
@@ -192,6 +202,8 @@ def test_batch_sizer_refuses_bad_settings():
         BatchSizer(cap=8, front=0)
     with pytest.raises(ValueError, match="least"):
         BatchSizer(cap=8, least=0)
+    with pytest.raises(ValueError, match="slower"):
+        BatchSizer(cap=8, slower=0.5)
 
 
 def test_the_default_solver_has_a_front_and_a_plain_one_does_not():

@@ -1,5 +1,5 @@
-"""The adaptive batch size: small rounds first (deep fast), larger while that pays, and no
-round past the time limit.
+"""The adaptive batch size: small rounds first (deep fast), larger while that pays, under
+a time limit a narrow front until the first solution, and no round past the limit.
 
 The buffer is a stack: a round takes the last ``k`` boxes, so the search goes down one
 bisection level per round on a front of ``k`` boxes.  A leaf (a certified solution) at
@@ -34,9 +34,15 @@ trades the two:
   are those processed so far plus the time left over the per-box time at ``k``, ``o/k +
   c``: ``o`` is the shortest round so far (the first rounds take the one box or the few
   the stack holds), ``c`` the rest of the rounds' time over their boxes.  Cheap boxes or a
-  long limit allow ``cap`` (katsura-6 within 10 s: three rounds of 512, then 1,024, the
-  same CPU time); a search that will not finish within its limit works on a narrower front
-  (Trigo1-0017 within 10 s: 128), which widens as its boxes add up.
+  long limit allow ``cap`` (katsura-6 within 10 s: the same 21,205 boxes as without a
+  limit), and the front never makes a box cost more than 1.5 times its time at ``cap``
+  (``slower``), nor cuts a round below 128 boxes (``least``: at rounds of 32,
+  Yamamua1-0024sp processed 4,102 boxes in 9.5 CPU s where it processed 7,731).  A search
+  that will not finish within its limit works on a narrower front (Trigo1-0017 within
+  10 s: 128), which widens as its boxes add up.  Once the search has certified a
+  solution the front is reached: the stack holds the deep boxes of the dive, and wide
+  rounds take them (kept narrow, the front lost most of the solutions of IBEX's shallow
+  ``-sp`` Trigo1 files: Trigo1-0034sp 85 -> 16, docs/solver.md).
 
 Only the grouping of the boxes changes: every box popped is processed as before, so the
 set of certified solutions of a complete search is the same (box counts may differ
@@ -54,9 +60,9 @@ from dataclasses import dataclass, field
 __all__ = ["ANYTIME_FRONT", "BatchSizer"]
 
 #: the front of :meth:`~.branch_and_prune.Solver.default`'s searches under a time limit:
-#: a round takes at most 1/64 of the boxes expected within the limit (``d`` ~ 7-17 levels
-#: to the first solution on IBEX's files: a latency of 1/9-1/4 of the boxes); measured
-#: beside fixed sizes in docs/solver.md, *Never behind ibexsolve at a time limit*
+#: until the first solution a round takes at most 1/64 of the boxes expected within the
+#: limit (``d`` ~ 7-17 rounds to the first solution on IBEX's files: a latency of 1/9-1/4
+#: of the boxes); measured in docs/solver.md, *A narrow front until the first solution*
 ANYTIME_FRONT = 64
 
 
@@ -68,10 +74,13 @@ class BatchSizer:
     ``rounds``: full rounds timed at a size before deciding; ``gain``: the relative fall of
     the per-box time that makes a doubling pay; ``share``: the largest share of the remaining
     time a round may be predicted to take after a doubling; ``margin``: the factor on the
-    last per-box time when a round is cut to the time left; ``front``: under a time limit,
-    a round takes at most ``1/front`` of the boxes expected within it (``None``: no such
-    cap), and at least ``least`` boxes (where the stack holds them: fewer, and a round is
-    mostly its fixed cost, and the rounds' times no longer tell ``o`` from ``c``).
+    last per-box time when a round is cut to the time left; ``front``: under a time limit
+    and until a solution is certified, a round takes at most ``1/front`` of the boxes
+    expected within the limit (``None``: no such cap), and at least ``least`` boxes (where
+    the stack holds them: fewer, and the rounds' times no longer tell ``o`` from ``c``;
+    on IBEX's Yamamura files, 24-80 variables, rounds of 32-64 boxes processed 30-50 %
+    fewer boxes in the same CPU time than rounds of 128-200), and never where a box would
+    cost more than ``slower`` times its time at ``cap``.
     """
 
     cap: int
@@ -81,7 +90,8 @@ class BatchSizer:
     share: float = 0.05
     margin: float = 2.0
     front: int | None = None
-    least: int = 32
+    least: int = 128
+    slower: float = 1.5
     size: int = field(init=False)
     per_box: float | None = field(init=False, default=None)  # seconds a box, last round
     _settled: bool = field(init=False, default=False)
@@ -101,16 +111,16 @@ class BatchSizer:
             raise ValueError("gain must be in [0, 1), share in (0, 1] and margin >= 1")
         if self.front is not None and not int(self.front) >= 1:
             raise ValueError("front must be >= 1 (or None)")
-        if not int(self.least) >= 1:
-            raise ValueError("least must be >= 1")
+        if not (int(self.least) >= 1 and self.slower >= 1):
+            raise ValueError("least must be >= 1 and slower >= 1")
         self.size = min(int(self.start), int(self.cap))
         self._settled = self.size >= self.cap
 
     def next(self, remaining: float | None, solutions: int = 0) -> int:
-        """The size of the next round with ``remaining`` seconds left (``None``: no limit):
-        the current size, at most the front's share of the boxes expected within the limit
-        (``front``), cut to what the remaining time fits at ``margin`` times the last per-box
-        time."""
+        """The size of the next round with ``remaining`` seconds left (``None``: no limit)
+        and ``solutions`` certified so far: the current size, at most the front's share of
+        the boxes expected within the limit (``front``, while ``solutions`` is 0), cut to
+        what the remaining time fits at ``margin`` times the last per-box time."""
         if remaining is None or not self.per_box:
             return self.size
         size = self.size
@@ -131,12 +141,18 @@ class BatchSizer:
         return o, max(self._time - self._rounds * o, 0.0) / self._done
 
     def _front(self, remaining: float, o: float, c: float) -> int:
-        """The first of ``cap``, ``cap/2``, ``cap/4`` ... (not below ``least``) with
-        ``front k`` at most the boxes expected: those recorded plus ``remaining`` over the
-        per-box time ``o/k + c`` at ``k``."""
+        """The first of ``cap``, ``cap/2``, ``cap/4`` ... with ``front k`` at most the boxes
+        expected: those recorded plus ``remaining`` over the per-box time ``o/k + c`` at
+        ``k``; not below ``least``, nor where ``o/k + c`` passes ``slower`` times its value
+        at ``cap``."""
         assert self.front is not None
         k = int(self.cap)
-        while k // 2 >= self.least and self.front * k > self._done + remaining / (o / k + c):
+        dearest = self.slower * (o / k + c)
+        while (
+            k // 2 >= self.least
+            and o / (k // 2) + c <= dearest
+            and self.front * k > self._done + remaining / (o / k + c)
+        ):
             k //= 2
         return k
 
