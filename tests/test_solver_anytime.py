@@ -14,7 +14,7 @@ from certsolve.expr.minibex import load_minibex
 from certsolve.expr.node import var
 from certsolve.expr.system import System
 from certsolve.solver import Solver, solve
-from certsolve.solver.batching import ANYTIME_FRONT, BatchSizer
+from certsolve.solver.batching import BatchSizer
 from certsolve.solver.bisectors import LargestFirst
 from certsolve.solver.certify import Certifier
 from certsolve.solver.pipeline import FixPoint
@@ -148,72 +148,11 @@ def test_batch_sizer_cuts_a_round_to_the_time_left_and_caps_growth():
     assert capped.size == 12
 
 
-def _timed(sizer: BatchSizer, rounds, o: float, c: float) -> None:
-    """Record rounds of the given sizes, each taking ``o + c k`` seconds (no limit)."""
-    for k in rounds:
-        sizer.record(k, o + c * k, None)
-
-
-def test_under_a_time_limit_a_round_is_a_small_share_of_the_boxes_expected():
-    """Rounds costing ``10 ms + 1 ms a box``: 10 s left allow ~9,800 boxes at 1,024 a
-    round, and 64 rounds of 128 fit (~9,200 at 128 a round) where 64 of 256 do not; a long
-    limit, no limit, a solution certified, or no front keep the full size."""
-    sizer = BatchSizer(cap=1024, start=1024, front=64)
-    _timed(sizer, (1, 2, 16, 64), o=0.010, c=0.001)
-    assert sizer.cost() == pytest.approx((0.011, 0.001 * (1 - 4 / 83)))
-    assert sizer.next(10.0) == 128 and sizer._front(1.0, *sizer.cost()) == 128  # least
-    assert sizer.next(1000.0) == 1024 and sizer.next(None) == 1024
-    assert sizer.next(10.0, solutions=1) == 1024  # solutions come: the front is reached
-    plain = BatchSizer(cap=1024, start=1024)
-    _timed(plain, (1, 2, 16, 64), o=0.010, c=0.001)
-    assert plain.next(10.0) == 1024
-
-
-def test_the_front_grows_with_the_boxes_processed_and_stops_at_least():
-    """The boxes already processed count in the expected ones: after ~60,000 boxes the
-    same 10 s allow the full size (64 x 1,024 <= 60,000 + 9,900); with 0.1 s left the
-    front stops at ``least``, and only the cut to the time left goes below it (0.02 s fit
-    8 boxes at twice the last round's 1.16 ms a box)."""
-    sizer = BatchSizer(cap=1024, start=1024, front=64, least=32)
-    _timed(sizer, (1, 2, 16, 64), o=0.010, c=0.001)
-    assert sizer.next(0.1) == 32 and sizer.next(0.02) == 8
-    _timed(sizer, (1024,) * 40, o=0.010, c=0.001)
-    assert sizer.next(10.0) == 512
-    _timed(sizer, (1024,) * 20, o=0.010, c=0.001)
-    assert sizer.next(10.0) == 1024
-
-
-def test_the_front_costs_a_box_at_most_slower_times_its_time_at_the_full_size():
-    """Rounds costing ``100 ms + 1 ms a box`` (a large system: mostly fixed cost): 128 a
-    round would make a box 1.8 ms against 1.1 ms at 1,024, over 1.5 times, so the front
-    stops at 256 where the share alone asks for 32; allowed 4 times, it goes to 32."""
-    for slower, size in ((1.5, 256), (4.0, 32)):
-        sizer = BatchSizer(cap=1024, start=1024, front=64, least=32, slower=slower)
-        _timed(sizer, (1, 2, 16, 64), o=0.100, c=0.001)
-        assert sizer.next(10.0) == size
-
-
 def test_batch_sizer_refuses_bad_settings():
     with pytest.raises(ValueError, match="start"):
         BatchSizer(cap=8, start=0)
     with pytest.raises(ValueError, match="share"):
         BatchSizer(cap=8, share=0.0)
-    with pytest.raises(ValueError, match="front"):
-        BatchSizer(cap=8, front=0)
-    with pytest.raises(ValueError, match="least"):
-        BatchSizer(cap=8, least=0)
-    with pytest.raises(ValueError, match="slower"):
-        BatchSizer(cap=8, slower=0.5)
-
-
-def test_the_default_solver_has_a_front_and_a_plain_one_does_not():
-    """:meth:`Solver.default` (the equation solver) narrows its rounds under a time limit;
-    a solver assembled from parts (forward kinematics) keeps its rounds."""
-    system = load_minibex(SYSTEMS / "katsura-5.mbx")
-    solver = Solver.default(system)
-    assert solver.sizer().front == ANYTIME_FRONT
-    plain = Solver(system, Nothing(), Certifier(solver.csys), LargestFirst())
-    assert plain.sizer().front is None
 
 
 def test_adaptive_and_fixed_batches_certify_the_same_solutions():

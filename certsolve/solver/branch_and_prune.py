@@ -59,7 +59,7 @@ from ..expr.polynomial import reduce_degree as lower_degree
 from ..expr.system import System
 from ..lazy import surely_valid
 from .batch import Batch, Contractor, progress_gain
-from .batching import ANYTIME_FRONT, BatchSizer
+from .batching import BatchSizer
 from .bisectors import SmearCurvatureMix, domain_scale, split
 from .buffer import BoxStack
 from .certify import Certifier, SolutionSet
@@ -93,9 +93,7 @@ class SolverLimits:
     BatchSizer`: it grows to ``batch_size`` while the per-box time falls); ``None`` (the
     default): ``batch_size`` from the first round.  Either way a round under a time limit is
     cut to the boxes the time left fits at twice the last round's per-box time, so a search
-    without a time limit groups its boxes as with a fixed size; ``front``: under a time
-    limit a round takes at most ``1/front`` of the boxes expected within it (``None``: no
-    such cap; :meth:`Solver.default`: :data:`~.batching.ANYTIME_FRONT`).  ``max_undecided``,
+    without a time limit groups its boxes as with a fixed size.  ``max_undecided``,
     ``max_pending``: caps on the undecided and pending hulls listed in the result
     (:mod:`.summary`).
     """
@@ -104,7 +102,6 @@ class SolverLimits:
     bisect_mask: np.ndarray | None = None
     batch_size: int = 1024
     batch_start: int | None = None
-    front: int | None = None
     max_undecided: int = MAX_LISTED
     max_pending: int = MAX_LISTED
 
@@ -122,7 +119,6 @@ class SolverLimits:
             ("eps", float(self.eps)),
             ("batch_size", int(self.batch_size)),
             ("batch_start", None if self.batch_start is None else int(self.batch_start)),
-            ("front", None if self.front is None else int(self.front)),
             ("max_undecided", int(self.max_undecided)),
             ("max_pending", int(self.max_pending)),
             ("bisect_mask", mask),
@@ -256,7 +252,6 @@ class Solver:
             bisect_mask=bisect_mask,
             batch_size=batch_size,
             batch_start=batch_start,
-            front=ANYTIME_FRONT,
             max_undecided=max_undecided,
             max_pending=max_pending,
         )
@@ -306,11 +301,7 @@ class Solver:
         """A new batch size for one search: from ``batch_start`` (or ``batch_size``), cut to
         the time left (:class:`~.batching.BatchSizer`)."""
         start = self.limits.batch_start
-        return BatchSizer(
-            cap=self.batch_size,
-            start=self.batch_size if start is None else start,
-            front=self.limits.front,
-        )
+        return BatchSizer(cap=self.batch_size, start=self.batch_size if start is None else start)
 
     @property
     def bisect_mask(self) -> np.ndarray | None:

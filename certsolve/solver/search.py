@@ -234,7 +234,7 @@ class Search:
             lo, hi = self.state.stack.pop(self.step.batch_size)
             self.step.process(lo, hi, self.state)
         else:
-            lo, hi = self.state.stack.pop(sizer.next(self.remaining_time(), self.solutions()))
+            lo, hi = self.state.stack.pop(sizer.next(self.remaining_time()))
             t0 = time.perf_counter()
             self.step.process(lo, hi, self.state)
             sizer.record(lo.shape[0], time.perf_counter() - t0, self.remaining_time())
