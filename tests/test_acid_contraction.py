@@ -8,6 +8,8 @@ box holds is either in its row's contracted box or in a unicity box the round pr
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 from test_solver_contractors import NAMES, REFERENCE, SYSTEMS, compiled, holds, random_boxes
@@ -15,7 +17,7 @@ from test_solver_contractors import NAMES, REFERENCE, SYSTEMS, compiled, holds, 
 from certsolve.expr.minibex import load_minibex
 from certsolve.solver import Solver, solve
 from certsolve.solver.batch import Batch
-from certsolve.solver.contractors import IntervalNewton
+from certsolve.solver.contractors import HC4, IntervalNewton
 from certsolve.solver.pipeline import NEWTON_STEPS, find
 from certsolve.solver.shaving import AdaptiveCount, Shave
 
@@ -118,3 +120,26 @@ def test_the_default_pipeline_finds_every_reference_solution(name):
     assert len(res.solutions) == len(pts)
     for p in pts:
         assert sum(holds(s.lo, s.hi, p) for s in res.solutions) == 1
+
+
+def test_acid_stops_shaving_past_the_deadline():
+    """Past the batch's deadline (the search's time limit) no further variable is shaved:
+    one CID call (the chosen variable) instead of one per variable, and every box only
+    shrinks less -- each contains what the whole loop leaves, so no solution is lost."""
+    csys, pts = compiled("eco-6")
+    rng = np.random.default_rng(38)
+    lo, hi = random_boxes(pts, csys.system.domain, rng, count=64)
+    var = np.argmax(hi - lo, axis=1)
+    _, _, jlo, jhi = csys.eval_fj(lo, hi)
+    shave = Shave(HC4(csys), count=None, n=csys.n)
+    shave.stacked_pairs = 0  # one variable after the other: the loop the deadline cuts
+    calls = []
+    inner = shave.cid.contract
+    shave.cid.contract = lambda *a: calls.append(1) or inner(*a)
+    full = shave.contract(lo, hi, jlo, jhi, var)
+    n_full, calls[:] = len(calls), []
+    cut = shave.contract(lo, hi, jlo, jhi, var, deadline=time.monotonic() - 1.0)
+    assert n_full > 1 and len(calls) == 1
+    assert np.all(cut[2] <= full[2])  # a box proven empty when cut is empty in full too
+    live = ~cut[2]
+    assert np.all(cut[0][live] <= full[0][live]) and np.all(cut[1][live] >= full[1][live])

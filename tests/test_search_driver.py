@@ -44,7 +44,7 @@ class Bisect1D:
     def start(self, known=None) -> ToyState:
         return ToyState(BoxStack(1))
 
-    def process(self, lo, hi, state: ToyState) -> None:
+    def process(self, lo, hi, state: ToyState, *, deadline=None) -> None:
         a, b = lo[:, 0], hi[:, 0]
         small = b - a < 1.0
         for i in np.flatnonzero(small):

@@ -271,7 +271,10 @@ class PavingStep:
             f"eps: {self.scale.tolist()!r}"
         )
 
-    def process(self, lo: np.ndarray, hi: np.ndarray, state: PavingState) -> None:
+    def process(
+        self, lo: np.ndarray, hi: np.ndarray, state: PavingState, *, deadline: float | None = None
+    ) -> None:
+        # ``deadline`` (:meth:`.Step.process`) is not used: no part of this round loops long
         d = self.d
         glo, ghi, full_rank, wires_ok = slack_enclosures(
             self.robot,

@@ -240,7 +240,10 @@ class DesignStep:
         boxes.add(pb.theta[:, 0], pb.theta[:, 1], np.inf, 1)
         return DesignState(PairQueue(1 + len(pb.W)), boxes)
 
-    def process(self, lo: np.ndarray, hi: np.ndarray, state: DesignState) -> None:
+    def process(
+        self, lo: np.ndarray, hi: np.ndarray, state: DesignState, *, deadline: float | None = None
+    ) -> None:
+        # ``deadline`` (:meth:`.Step.process`) is not used: no part of this round loops long
         pb, t = self.problem, state.boxes
         pid = lo[:, 0].astype(np.int64)
         live = ~t.bad[pid]

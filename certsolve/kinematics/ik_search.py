@@ -298,7 +298,10 @@ class ControlSearch:
             state.found = point
         state.undecided.extend(undecided)
 
-    def process(self, lo: np.ndarray, hi: np.ndarray, state: ControlState) -> None:
+    def process(
+        self, lo: np.ndarray, hi: np.ndarray, state: ControlState, *, deadline: float | None = None
+    ) -> None:
+        # ``deadline`` (:meth:`.Step.process`) is not used: no part of this round loops long
         lo, hi, empty = contract(self.pc, lo, hi)
         lo, hi = lo[~empty], hi[~empty]
         if lo.shape[0] == 0:

@@ -121,6 +121,9 @@ class Batch:
     prove: Prove | None = None  # record proven solutions (existence, unicity boxes)
     acid: Any = None  # the search's learnt state (:class:`.shaving.AdaptiveCount`), if any
     hull: Any = None  # the search's learnt state (:class:`.relaxation.HullShare`), if any
+    #: a :func:`time.monotonic` value (the search's limit) past which a part whose work on
+    #: the batch is long (ACID's loop over variables) stops early: contracting less is sound
+    deadline: float | None = None
     empty: np.ndarray = field(init=False)
     ids: np.ndarray = field(init=False)  # each row's position in the round's first batch
     #: the boxes as the round received them (row ``ids[r]`` is row ``r``'s), and the

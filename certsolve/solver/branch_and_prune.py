@@ -490,9 +490,12 @@ class Solver:
         ]
         return new, end
 
-    def process(self, lo: np.ndarray, hi: np.ndarray, state: SearchState) -> None:
+    def process(
+        self, lo: np.ndarray, hi: np.ndarray, state: SearchState, *, deadline: float | None = None
+    ) -> None:
         """One round on the boxes ``lo, hi``: prune by known solutions, contract (the
-        pipeline), then report the boxes narrower than ``eps`` and bisect the others."""
+        pipeline), then report the boxes narrower than ``eps`` and bisect the others.
+        ``deadline``: the parts may stop contracting past it (:attr:`.Batch.deadline`)."""
         keep, plo, phi = state.solutions.prune(lo, hi)
 
         def prove(elo, ehi, ulo, uhi) -> None:
@@ -510,6 +513,7 @@ class Solver:
             prove=prove,
             acid=state.acid,
             hull=state.hull,
+            deadline=deadline,
         )
         self.contractor.apply(batch)
         batch.drop_empty()

@@ -46,6 +46,7 @@ from ..expr.compiled import CompiledSystem
 from ..expr.system import Constraint, System
 from ..interval.linalg import krawczyk_mr, mr_from_bounds
 from .batch import Batch
+from .batching import BatchSizer
 from .bisectors import domain_scale, split
 from .buffer import BoxStack
 from .contractors import HC4
@@ -195,8 +196,11 @@ class ManifoldPaver:
     def listed(self, state: PavingState, start: int) -> tuple[list[Solution], int]:
         return state.inside[start:], len(state.inside)
 
-    def process(self, lo: np.ndarray, hi: np.ndarray, state: PavingState) -> None:
+    def process(
+        self, lo: np.ndarray, hi: np.ndarray, state: PavingState, *, deadline: float | None = None
+    ) -> None:
         """One round: HC4, the parametric Krawczyk test and contraction, then split."""
+        # ``deadline`` (:meth:`.Step.process`) is not used: no part of this round loops long
         batch = Batch(lo, hi, csys=self.csys, eps=self.eps)
         self.hc4.apply(batch)
         batch.drop_empty()
@@ -313,7 +317,10 @@ class ManifoldPaver:
         cancel: Any = None,
     ) -> SolveResult:
         """Pave the domain (module docstring); the limits stop the paving, the boxes left
-        are pending."""
+        are pending.  Rounds start at 16 boxes and grow to ``batch_size`` while that pays,
+        cut to the time left (:class:`~.batching.BatchSizer`, as the solver's): one round of
+        1,023 boxes of ``DiscreteBoundary-0200`` (200 variables, 141 equations) took 17 s,
+        and a 10 s limit ran 19 s."""
         dom = self.system.domain
         run = run_search(
             self,
@@ -322,6 +329,7 @@ class ManifoldPaver:
             limits=Limits(timeout=timeout, max_boxes=max_boxes, max_solutions=max_solutions),
             progress=progress,
             cancel=cancel,
+            sizer=BatchSizer(cap=self.batch_size),
         )
         return self.result(run)
 

@@ -50,9 +50,16 @@ class Step(Protocol):
     def start(self, known: Any = None) -> Any:
         """A new state with an empty stack, seeded with ``known`` (see :meth:`known`)."""
 
-    def process(self, lo: np.ndarray, hi: np.ndarray, state: Any) -> None:
+    def process(
+        self, lo: np.ndarray, hi: np.ndarray, state: Any, *, deadline: float | None = None
+    ) -> None:
         """Process a batch ``(B, n)``: record results in ``state``, push what remains of the
-        boxes on ``state.stack``.  Whatever is neither pushed nor recorded is proven empty."""
+        boxes on ``state.stack``.  Whatever is neither pushed nor recorded is proven empty.
+
+        ``deadline``: a :func:`time.monotonic` value (the search's time limit) past which
+        the step may cut its work on the batch short, pushing the boxes as far as it got
+        (sound: contracting less keeps every solution), so that one long round does not
+        outlast the limit by much."""
 
     def tally(self, state: Any) -> Tally: ...
 

@@ -230,13 +230,15 @@ class Search:
     def batch(self) -> None:
         """Process one batch from the buffer here."""
         sizer = self.sizer
+        left = self.remaining_time()
+        deadline = None if left is None else time.monotonic() + left
         if sizer is None:
             lo, hi = self.state.stack.pop(self.step.batch_size)
-            self.step.process(lo, hi, self.state)
+            self.step.process(lo, hi, self.state, deadline=deadline)
         else:
-            lo, hi = self.state.stack.pop(sizer.next(self.remaining_time()))
+            lo, hi = self.state.stack.pop(sizer.next(left))
             t0 = time.perf_counter()
-            self.step.process(lo, hi, self.state)
+            self.step.process(lo, hi, self.state, deadline=deadline)
             sizer.record(lo.shape[0], time.perf_counter() - t0, self.remaining_time())
         self.stats.boxes += lo.shape[0]
         self.stats.batches += 1

@@ -18,6 +18,7 @@ a fixed count or the count :class:`AdaptiveCount` learns (IBEX's ACID).
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import KW_ONLY, dataclass
 
 import numpy as np
@@ -236,12 +237,22 @@ class Shave:
             lo, hi, v = batch.lo[rows], batch.hi[rows], var[rows]
             jlo, jhi = batch.jacobian(rows)
         clo, chi, cemp = self.contract(
-            lo, hi, jlo, jhi, v, batch.acid, eps=batch.eps, mask=batch.mask
+            lo, hi, jlo, jhi, v, batch.acid, eps=batch.eps, mask=batch.mask, deadline=batch.deadline
         )
         batch.with_rows(rows, clo, chi, cemp)
 
     def contract(
-        self, lo, hi, jlo, jhi, var, acid: AdaptiveCount | None = None, *, eps=0.0, mask=None
+        self,
+        lo,
+        hi,
+        jlo,
+        jhi,
+        var,
+        acid: AdaptiveCount | None = None,
+        *,
+        eps=0.0,
+        mask=None,
+        deadline: float | None = None,
     ):
         """CID on ``var`` then on up to ``count - 1`` other variables of each box (or the
         count ``acid`` has learnt, more for its learning boxes; this call updates it), by
@@ -252,6 +263,11 @@ class Shave:
         shaves its extra variables side by side instead (:meth:`_side_by_side`,
         :attr:`stacked_pairs`).  A box proven empty stays empty.  Returns ``(lo, hi,
         empty)``.
+
+        ``deadline`` (a :func:`time.monotonic` value): past it, no further variable is
+        shaved.  On a large system one call can be long: ``Yamamua1-0600sp`` (601
+        variables), whose learning boxes shave every variable, took 35 s in one call, and a
+        10 s limit ran 31 s (``docs/ibex-benchs.md``).
         """
         clo, chi, cemp = self.cid.contract(lo, hi, var)
         B = lo.shape[0]
@@ -275,6 +291,8 @@ class Shave:
                     act = np.flatnonzero(useful[:, k] & ~cemp)
                     if act.size == 0:
                         break  # scores are sorted: no box has a k-th (or later) variable
+                    if deadline is not None and time.monotonic() > deadline:
+                        break  # the search's limit: what is shaved so far is kept
                     nlo, nhi, emp = self.cid.contract(clo[act], chi[act], order[act, k])
                     if acid is not None:
                         shrank = _learnt(acid, learns[act], clo[act], chi[act], nlo, nhi, emp)
