@@ -67,12 +67,12 @@ __all__ = ["FixPoint", "Inflate", "Sequence", "core", "default_pipeline", "find"
 MIXED_NODES = 250_000
 
 #: the polytope hull's learnt share in the solver's pipeline (:class:`.relaxation.HullShare`;
-#: forward kinematics keeps the defaults): a contraction is useful when it cuts a box's
-#: volume by 4, the work of two bisections (on a batch of one box the hull's programs cost
-#: about two rounds of HC4 and Newton), and the share is the mean over the last ~16 boxes,
-#: so a small search of one-box rounds turns a hull that does not pay off within a few
-#: dozen rounds.  Measured in ``docs/solver.md`` (*The hull where it pays, on small files*).
-HULL_SHARE = HullShare(ratio=0.25, window=16)
+#: the defaults, as forward kinematics): useful when it halves a box's volume, over the last
+#: ~32 boxes it contracted.  A stricter share (a 4x cut over ~16 boxes) saved 2 % of the CPU
+#: on the 42 smallest of the 65 files both solvers complete and cost katsura-6 36 % more
+#: boxes (22,079 -> 29,982, 2.2 -> 2.9 s); ``docs/solver.md``, *The hull where it pays, on
+#: small files*.
+HULL_SHARE = HullShare(ratio=0.5, window=32)
 
 #: Newton steps a box may take in one round of the solver's pipeline
 #: (:class:`~.contractors.IntervalNewton` ``iterations``); forward kinematics keeps 1.
