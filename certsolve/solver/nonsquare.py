@@ -200,7 +200,8 @@ class ManifoldPaver:
         self, lo: np.ndarray, hi: np.ndarray, state: PavingState, *, deadline: float | None = None
     ) -> None:
         """One round: HC4, the parametric Krawczyk test and contraction, then split."""
-        # ``deadline`` (:meth:`.Step.process`) is not used: no part of this round loops long
+        # ``deadline`` (:meth:`.Step.process`) is not used: a round is bounded by its size,
+        # which :meth:`solve`'s sizer fits to the time left
         batch = Batch(lo, hi, csys=self.csys, eps=self.eps)
         self.hc4.apply(batch)
         batch.drop_empty()
