@@ -12,12 +12,11 @@ import pytest
 
 from certsolve.kinematics import inverse_kinematics
 from certsolve.kinematics.fk import FKSolver, with_tau_max
-from certsolve.kinematics.fk_solver import NarrowOrLearnt
 from certsolve.robot import Pose, Robot
 from certsolve.solver import SearchStatus
 from certsolve.solver.batch import Batch
 from certsolve.solver.pipeline import find
-from certsolve.solver.relaxation import HullShare
+from certsolve.solver.relaxation import HullShare, PolytopeHull
 
 ROBOTS = Path(__file__).resolve().parent.parent / "examples" / "robots"
 REAL_POSE = [111.0, 58.0, 107.0, 0.0, 0.0, 0.0]
@@ -62,15 +61,15 @@ def test_on_for_general_19_and_in_the_fingerprint():
 
 
 def test_the_hull_on_every_narrow_box_and_the_wide_ones_as_learnt():
-    """``NarrowOrLearnt``: a box narrower than the formulation's hull widths gets the hull
+    """``PolytopeHull(always=...)``: a box narrower than the formulation's hull widths gets the hull
     whatever the learnt share says; the share plans the wider ones and learns from them
     only."""
     base = Robot.load(ROBOTS / "marionet.json")
     u = inverse_kinematics(base, REAL_POSE, method="alg2").u
     fk = FKSolver(with_tau_max(base, 60.0), prepare_search=False)
     search = fk.search(u)
-    gate = find(search.solver.contractor, NarrowOrLearnt)
-    assert gate is not None
+    gate = find(search.solver.contractor, PolytopeHull)
+    assert gate is not None and gate.always is not None
     pose = Pose.from_params(6, REAL_POSE)
     boxes = [
         fk.form.pose_box(np.asarray(pose.position) + off, pose.rotation, r, search.domain)
@@ -80,7 +79,7 @@ def test_the_hull_on_every_narrow_box_and_the_wide_ones_as_learnt():
     hi = np.array([b[1] for b in boxes])
     narrow = np.all(hi - lo < fk.form.hull_widths(), axis=1)
     assert narrow.tolist() == [True, True, False, True, False]
-    clo, chi, _ = gate.hull.contract(lo, hi)
+    clo, chi, _ = gate.contract(lo, hi)
     learnt = HullShare(share=0.0)  # below its threshold: one wide box in 16, the first
     batch = Batch(
         lo, hi, csys=search.solver.csys, eps=fk.eps, mask=fk.form.bisect_mask(), hull=learnt

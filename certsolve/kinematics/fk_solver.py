@@ -19,17 +19,15 @@ import numpy as np
 
 from ..expr.compiled import CompiledSystem
 from ..inputs import InputError
-from ..interval.reductions import all_last
 from ..robot.elastic import tension
 from ..robot.geometry import euler_zyx
 from ..robot.model import Robot
 from ..robot.schema import RobotSpec
 from ..solver import SearchStatus, Solver, SolverLimits
-from ..solver.batch import Batch, progress_gain
 from ..solver.certify import Certifier
 from ..solver.contractors import HC4
 from ..solver.pipeline import FixPoint, Inflate, Sequence, core
-from ..solver.relaxation import HullShare, PolytopeHull
+from ..solver.relaxation import PolytopeHull
 from ..solver.result import SolveResult
 from .energy_minima import energy_minima
 from .fk_formulation import FKFormulation
@@ -44,50 +42,12 @@ __all__ = [
     "FKResult",
     "FKSearch",
     "FKSolver",
-    "NarrowOrLearnt",
     "with_tau_max",
 ]
 
 #: half-width (cm) of the seed boxes around the energy's local minima, in every chosen
 #: point's coordinates (``seed_minima``)
 SEED_RADIUS = 0.5
-
-
-class NarrowOrLearnt:
-    """The polytope hull on every box narrower than ``widths`` (per variable), and on the
-    wider ones as its learnt share plans (:class:`.HullShare`, learnt on the wider boxes
-    only).
-
-    It only chooses which boxes a sound contractor sees; every box keeps what it held.  A
-    narrow box's contraction does not depend on the batch it came in, so a search on
-    workers contracts the same narrow boxes as one in this process.
-    """
-
-    def __init__(self, hull: PolytopeHull, widths: np.ndarray):
-        self.hull = hull
-        self.widths = np.asarray(widths, dtype=float)
-
-    def hull_learner(self) -> HullShare:
-        """The learnt share for a search (its state, :attr:`.SearchState.hull`)."""
-        return HullShare()
-
-    def apply(self, batch: Batch) -> None:
-        learnt = batch.hull if batch.hull is not None else HullShare(threshold=0.0)
-        narrow = all_last(batch.hi - batch.lo < self.widths)
-        wide = np.flatnonzero(~narrow)
-        rows = narrow.copy()
-        rows[wide[learnt.plan(wide.size)]] = True
-        if not rows.any():
-            learnt.done(np.zeros(0, dtype=bool), wide.size)
-            return
-        lo, hi = batch.lo[rows], batch.hi[rows]
-        clo, chi, empty = self.hull.contract(lo, hi)
-        useful = empty | (progress_gain(lo, hi, clo, chi, batch.eps, batch.mask) <= learnt.gain)
-        learnt.done(useful[~narrow[rows]], wide.size)
-        batch.with_rows(rows, clo, chi, empty)
-
-    def describe(self) -> str:
-        return f"NarrowOrLearnt({self.hull.describe()}, widths={self.widths.tolist()!r})"
 
 
 @dataclass
@@ -234,7 +194,7 @@ class FKSolver:
     on every box narrower than the formulation's hull widths
     (:meth:`.FKFormulation.hull_widths`: the orientation within ~0.2 of the longest edge,
     where it empties half the boxes or more) and on the wider ones as its learnt share plans
-    (:class:`NarrowOrLearnt`, :class:`.HullShare`: every box while it halves enough of
+    (``PolytopeHull(always=...)``, :class:`.HullShare`: every box while it halves enough of
     them, one in 16 otherwise).  By default on for the general-19 system, off
     for the others (docs/fk-cost.md, its last section; CPU s, medians of 3 interleaved):
     general-19 at 10 N, u = 0, 128,721 -> 17,535 boxes, 10.1 -> 3.6 s; at 60 N, u drawn
@@ -325,12 +285,7 @@ class FKSolver:
         newton[-1:-1] = list(extra)  # e.g. the set's Krawczyk (:mod:`.fk_tolerance`)
         rounds: list[Any] = [FixPoint(Sequence(*newton))]
         if self.relax:
-            widths = form.hull_widths()
-            if widths is None:
-                rounds.append(PolytopeHull(csys, directions=1))
-            else:
-                hull = PolytopeHull(csys, directions=1, adaptive=False)
-                rounds.append(NarrowOrLearnt(hull, widths))
+            rounds.append(PolytopeHull(csys, directions=1, always=form.hull_widths()))
         solver = Solver(
             csys,
             Sequence(*rounds, Inflate()),

@@ -295,6 +295,11 @@ class PolytopeHull:
     with): a row HC4 and Newton have halved goes back to the buffer whatever the hull
     does (:class:`.pipeline.FixPoint`), and its next round contracts the smaller box.
     Without a learnt state, or with ``adaptive=False``, every box.
+
+    ``always`` (per variable): every box narrower than these widths is contracted whatever
+    the share plans, and the share plans and learns from the other boxes only (forward
+    kinematics: :meth:`.FKFormulation.hull_widths`, where the hull's yield follows the
+    box's width and a share averaging narrow and wide boxes sat at its threshold).
     """
 
     def __init__(
@@ -306,9 +311,12 @@ class PolytopeHull:
         stall: StallRule | None = _STALL,
         adaptive: bool = True,
         share: HullShare | None = None,
+        always: np.ndarray | None = None,
     ):
         self.csys = csys
         self.adaptive = bool(adaptive)
+        #: per variable, the widths under which a box is contracted whatever the share plans
+        self.always = None if always is None else np.asarray(always, dtype=float)
         #: the settings of the learnt state a search starts from (:meth:`hull_learner`)
         self.share = HullShare() if share is None else replace(share)
         self.affine = bool(affine)
@@ -422,22 +430,30 @@ class PolytopeHull:
             batch.lo, batch.hi, empty = self.contract(batch.lo, batch.hi)
             batch.empty |= empty
             return
-        rows = learnt.plan(batch.size)
+        if self.always is None:
+            sure = np.zeros(batch.size, dtype=bool)
+        else:
+            sure = all_last(batch.hi - batch.lo < self.always)
+        offered = np.flatnonzero(~sure)  # the boxes the share plans and learns from
+        rows = sure.copy()
+        rows[offered[learnt.plan(offered.size)]] = True
         if rows.any():  # the stalled rows (class docstring)
             at = batch.ids
             rows &= batch.gain(batch.start_lo[at], batch.start_hi[at]) > BISECTION_GAIN
         if not rows.any():
-            learnt.done(np.zeros(0, dtype=bool), batch.size)
+            learnt.done(np.zeros(0, dtype=bool), offered.size)
             return
         lo, hi = (batch.lo, batch.hi) if rows.all() else (batch.lo[rows], batch.hi[rows])
         clo, chi, cemp = self.contract(lo, hi)
         gain = progress_gain(lo, hi, clo, chi, batch.eps, batch.mask)
-        learnt.done(cemp | (gain <= learnt.gain), batch.size)
+        learnt.done((cemp | (gain <= learnt.gain))[~sure[rows]], offered.size)
         batch.with_rows(rows, clo, chi, cemp)
 
     def describe(self) -> str:
         return (
             f"PolytopeHull(directions={self.directions}, max_iter={self.max_iter}, "
             f"affine={self.affine}, stall={self.stall!r}, adaptive={self.adaptive}, "
-            f"share={self.share.describe()})"
+            f"share={self.share.describe()}"
+            + ("" if self.always is None else f", always={self.always.tolist()!r}")
+            + ")"
         )
