@@ -2,8 +2,8 @@
 
     python benchmarks/ibex_bench.py DIR [--timeout 30] [--runs 3] [--eps 1e-8]
         [--solvers certsolve,ibexsolve] [--ibexsolve PATH] [--workers N] [--cid-vars auto]
-        [--only REGEX] [--both-complete DIR] [--results DIR] [--markdown docs/ibex-benchs.md]
-        [--csv OUT]
+        [--only REGEX] [--both-complete DIR [--ibex-below S]] [--results DIR]
+        [--markdown docs/ibex-benchs.md] [--csv OUT]
 
 Every ``.bch`` / ``.mbx`` file under ``DIR`` (recursively) is first read by the Minibex parser
 in this process: it parses (its variables ``n`` and equations ``m`` are noted; ``m != n`` is
@@ -366,19 +366,21 @@ def save_store(path: Path, store: dict[str, list[dict]]) -> None:
 
 
 def both_complete(args: argparse.Namespace) -> set[str]:
-    """The files whose last stored run in ``--both-complete`` is complete for both solvers."""
+    """The files whose last stored run in ``--both-complete`` is complete for both solvers;
+    with ``--ibex-below S``, only those where ibexsolve's median wall time there is below
+    ``S`` seconds (the small files, where start-up and a few rounds are the whole call)."""
     where = argparse.Namespace(**{**vars(args), "results": args.both_complete})
-    done = [
-        {
-            f
-            for f, runs in load_store(store_path(where, s)).items()
-            if runs[-1]["status"] == "complete"
-        }
-        for s in SOLVERS
-    ]
+    stores = {s: load_store(store_path(where, s)) for s in SOLVERS}
+    done = [{f for f, runs in stores[s].items() if runs[-1]["status"] == "complete"}
+            for s in SOLVERS]  # fmt: skip
     if not any(done):
         raise SystemExit(f"--both-complete: no stored runs in {args.both_complete}")
-    return set.intersection(*done)
+    both = set.intersection(*done)
+    below = getattr(args, "ibex_below", None)
+    if below is None:
+        return both
+    ibex = stores["ibexsolve"]
+    return {f for f in both if statistics.median(r["wall"] for r in ibex[f]) < below}
 
 
 def summary_of(runs: list[Run]) -> Run:
@@ -504,6 +506,9 @@ def main() -> None:
     ap.add_argument("--both-complete", type=Path, default=None, metavar="DIR",
                     help="run only files both solvers complete in the runs stored in DIR "
                     "(same --timeout and --eps): the subset of the time ratio")  # fmt: skip
+    ap.add_argument("--ibex-below", type=float, default=None, metavar="S",
+                    help="with --both-complete: only files where ibexsolve's stored median "
+                    "wall time is below S seconds")  # fmt: skip
     ap.add_argument("--results", type=Path, default=Path("ibex-bench-results"),
                     help="directory of stored runs (resumed)")  # fmt: skip
     ap.add_argument("--markdown", type=Path, default=None, help="write the table here")
@@ -517,6 +522,8 @@ def main() -> None:
             ap.error(f"--solvers: unknown solver {s!r} (certsolve, ibexsolve or none)")
     args.results.mkdir(parents=True, exist_ok=True)
     only = re.compile(args.only)
+    if args.ibex_below is not None and args.both_complete is None:
+        ap.error("--ibex-below: with --both-complete DIR (ibexsolve's stored times)")
     keep = None if args.both_complete is None else both_complete(args)
     files = sorted(p for p in args.dir.rglob("*") if p.suffix in (".bch", ".mbx"))
     stores = {s: load_store(store_path(args, s)) for s in SOLVERS}

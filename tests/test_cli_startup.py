@@ -6,6 +6,7 @@ command table still gives each command its full parser.
 """
 
 import argparse
+import gc
 import json
 import subprocess
 import sys
@@ -96,6 +97,52 @@ def test_the_command_runs_with_one_blas_thread_unless_the_user_sets_it(monkeypat
     else:
         monkeypatch.setenv("OPENBLAS_NUM_THREADS", given)
     monkeypatch.setattr("sys.argv", ["certsolve", "schema", "robot"])
-    assert cli.main() == 0
+    try:
+        assert cli.main() == 0
+    finally:
+        gc.unfreeze()  # main() as the process's command froze what was loaded
     assert os.environ["OPENBLAS_NUM_THREADS"] == (given or cli.BLAS_THREADS)
     assert capsys.readouterr().out.lstrip().startswith("{")
+
+
+GC_STATE = "print(json.dumps([gc.isenabled(), gc.get_freeze_count()]))"
+
+
+def test_the_command_loads_its_modules_without_the_collector_then_freezes_them():
+    """``main()`` as the process's command: the collector is on again after the command's
+    modules loaded, and what they hold is frozen (not walked by later collections)."""
+    code = (
+        "import gc, json, sys\n"
+        "sys.argv = ['certsolve', 'solve', 'examples/systems/circle-line.mbx', '--json']\n"
+        "from certsolve.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()) as out:\n"
+        "    assert main() == 0\n"
+        "assert json.loads(out.getvalue())['status'] == 'complete'\n" + GC_STATE
+    )
+    enabled, frozen = _probe(code)
+    assert enabled
+    assert frozen > 10_000  # numpy's and the solver's objects, not a handful
+
+
+def test_a_caller_of_main_keeps_its_collector():
+    """``main(argv)`` (a caller's process: a test, a script) leaves the collector as it is."""
+    code = (
+        "import gc, json\n"
+        "from certsolve.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    assert main(['solve', 'examples/systems/circle-line.mbx', '--json']) == 0\n" + GC_STATE
+    )
+    assert _probe(code) == [True, 0]
+
+
+def _probe(code: str):
+    """The last line of ``code``'s output in a fresh interpreter, as JSON."""
+    out = subprocess.run(
+        [sys.executable, "-c", "import contextlib, io\n" + code],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout.splitlines()[-1])

@@ -118,3 +118,25 @@ def test_the_table_summarises_parses_completions_ratios_and_disagreements():
     assert "| complete | 2 (3) |" in page  # b: ibexsolve's raw count beside the distinct one
     assert "refused: the system is not square" in page and "| timeout | 4 | ? | ? |" in page
     assert "parse error: line 1, column 1: unexpected 'x'" in page
+
+
+def test_both_complete_keeps_the_files_both_finish_and_ibex_below_the_small_ones(tmp_path):
+    """``--both-complete DIR``: the files whose last stored run is complete for both solvers;
+    ``--ibex-below S``: of those, the ones where ibexsolve's median wall time is below S."""
+    args = bench.argparse.Namespace(timeout=10.0, eps=1e-8, both_complete=tmp_path)
+
+    def runs(status, *walls):
+        return [{"status": status, "wall": w} for w in walls]
+
+    stores = {
+        "certsolve": {"a": runs("complete", 0.3), "b": runs("complete", 2.0),
+                      "c": runs("timeout", 10.0), "d": runs("complete", 0.2)},
+        "ibexsolve": {"a": runs("complete", 0.01, 0.5, 0.02), "b": runs("complete", 0.4),
+                      "c": runs("complete", 0.01), "d": runs("timeout", 10.0)},
+    }  # fmt: skip
+    where = bench.argparse.Namespace(**{**vars(args), "results": tmp_path})
+    for solver, store in stores.items():
+        bench.save_store(bench.store_path(where, solver), store)
+    assert bench.both_complete(args) == {"a", "b"}
+    args.ibex_below = 0.1
+    assert bench.both_complete(args) == {"a"}  # a: median 0.02 s; b: 0.4 s
