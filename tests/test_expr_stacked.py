@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from certsolve.expr import System, sqrt, var
-from certsolve.expr.compiled import STACK_ELEMENTS, CompiledSystem
+from certsolve.expr import System, compiled, sqrt, var
+from certsolve.expr.compiled import CHUNK_ELEMENTS, CompiledSystem
 from certsolve.expr.minibex import load_minibex
 from certsolve.interval.core import midpoint
 
@@ -62,7 +62,7 @@ def test_stacked_merges_the_groups_of_the_copies(name):
     c = midpoint(lo, hi)
     key = tuple((j,) for j in range(csys.n))
     stacked = csys._mixed_program(key)
-    assert 64 * stacked.program.n_nodes <= STACK_ELEMENTS  # the stacked path is the one run
+    assert 64 * stacked.program.n_nodes <= CHUNK_ELEMENTS  # the stacked path is the one run
     got = csys.eval_fj_mixed(lo, hi, c, groups)
     want = csys._mixed_by_group(lo, hi, c, groups)
     for a, b in zip(got, want):
@@ -72,18 +72,63 @@ def test_stacked_merges_the_groups_of_the_copies(name):
     assert len(stacked.program.fwd_groups) < per_group
 
 
-def test_large_batches_take_one_program_per_group():
+def test_large_batches_take_the_stacked_program_in_chunks(monkeypatch):
+    """Past :data:`CHUNK_ELEMENTS` node values the stacked program runs on chunks of the
+    boxes: the floats of one program per group, at every batch size, and with a program
+    too large for :data:`STACK_MIN_BOXES` boxes a chunk the per-group path itself."""
     system = load_minibex(SYSTEMS / "eco-6.mbx")
     csys = CompiledSystem(system)
     groups = list(np.eye(csys.n, dtype=bool))
     csys.prepare_mixed(groups)
-    stacked = csys._mixed_program(tuple((j,) for j in range(csys.n)))
-    B = STACK_ELEMENTS // stacked.program.n_nodes + 1
-    lo, hi = boxes(system.domain, B, np.random.default_rng(1), 1 / 16)
+    nodes = csys._mixed_program(tuple((j,) for j in range(csys.n))).program.n_nodes
+    monkeypatch.setattr(compiled, "CHUNK_ELEMENTS", 16 * nodes)  # chunks of 16 boxes
+    calls = []
+    per_group = csys._mixed_by_group
+    monkeypatch.setattr(csys, "_mixed_by_group", lambda *a: calls.append(1) or per_group(*a))
+    rng = np.random.default_rng(1)
+    for B in (15, 16, 17, 50):
+        lo, hi = boxes(system.domain, B, rng, 1 / 16)
+        c = midpoint(lo, hi)
+        got = csys.eval_f_mixed(lo, hi, c, groups)
+        want = (*csys.eval_f_at(c), *per_group(lo, hi, c, groups))
+        for a, b in zip(got, want, strict=True):
+            assert a.shape[0] == B
+            assert np.array_equal(a, b, equal_nan=True)
+    assert not calls  # every batch ran in the stacked program
+    monkeypatch.setattr(compiled, "CHUNK_ELEMENTS", 8 * nodes)  # < STACK_MIN_BOXES a chunk
+    lo, hi = boxes(system.domain, 9, rng, 1 / 16)
+    csys.eval_fj_mixed(lo, hi, midpoint(lo, hi), groups)
+    assert calls  # too large a program for a chunk: one program per group
+
+
+@pytest.mark.parametrize("name", ["katsura-5", "trig-exp", "kin2-6r"])
+def test_chunks_give_the_floats_of_one_call(name, monkeypatch):
+    """Every batched evaluation of :class:`CompiledSystem` split in chunks of a few boxes
+    (:func:`compiled._chunked`) gives the floats, the domain test and the HC4 contraction
+    of one call over the whole batch."""
+    system = load_minibex(SYSTEMS / f"{name}.mbx")
+    csys = CompiledSystem(system)
+    rng = np.random.default_rng(3)
+    lo, hi = boxes(system.domain, 37, rng, 1 / 8)
     c = midpoint(lo, hi)
-    got = csys.eval_fj_mixed(lo, hi, c, groups)
-    want = csys._mixed_by_group(lo, hi, c, groups)
-    for a, b in zip(got, want):
+    groups = list(np.eye(csys.n, dtype=bool))
+    cols = [0, csys.n - 1]
+
+    def everything():
+        return [
+            *csys.eval_f(lo, hi),
+            *csys.eval_f_at(c),
+            *csys.eval_fj(lo, hi, check_domain=True),
+            *csys.eval_fj_columns(lo, hi, cols),
+            *csys.eval_f_mixed(lo, hi, c, groups),
+            *csys.hc4_revise(lo, hi),
+        ]
+
+    whole = everything()
+    monkeypatch.setattr(compiled, "CHUNK_ELEMENTS", 5 * csys.hc4.n_nodes)
+    chunked = everything()
+    for a, b in zip(chunked, whole, strict=True):
+        assert a.shape == b.shape
         assert np.array_equal(a, b, equal_nan=True)
 
 

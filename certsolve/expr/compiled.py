@@ -9,6 +9,13 @@ constraints and the symbolic Jacobian, and three level-grouped programs over it:
 
 All methods take batches: boxes as ``(B, n)`` arrays of bounds, points as ``(B, n)``.
 Everything in it is plain data (arrays, lists), so it pickles to worker processes.
+
+**Chunks.**  A program call holds a ``(nodes, B)`` array per bound: a batch whose call
+would hold more than :data:`CHUNK_ELEMENTS` node values per bound is evaluated in equal
+chunks of boxes (:func:`_chunked`), so a large program (Hansen's mixed Jacobian stacked,
+:mod:`.stacked`) runs at any batch size in bounded memory.  Every bound is computed from
+its own box's values and rounded alone, whatever the size of the array it is in, so the
+chunks give the floats of one call, and the domain test is per box.
 """
 
 from __future__ import annotations
@@ -25,9 +32,32 @@ from .system import System
 
 __all__ = ["CompileTimeout", "CompiledSystem"]
 
-#: largest batch x nodes for which the mixed Jacobian is evaluated as one stacked program
-#: (8 MB per bound array); above, one program per group costs few calls per element anyway
-STACK_ELEMENTS = 1 << 20
+#: node values per bound array in one program call (16 MB): larger batches are evaluated
+#: in chunks of boxes (module docstring).  Smaller chunks were slower in the search
+#: (general-19 at 60 N, P1 within 6 cm of the pose, 2048 boxes a batch; CPU a box, the
+#: same boxes): HC4 27-29 us at 2^21 and 2^20, 30-31 at 2^19, 36 at 2^18; partial Newton
+#: 10-11, 11-12, 12-13, 13 (docs/fk-cost.md, its last section)
+CHUNK_ELEMENTS = 1 << 21
+
+#: the mixed Jacobian is evaluated as one stacked program, in chunks, while a chunk holds at
+#: least this many boxes; a larger program, one column program per group (each in chunks).
+#: general-19's (1,421 nodes; batches of ~1,700 boxes): interval Newton 29-30 -> 23-25 us
+#: a box in the search, where batches past 737 boxes took one program per group and ``f``
+#: at ``c`` (2,023 nodes and 153 groups in all, against 1,421 and 46)
+STACK_MIN_BOXES = 16
+
+
+def _chunked(fn, nodes: int, *boxes: np.ndarray) -> tuple:
+    """``fn(*boxes)``, in equal chunks of rows when the batch holds more than
+    :data:`CHUNK_ELEMENTS` values of ``nodes`` nodes: every output of ``fn`` (arrays with the
+    boxes along axis 0) concatenated over the chunks."""
+    B = boxes[0].shape[0]
+    k = -(-B * nodes // CHUNK_ELEMENTS)
+    if k <= 1:
+        return fn(*boxes)
+    size = -(-B // k)
+    parts = [fn(*(a[i : i + size] for a in boxes)) for i in range(0, B, size)]
+    return tuple(np.concatenate(p) for p in zip(*parts, strict=True))
 
 
 def _group_key(groups) -> tuple[tuple[int, ...], ...]:
@@ -114,6 +144,9 @@ class CompiledSystem:
     # -- interval evaluation --------------------------------------------------------------
     def eval_f(self, lo, hi):
         """Enclosures of ``f`` over boxes: two ``(B, n)`` arrays."""
+        return _chunked(self._eval_f, self.f.n_nodes, lo, hi)
+
+    def _eval_f(self, lo, hi):
         LO, HI = self.f.eval_interval(lo, hi, self.param_lo, self.param_hi)
         return LO[self.f.outputs].T, HI[self.f.outputs].T
 
@@ -128,6 +161,9 @@ class CompiledSystem:
         with ``check_domain`` also a ``(B,)`` mask of boxes on which ``f`` and ``J`` are
         defined everywhere (:meth:`Program.defined_mask`).
         """
+        return _chunked(lambda lo, hi: self._eval_fj(lo, hi, check_domain), self.fj.n_nodes, lo, hi)
+
+    def _eval_fj(self, lo, hi, check_domain: bool):
         B = lo.shape[0]
         LO, HI = self.fj.eval_interval(lo, hi, self.param_lo, self.param_hi)
         n = self.n
@@ -136,9 +172,7 @@ class CompiledSystem:
         jlo[:, self._jac_flat] = LO[self._fj_jac].T
         jhi[:, self._jac_flat] = HI[self._fj_jac].T
         out = (LO[self._fj_f].T, HI[self._fj_f].T, jlo.reshape(B, n, n), jhi.reshape(B, n, n))
-        if check_domain:
-            return (*out, self.fj.defined_mask(LO, HI))
-        return out
+        return (*out, self.fj.defined_mask(LO, HI)) if check_domain else out
 
     def _column_program(self, cols: tuple[int, ...]):
         """Program for ``f`` and the Jacobian columns ``cols`` only (built on first use)."""
@@ -167,6 +201,9 @@ class CompiledSystem:
         """
         cols = tuple(sorted(int(c) for c in cols))
         prog, flat = self._column_program(cols)
+        return _chunked(lambda lo, hi: self._eval_columns(prog, flat, lo, hi), prog.n_nodes, lo, hi)
+
+    def _eval_columns(self, prog: Program, flat: np.ndarray, lo, hi):
         B = lo.shape[0]
         LO, HI = prog.eval_interval(lo, hi, self.param_lo, self.param_hi)
         n = self.n
@@ -201,28 +238,39 @@ class CompiledSystem:
         later ones.
 
         Returns ``jlo, jhi`` ``(B, n, n)`` and the ``(B,)`` mask of boxes on which ``f`` and
-        those columns are defined and smooth (the last group's box is ``X`` itself).  Small
-        batches evaluate every group in one stacked program (:mod:`.stacked`), large ones
-        one column program per group (:meth:`eval_fj_columns`, built on first use): the
-        same floats.
+        those columns are defined and smooth (the last group's box is ``X`` itself).  Every
+        group is evaluated in one stacked program (:mod:`.stacked`), in chunks of boxes; a
+        program too large for :data:`STACK_MIN_BOXES` boxes a chunk, on a batch too large
+        for one call, one column program per group (:meth:`eval_fj_columns`, built on
+        first use): the same floats.
         """
-        key = _group_key(groups)
-        stacked = self._mixed_program(key)
-        B, n = lo.shape
-        if B * stacked.program.n_nodes <= STACK_ELEMENTS:
-            return stacked.eval(lo, hi, c, self.param_lo, self.param_hi)
+        if self._stacks(groups, lo.shape[0]):
+            return self.eval_f_mixed(lo, hi, c, groups)[2:]
         return self._mixed_by_group(lo, hi, c, groups)
 
     def eval_f_mixed(self, lo, hi, c, groups):
-        """``f(c)`` (rigorous, ``(B, n)`` bounds) and :meth:`eval_fj_mixed`, in one call of
-        the stacked program at small batches (its copy of ``f`` at ``c``): the floats of
+        """``f(c)`` (rigorous, ``(B, n)`` bounds) and :meth:`eval_fj_mixed`, in the same
+        calls of the stacked program (its copy of ``f`` at ``c``): the floats of
         :meth:`eval_f_at` and :meth:`eval_fj_mixed`.  Returns ``(flo, fhi, jlo, jhi,
         defined)``."""
-        key = _group_key(groups)
-        stacked = self._mixed_program(key)
-        if lo.shape[0] * stacked.program.n_nodes <= STACK_ELEMENTS:
-            return stacked.eval_with_f(lo, hi, c, self.param_lo, self.param_hi)
-        return (*self.eval_f_at(c), *self._mixed_by_group(lo, hi, c, groups))
+        if not self._stacks(groups, lo.shape[0]):
+            return (*self.eval_f_at(c), *self._mixed_by_group(lo, hi, c, groups))
+        stacked = self._mixed_program(_group_key(groups))
+        plo, phi = self.param_lo, self.param_hi
+        return _chunked(
+            lambda lo, hi, c: stacked.eval_with_f(lo, hi, c, plo, phi),
+            stacked.program.n_nodes,
+            lo,
+            hi,
+            c,
+        )
+
+    def _stacks(self, groups, boxes: int) -> bool:
+        """Whether the mixed Jacobian over ``groups`` for ``boxes`` boxes is evaluated in
+        the stacked program: in one call of at most :data:`CHUNK_ELEMENTS` node values, or
+        in chunks of at least :data:`STACK_MIN_BOXES` boxes."""
+        nodes = self._mixed_program(_group_key(groups)).program.n_nodes
+        return boxes * nodes <= CHUNK_ELEMENTS or CHUNK_ELEMENTS // nodes >= STACK_MIN_BOXES
 
     def _mixed_by_group(self, lo, hi, c, groups):
         """:meth:`eval_fj_mixed` one column program per group."""
@@ -243,6 +291,9 @@ class CompiledSystem:
 
     def eval_constraints(self, lo, hi):
         """Enclosures of the constraint expressions over boxes: two ``(B, m)`` arrays."""
+        return _chunked(self._eval_constraints, self.hc4.n_nodes, lo, hi)
+
+    def _eval_constraints(self, lo, hi):
         LO, HI = self.hc4.eval_interval(lo, hi, self.param_lo, self.param_hi)
         out = self.hc4.outputs[self.n :]
         return LO[out].T, HI[out].T
@@ -311,6 +362,9 @@ class CompiledSystem:
 
         Returns the narrowed boxes ``(lo, hi)`` and a mask of boxes proven empty.
         """
+        return _chunked(self._hc4_revise, self.hc4.n_nodes, lo, hi)
+
+    def _hc4_revise(self, lo, hi):
         p = self.hc4
         LO, HI = p.eval_interval(lo, hi, self.param_lo, self.param_hi)
         forward = (LO.copy(), HI.copy())
