@@ -10,7 +10,8 @@ and IK Algorithm 2.
 Searches: for each case (robot, tau_max, control vector u) the median wall and CPU time of a
 complete all-solutions search with each worker count, with the status, certified poses,
 boxes and bisections beside them.  Cases marked ``target`` are the targets of issue 10
-(../shared/TARGETS.md); ``u~S(seed)`` is u drawn uniformly in the strokes with that seed,
+(../shared/TARGETS.md); ``u~S(seed)`` is u drawn uniformly in the strokes with that seed
+(``x0.25``: in the middle quarter of every stroke, issue 29's case of <= 120 s),
 ``random-general-N`` / ``random-T-N`` the perturbed designs of
 :func:`certsolve.robot.presets.random_marionet`; ``u=IK(P)`` the control vector of IK
 Algorithm 2 at ``REAL_POSE``, ``u=IK(~,lo-hi)`` IK at a random pose near the middle with
@@ -86,6 +87,8 @@ CASES = {
     "random-general-0 tau<=40 u~S(7)": ("random-general-0", 40.0, ("S", 7, 1.0)),
     "random-general-0 tau<=60 u~S(7)": ("random-general-0", 60.0, ("S", 7, 1.0)),
     "random-general-1 tau<=60 u~S(7)": ("random-general-1", 60.0, ("S", 7, 1.0)),
+    # the middle quarter of the strokes (docs/fk-cost.md's curve): u near the reachable set
+    "general-19 tau<=60 u~S(1) x0.25 (target)": ("marionet", 60.0, ("S", 1, 0.25)),
     "T-16 tau<=60 u=IK(P)": ("marionet-t", 60.0, ("IK", REAL_POSE)),
     "T-16 tau<=60 u=IK(P) stable-only (target)": ("marionet-t", 60.0, ("IK", REAL_POSE)),
     "general-19 tau<=60 u=IK(P)": ("marionet", 60.0, ("IK", REAL_POSE)),
