@@ -36,7 +36,7 @@ __all__ = ["CompileTimeout", "CompiledSystem"]
 #: in chunks of boxes (module docstring).  Smaller chunks were slower in the search
 #: (general-19 at 60 N, P1 within 6 cm of the pose, 2048 boxes a batch; CPU a box, the
 #: same boxes): HC4 27-29 us at 2^21 and 2^20, 30-31 at 2^19, 36 at 2^18; partial Newton
-#: 10-11, 11-12, 12-13, 13 (docs/fk-cost.md, its last section)
+#: 10-11, 11-12, 12-13, 13 (docs/fk-cost.md, "The last 10 %")
 CHUNK_ELEMENTS = 1 << 21
 
 #: the mixed Jacobian is evaluated as one stacked program, in chunks, while a chunk holds at

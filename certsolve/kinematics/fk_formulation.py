@@ -160,7 +160,7 @@ class FKFormulation(ABC):
         (:class:`~certsolve.solver.relaxation.HullShare`) averages these over a batch, and
         there sits near its threshold: it turns the hull on and off batch by batch.  With
         these widths for the boxes it pays on, and the share for the others:
-        docs/fk-cost.md, its last section.
+        docs/fk-cost.md, "Real control vectors at 60 N: the cost of a box".
         """
         names = self.system.variables
         edge = np.array([v.startswith("e") for v in names]) & self.bisect_mask()

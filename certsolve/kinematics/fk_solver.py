@@ -36,14 +36,7 @@ from .fk_systems import build_formulation
 from .stability import EnergyHessian, Stability, StabilityVerdict
 from .stable_only import StableOnly
 
-__all__ = [
-    "SEED_RADIUS",
-    "FKPose",
-    "FKResult",
-    "FKSearch",
-    "FKSolver",
-    "with_tau_max",
-]
+__all__ = ["SEED_RADIUS", "FKPose", "FKResult", "FKSearch", "FKSolver", "with_tau_max"]
 
 #: half-width (cm) of the seed boxes around the energy's local minima, in every chosen
 #: point's coordinates (``seed_minima``)
@@ -184,10 +177,10 @@ class FKSolver:
     ``position_newton`` (platform-frame formulations): a parametric interval Newton step
     on the force balance in the reference point, the wire lengths taken from the pose,
     over each box's orientations (:mod:`.fk_position`), before the full Newton step.  Off
-    by default: fewer boxes, and more CPU but on T-16 at 60 N (docs/fk-cost.md, its last
-    section, medians of 3 interleaved): T-16 at 60 N, u = IK(P), 331,313 -> 257,034 boxes,
-    22.4 -> 22.2 CPU s; general-19 at 10 N 128,721 -> 124,533, 11.3 -> 13.5 s; T-16 at
-    10 N 1,694 -> 1,570, 0.71 -> 0.76 s.
+    by default: fewer boxes, and more CPU but on T-16 at 60 N (docs/fk-cost.md, "The
+    position determined by the orientation", medians of 3 interleaved): T-16 at 60 N,
+    u = IK(P), 331,313 -> 257,034 boxes, 22.4 -> 22.2 CPU s; general-19 at 10 N 128,721 ->
+    124,533, 11.3 -> 13.5 s; T-16 at 10 N 1,694 -> 1,570, 0.71 -> 0.76 s.
 
     ``relax``: the polytope hull of the X-Taylor and affine relaxation
     (:class:`.PolytopeHull`, one direction) once a round, after the contraction fixpoint,
@@ -195,8 +188,9 @@ class FKSolver:
     (:meth:`.FKFormulation.hull_widths`: the orientation within ~0.2 of the longest edge,
     where it empties half the boxes or more) and on the wider ones as its learnt share plans
     (``PolytopeHull(always=...)``, :class:`.HullShare`: every box while it halves enough of
-    them, one in 16 otherwise).  By default on for the general-19 system, off
-    for the others (docs/fk-cost.md, its last section; CPU s, medians of 3 interleaved):
+    them, one in 16 otherwise).  By default on for the general-19 system, off for the
+    others (docs/fk-cost.md, "The polytope hull once a round"; CPU s, medians of 3
+    interleaved):
     general-19 at 10 N, u = 0, 128,721 -> 17,535 boxes, 10.1 -> 3.6 s; at 60 N, u drawn
     in the strokes, 156,877 -> 35,511 boxes, 10.5 -> 5.7 s; T-16 at 60 N, u = IK(P),
     331,313 -> 318,751 boxes, 20.1 -> 19.3 s, but more CPU at 10 N (0.67 -> 0.81 s).
