@@ -207,16 +207,16 @@ class FlakyPool(TaskPool):
         self.workers, self.slots = 2, slots
         self.queue, self.count = [], 0
 
-    def submit(self, lo, hi, known, limits):
+    def submit(self, lo, hi, known, limits, hints=None):
         self.count += 1
-        self.queue.append((self.count, lo, hi, known, limits))
+        self.queue.append((self.count, lo, hi, known, limits, hints))
         return self.count
 
     def next_done(self):
-        n, lo, hi, known, limits = self.queue.pop(0)
+        n, lo, hi, known, limits, hints = self.queue.pop(0)
         if n in self.lose:
             return n, None, WorkerLost()
-        return n, run_task(self.step, lo, hi, known, limits), None
+        return n, run_task(self.step, lo, hi, known, limits, hints), None
 
     def lost(self, error):
         return isinstance(error, WorkerLost)

@@ -57,9 +57,10 @@ class DesignVerdict(StrEnum):
 
 class PairQueue:
     """A first-in first-out buffer of rows, with the driver's buffer interface
-    (``push``, ``pop``, ``snapshot``, ``len``; :class:`~certsolve.solver.buffer.BoxStack`
-    is the last-in first-out one).  Rows live in ``[head, tail)`` of two arrays that grow
-    by doubling; the used part moves to the front when the free room is at the front."""
+    (``push``, ``pop``, ``pop_hinted``, ``snapshot``, ``hints``, ``len``;
+    :class:`~certsolve.solver.buffer.BoxStack` is the last-in first-out one).  Rows live in
+    ``[head, tail)`` of two arrays that grow by doubling; the used part moves to the front
+    when the free room is at the front."""
 
     def __init__(self, n: int, capacity: int = 1024):
         self.n = n
@@ -71,7 +72,8 @@ class PairQueue:
     def __len__(self) -> int:
         return self._tail - self._head
 
-    def push(self, lo: np.ndarray, hi: np.ndarray) -> None:
+    def push(self, lo: np.ndarray, hi: np.ndarray, hints: np.ndarray | None = None) -> None:
+        """Queue rows (``hints``: not kept -- no part of the design's step leaves any)."""
         k = lo.shape[0]
         if k == 0:
             return
@@ -97,9 +99,17 @@ class PairQueue:
             self._head = self._tail = 0
         return lo, hi
 
+    def pop_hinted(self, k: int) -> tuple[np.ndarray, np.ndarray, None]:
+        """:meth:`pop`, and no hints."""
+        return (*self.pop(k), None)
+
     def snapshot(self) -> tuple[np.ndarray, np.ndarray]:
         """Copies of the queued rows, oldest first (pushing them rebuilds the queue)."""
         return self._lo[self._head : self._tail].copy(), self._hi[self._head : self._tail].copy()
+
+    def hints(self) -> None:
+        """No hints are kept."""
+        return None
 
 
 _COLUMNS = ("lo", "hi", "open", "bad", "done", "margin")

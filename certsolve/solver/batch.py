@@ -15,7 +15,10 @@ through its contractor, a composition of parts (:mod:`.pipeline`).  The record h
 * what a part may do besides contracting: prove a solution (:meth:`prove`), send a box
   back to the buffer for another round (:meth:`send_back`, :meth:`push_back`), and the
   search's learnt states (``acid``, see :class:`.shaving.AdaptiveCount`; ``hull``, see
-  :class:`.relaxation.HullShare`).
+  :class:`.relaxation.HullShare`);
+* each box's *hints* (``hints``, :mod:`.buffer`): what a part left for the box's next
+  contraction (the polytope hull's LP active sets).  They travel with the box: a box sent
+  back keeps its row, the halves of a bisection inherit it.
 
 **Order.** What a part sends back waits on the batch and reaches the buffer when the round
 ends (:meth:`flush`), *after* the halves of the round's bisections: the buffer pops its last
@@ -45,6 +48,7 @@ import numpy as np
 
 from ..interval.core import splittable_width
 from ..interval.reductions import all_last
+from .buffer import no_hints, stacked_hints
 
 if TYPE_CHECKING:
     from ..expr.compiled import CompiledSystem
@@ -140,7 +144,11 @@ class Batch:
     _jac: tuple[np.ndarray, np.ndarray] | None = field(default=None, init=False, repr=False)
     _jac_at: np.ndarray | None = field(default=None, init=False, repr=False)  # rows of _jac
     _var: np.ndarray | None = field(default=None, init=False, repr=False)
-    _back: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list, init=False)
+    #: each row's hints (:mod:`.buffer`), or ``None``: no part has left any
+    hints: np.ndarray | None = None
+    _back: list[tuple[np.ndarray, np.ndarray, np.ndarray | None]] = field(
+        default_factory=list, init=False
+    )
 
     def __post_init__(self) -> None:
         self.empty = np.zeros(self.lo.shape[0], dtype=bool)
@@ -163,6 +171,8 @@ class Batch:
             self.regular = self.regular[rows]
         if self._var is not None:
             self._var = self._var[rows]
+        if self.hints is not None:
+            self.hints = self.hints[rows]
 
     def drop_empty(self) -> None:
         """Take the rows proven empty out of the round."""
@@ -174,30 +184,44 @@ class Batch:
         (at :meth:`flush`) and take them out of this one."""
         if not np.any(rows):
             return
-        self.push_back(self.lo[rows], self.hi[rows])
+        hints = None if self.hints is None else self.hints[rows]
+        self.push_back(self.lo[rows], self.hi[rows], hints)
         self.keep(~rows)
 
-    def push_back(self, lo: np.ndarray, hi: np.ndarray) -> None:
-        """Boxes ``(k, n)`` for the buffer, pushed at :meth:`flush` (module docstring)."""
+    def push_back(self, lo: np.ndarray, hi: np.ndarray, hints: np.ndarray | None = None) -> None:
+        """Boxes ``(k, n)`` (and their hints) for the buffer, pushed at :meth:`flush`
+        (module docstring)."""
         if self.stack is None:
             raise RuntimeError("this batch has no buffer to send boxes back to")
         if lo.shape[0]:
-            self._back.append((lo, hi))
+            self._back.append((lo, hi, hints))
 
     @property
     def backlog(self) -> int:
         """Boxes sent back in this round, not yet on the buffer."""
-        return sum(a.shape[0] for a, _ in self._back)
+        return sum(a.shape[0] for a, _, _ in self._back)
 
     def flush(self) -> None:
         """Push what the parts sent back onto the buffer (call once, when the round ends:
         after the halves of its bisections, so these boxes come next)."""
         if self._back:
             assert self.stack is not None
-            lo = np.concatenate([a for a, _ in self._back])
-            hi = np.concatenate([b for _, b in self._back])
+            lo = np.concatenate([a for a, _, _ in self._back])
+            hi = np.concatenate([b for _, b, _ in self._back])
+            hints = stacked_hints([(a.shape[0], h) for a, _, h in self._back])
             self._back = []
-            self.stack.push(lo, hi)
+            self.stack.push(lo, hi, hints)
+
+    def set_hints(self, rows: np.ndarray, hints: np.ndarray) -> None:
+        """Write ``hints`` ``(k, width)`` into ``rows`` (indices or a mask); the other rows
+        keep theirs (``-1`` rows if the batch had none, or of another width)."""
+        if self.hints is None or self.hints.shape[1] != hints.shape[1]:
+            self.hints = no_hints(self.size, hints.shape[1])
+        self.hints[rows] = hints
+
+    def row_hints(self, rows: np.ndarray) -> np.ndarray | None:
+        """The hints of ``rows`` (indices or a mask), or ``None`` if the batch has none."""
+        return None if self.hints is None else self.hints[rows]
 
     def gain(self, lo0: np.ndarray, hi0: np.ndarray) -> np.ndarray:
         """:func:`progress_gain` of every row from ``lo0, hi0`` (same rows) to its box now."""

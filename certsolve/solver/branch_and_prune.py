@@ -61,7 +61,7 @@ from ..lazy import surely_valid
 from .batch import Batch, Contractor, progress_gain
 from .batching import BatchSizer
 from .bisectors import SmearCurvatureMix, domain_scale, split
-from .buffer import BoxStack
+from .buffer import BoxStack, no_hints
 from .certify import Certifier, SolutionSet
 from .checkpoint import Checkpoint
 from .executors import resolve_executor
@@ -491,12 +491,21 @@ class Solver:
         return new, end
 
     def process(
-        self, lo: np.ndarray, hi: np.ndarray, state: SearchState, *, deadline: float | None = None
+        self,
+        lo: np.ndarray,
+        hi: np.ndarray,
+        state: SearchState,
+        *,
+        deadline: float | None = None,
+        hints: np.ndarray | None = None,
     ) -> None:
         """One round on the boxes ``lo, hi``: prune by known solutions, contract (the
         pipeline), then report the boxes narrower than ``eps`` and bisect the others.
-        ``deadline``: the parts may stop contracting past it (:attr:`.Batch.deadline`)."""
+        ``deadline``: the parts may stop contracting past it (:attr:`.Batch.deadline`).
+        ``hints``: the boxes' hints from the buffer (:mod:`.buffer`), if any."""
         keep, plo, phi = state.solutions.prune(lo, hi)
+        if hints is not None:  # the pieces of a pruned box start without
+            hints = np.concatenate([hints[keep], no_hints(plo.shape[0], hints.shape[1])])
 
         def prove(elo, ehi, ulo, uhi) -> None:
             self._record(state, elo, ehi, ulo, uhi, tight=False)
@@ -514,6 +523,7 @@ class Solver:
             acid=state.acid,
             hull=state.hull,
             deadline=deadline,
+            hints=hints,
         )
         self.contractor.apply(batch)
         batch.drop_empty()
@@ -533,8 +543,13 @@ class Solver:
             lo3, hi3 = batch.lo[big], batch.hi[big]
             (alo, ahi), (blo, bhi) = split(lo3, hi3, var[big], self.bisector.ratio)
             state.stats.bisections += lo3.shape[0]
+            hints = batch.row_hints(big)  # each half starts from its parent's
             # the lower halves on top: the next round dives into them (IBEX's order)
-            state.stack.push(np.concatenate([blo, alo]), np.concatenate([bhi, ahi]))
+            state.stack.push(
+                np.concatenate([blo, alo]),
+                np.concatenate([bhi, ahi]),
+                None if hints is None else np.concatenate([hints, hints]),
+            )
 
     def _choose(self, lo, hi, jlo, jhi) -> np.ndarray:
         """The bisector's variable for each box (``jlo, jhi``: its Jacobian enclosure)."""

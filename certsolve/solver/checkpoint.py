@@ -5,9 +5,10 @@ driver's guarantee (:mod:`.search`) is that the two together cover the initial b
 one snapshot serves every step kind (solver, forward kinematics, workspace paving ...):
 
 * **snapshot**: the pending boxes (the buffer, plus the slices handed out to workers and
-  not back yet) as two ``(P, n)`` arrays; the step's records ``step.found(state)`` (the
-  protocol the executors already use to bring a task's findings home; for the driver's own
-  state, started with nothing known, it is *everything* recorded); the driver's counters;
+  not back yet) as two ``(P, n)`` arrays, and their hints (:mod:`.buffer`) if any; the
+  step's records ``step.found(state)`` (the protocol the executors already use to bring a
+  task's findings home; for the driver's own state, started with nothing known, it is
+  *everything* recorded); the driver's counters;
   and a **fingerprint** of the problem;
 * **restore**: ``state = step.start()``, ``step.merge(state, found)``, push the pending
   boxes.  A serial search then goes on exactly as if it had not stopped: the buffer is in
@@ -322,6 +323,7 @@ class Checkpoint:
             "found": search.step.found(search.state),
             "lo": lo,
             "hi": hi,
+            "hints": search.pending_hints(),
             "stats": search.counters().to_dict(),
         }
         return pack(self.fingerprint, type(search.step).__qualname__, records)
@@ -331,7 +333,7 @@ class Checkpoint:
         records = unpack(data, self.fingerprint)
         state = step.start()
         step.merge(state, records["found"])
-        state.stack.push(records["lo"], records["hi"])
+        state.stack.push(records["lo"], records["hi"], records.get("hints"))
         names = {f.name for f in dataclasses.fields(SearchStats)}
         stats = SearchStats(**{k: v for k, v in records["stats"].items() if k in names})
         self.resumed_from = stats.boxes

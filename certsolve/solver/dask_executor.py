@@ -76,10 +76,10 @@ class _DaskPool(TaskPool):
         self.slots = max(1, sum(nthreads.values()) + len(nthreads))
         self.workers = max(self.workers, len(nthreads))
 
-    def submit(self, lo, hi, known, limits):
+    def submit(self, lo, hi, known, limits, hints=None):
         if self._step.status != "finished":  # lost with its workers: scatter it again
             self._step = self.client.scatter(self._step_obj, broadcast=True, hash=False)
-        fut = self.client.submit(run_task, self._step, lo, hi, known, limits, pure=False)
+        fut = self.client.submit(run_task, self._step, lo, hi, known, limits, hints, pure=False)
         self._as_completed.add(fut)
         return fut
 

@@ -98,11 +98,11 @@ def _ready() -> None:
     on (the initializer does the work)."""
 
 
-def _run(lo, hi, known, limits: Limits) -> TaskResult:
+def _run(lo, hi, known, limits: Limits, hints=None) -> TaskResult:
     """A task in a worker process, on the step its initializer unpickled."""
     if _STEP is None:
         raise RuntimeError("a worker task ran before its process was initialised")
-    return run_task(_STEP, lo, hi, known, limits)
+    return run_task(_STEP, lo, hi, known, limits, hints)
 
 
 class _ProcessPool(TaskPool):
@@ -138,18 +138,18 @@ class _ProcessPool(TaskPool):
         for _ in range(self.workers):
             self._pool.submit(_ready)
 
-    def submit(self, lo, hi, known, limits):
+    def submit(self, lo, hi, known, limits, hints=None):
         from concurrent.futures.process import BrokenProcessPool
 
         if self._pool is None:
             self._start()
         try:
-            fut = self._pool.submit(_run, lo, hi, known, limits)
+            fut = self._pool.submit(_run, lo, hi, known, limits, hints)
         except BrokenProcessPool:  # a worker died while no task was running
             self._restart()
             if self._restarts > self._max_restarts:
                 raise
-            fut = self._pool.submit(_run, lo, hi, known, limits)
+            fut = self._pool.submit(_run, lo, hi, known, limits, hints)
         self._running[fut] = self._generation
         return fut
 

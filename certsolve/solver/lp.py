@@ -47,7 +47,7 @@ import numpy as np
 
 from ..interval.reductions import all_last, any_last, count_last, max_last
 
-__all__ = ["LPBatch", "StallRule", "dual_active_set"]
+__all__ = ["LPBatch", "StallRule", "dual_active_set", "warm_start"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -76,6 +76,9 @@ class LPBatch:
     y: np.ndarray  # (L, M) multipliers >= 0: approximately optimal, or a Farkas ray
     infeasible: np.ndarray  # (L,) y is a Farkas certificate (the objective is not used)
     iterations: int  # iterations of the longest-running program
+    #: (L, n) each program's last active set: where a program on nearby data starts
+    #: (:func:`warm_start`)
+    active: np.ndarray
 
 
 def dual_active_set(
@@ -165,6 +168,62 @@ def dual_active_set(
             _pivot(lanes, out, t, delta, Gf, bf, gap, pair, proven)
     out.finish(lanes, lanes.running)
     return out.result(iterations)
+
+
+def warm_start(
+    G: np.ndarray,
+    c: np.ndarray,
+    W: np.ndarray,
+    pair: np.ndarray | None = None,
+    tol: float = 1e-9,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Starts for :func:`dual_active_set` from earlier active sets ``W`` ``(L, n)`` (a
+    program's on nearby data, e.g. the parent box's; ``-1``: none).
+
+    Each ``W_l`` is kept where it is a basis of program ``l``'s constraints (``n``
+    distinct indices, ``N_W`` invertible) and dual feasible for its objective: the
+    multipliers ``λ = -N_W^{-T} c`` are ``>= -tol·max|λ|`` (those slightly below zero are
+    set to zero: the method only needs them approximately, as every multiplier it returns
+    is made rigorous by the caller).  Returns the ``(L,)`` mask of the programs so started,
+    and for those rows ``λ`` ``(L, n)`` and ``N_W^{-1}`` ``(L, n, n)`` (other rows: zeros).
+    """
+    L, n = c.shape
+    S, M, _ = G.shape
+    lam = np.zeros((L, n))
+    inv = np.zeros((L, n, n))
+    ok = all_last((W >= 0) & (W < M))
+    if n > 1:
+        ok &= all_last(np.diff(np.sort(W, axis=1), axis=1) != 0)
+    idx = np.flatnonzero(ok)
+    if idx.size == 0:
+        return ok, W, lam, inv
+    N = G[(idx // (L // S))[:, None], W[idx]]
+    with np.errstate(all="ignore"):
+        try:
+            Ni = np.linalg.inv(N)
+        except np.linalg.LinAlgError:  # an exactly singular one among them: leave those out
+            det = np.linalg.det(N)
+            regular = np.isfinite(det) & (det != 0.0)
+            Ni = np.full_like(N, np.nan)
+            Ni[regular] = np.linalg.inv(N[regular])
+        # λ_k = -Σ_i (N^{-1})_{ik} c_i
+        lw = -np.einsum("lik,li->lk", Ni, c[idx])
+        if pair is not None:
+            # a constraint with a negative multiplier swaps for its opposite (g -> -g):
+            # its multiplier and its column of N^{-1} change sign, c + Σ λ g = 0 holds
+            Wi = W[idx]
+            flip = (lw < 0.0) & (pair[Wi] >= 0)
+            W = W.copy()
+            W[idx] = np.where(flip, pair[Wi], Wi)
+            sgn = np.where(flip, -1.0, 1.0)
+            lw *= sgn
+            Ni *= sgn[:, None, :]
+        good = all_last(np.isfinite(lw)) & np.all(np.isfinite(Ni), axis=(1, 2))
+        good &= all_last(lw >= -tol * (1.0 + max_last(np.abs(lw)))[:, None])
+    ok[idx] = good
+    lam[idx[good]] = np.maximum(lw[good], 0.0)
+    inv[idx[good]] = Ni[good]
+    return ok, W, lam, inv
 
 
 @dataclass(kw_only=True)
@@ -329,7 +388,10 @@ class _Results:
         y = self.y
         np.add.at(y, (feasible[:, None], self.W[feasible]), np.maximum(self.lam[feasible], 0.0))
         return LPBatch(
-            y=np.where(np.isfinite(y), y, 0.0), infeasible=self.infeasible, iterations=iterations
+            y=np.where(np.isfinite(y), y, 0.0),
+            infeasible=self.infeasible,
+            iterations=iterations,
+            active=self.W,
         )
 
 

@@ -167,8 +167,9 @@ class Inflate:
             ihi = np.minimum(hi[r], Uhi[k])
             if not np.all(ilo < ihi):
                 continue
+            hint = batch.row_hints(slice(r, r + 1))  # the pieces start from the box's
             for plo, phi in box_difference(lo[r], hi[r], Ulo[k], Uhi[k]):
-                batch.push_back(plo[None], phi[None])
+                batch.push_back(plo[None], phi[None], hint)
             done[r] = True
         if np.any(done):
             batch.keep(~done)

@@ -103,6 +103,10 @@ class RunningSearch(Protocol):
         """Copies of the pending boxes (the buffer and the slices handed out)."""
         ...
 
+    def pending_hints(self) -> np.ndarray | None:
+        """Their hints (:mod:`.buffer`), in the same order, or ``None``."""
+        ...
+
     def counters(self) -> SearchStats:
         """The counters as they are now."""
         ...

@@ -41,6 +41,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from .batching import BatchSizer
+from .buffer import stacked_hints
 from .protocol import Saver, SearchStats, Step, Tally
 
 __all__ = [
@@ -181,7 +182,8 @@ class Search:
         self.reason: SearchStatus | None = None  # why the search stopped, once it has
         self.in_flight = 0  # boxes handed out to tasks and not back yet
         self.checkpoint = checkpoint
-        self._out: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # slices handed out, by id
+        #: slices handed out, by id: their boxes and hints
+        self._out: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray | None]] = {}
         self._base = step.tally(state).solutions if count_new else 0
         self._boxes0 = self.stats.boxes
         self._t0 = time.perf_counter()
@@ -232,13 +234,14 @@ class Search:
         sizer = self.sizer
         left = self.remaining_time()
         deadline = None if left is None else time.monotonic() + left
-        if sizer is None:
-            lo, hi = self.state.stack.pop(self.step.batch_size)
-            self.step.process(lo, hi, self.state, deadline=deadline)
-        else:
-            lo, hi = self.state.stack.pop(sizer.next(left))
-            t0 = time.perf_counter()
-            self.step.process(lo, hi, self.state, deadline=deadline)
+        k = self.step.batch_size if sizer is None else sizer.next(left)
+        lo, hi, hints = self.state.stack.pop_hinted(k)
+        # hints come only from the step's own contractors (the buffer's docstring): a step
+        # that never leaves any is never passed them
+        more = {} if hints is None else {"hints": hints}
+        t0 = time.perf_counter()
+        self.step.process(lo, hi, self.state, deadline=deadline, **more)
+        if sizer is not None:
             sizer.record(lo.shape[0], time.perf_counter() - t0, self.remaining_time())
         self.stats.boxes += lo.shape[0]
         self.stats.batches += 1
@@ -260,18 +263,19 @@ class Search:
                 self.batch()
 
     # -- work on tasks -----------------------------------------------------------------------
-    def take(self, k: int) -> tuple[np.ndarray, np.ndarray]:
-        """Hand out up to ``k`` boxes from the buffer; they stay counted as pending."""
-        lo, hi = self.state.stack.pop(k)
+    def take(self, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """Hand out up to ``k`` boxes from the buffer, with their hints (``None``: none);
+        they stay counted as pending."""
+        lo, hi, hints = self.state.stack.pop_hinted(k)
         self.in_flight += lo.shape[0]
-        self._out[id(lo)] = (lo, hi)
-        return lo, hi
+        self._out[id(lo)] = (lo, hi, hints)
+        return lo, hi, hints
 
-    def give_back(self, lo: np.ndarray, hi: np.ndarray) -> None:
+    def give_back(self, lo: np.ndarray, hi: np.ndarray, hints: np.ndarray | None = None) -> None:
         """Boxes of a task that will not return (lost worker, cancelled): pending again."""
         self.in_flight -= lo.shape[0]
         self._out.pop(id(lo), None)
-        self.state.stack.push(lo, hi)
+        self.state.stack.push(lo, hi, hints)
 
     def absorb(self, lo: np.ndarray, result: TaskResult) -> None:
         """A task's result for the slice ``lo`` (as :meth:`take` handed it out): its
@@ -279,7 +283,7 @@ class Search:
         self.in_flight -= lo.shape[0]
         self._out.pop(id(lo), None)
         self.step.merge(self.state, result.found)
-        self.state.stack.push(result.lo, result.hi)
+        self.state.stack.push(result.lo, result.hi, result.hints)
         self.stats.boxes += result.boxes
         self.stats.batches += result.batches
         self.stats.tasks += 1
@@ -292,9 +296,16 @@ class Search:
         """Copies of the pending boxes: the buffer, then the slices handed out to tasks."""
         lo, hi = self.state.stack.snapshot()
         if self._out:
-            lo = np.concatenate([lo, *(a for a, _ in self._out.values())])
-            hi = np.concatenate([hi, *(b for _, b in self._out.values())])
+            lo = np.concatenate([lo, *(a for a, _, _ in self._out.values())])
+            hi = np.concatenate([hi, *(b for _, b, _ in self._out.values())])
         return lo, hi
+
+    def pending_hints(self) -> np.ndarray | None:
+        """The hints of :meth:`pending_boxes`, in their order (``None``: none)."""
+        stack = self.state.stack
+        parts = [(len(stack), stack.hints())]
+        parts += [(a.shape[0], h) for a, _, h in self._out.values()]
+        return stacked_hints(parts)
 
     def counters(self) -> SearchStats:
         """A copy of the counters as they are now (time and CPU included)."""
@@ -444,17 +455,25 @@ class TaskResult:
     batches: int
     cpu: float  # thread CPU seconds of the task
     wall: float
+    hints: np.ndarray | None = None  # the unfinished boxes' hints (:mod:`.buffer`)
 
 
-def run_task(step: Step, lo: np.ndarray, hi: np.ndarray, known: Any, limits: Limits) -> TaskResult:
+def run_task(
+    step: Step,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    known: Any,
+    limits: Limits,
+    hints: np.ndarray | None = None,
+) -> TaskResult:
     """The worker side of every executor: the batch loop on a slice of the buffer.
 
     A function of its inputs only: ``step`` (scattered once per search with Dask),
-    the boxes, what is known and the task's limits.
+    the boxes and their hints, what is known and the task's limits.
     """
     t0, c0 = time.perf_counter(), time.thread_time()
     state = step.start(known)
-    state.stack.push(lo, hi)
+    state.stack.push(lo, hi, hints)
     search = Search(step, state, limits, count_new=True)
     search.run_serial()
     rlo, rhi = state.stack.snapshot()
@@ -462,6 +481,7 @@ def run_task(step: Step, lo: np.ndarray, hi: np.ndarray, known: Any, limits: Lim
         found=step.found(state),
         lo=rlo,
         hi=rhi,
+        hints=state.stack.hints(),
         boxes=search.stats.boxes,
         batches=search.stats.batches,
         cpu=time.thread_time() - c0,

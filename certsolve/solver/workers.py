@@ -28,8 +28,10 @@ class TaskPool(ABC):
     slots: int  # tasks kept in flight
 
     @abstractmethod
-    def submit(self, lo: np.ndarray, hi: np.ndarray, known: Any, limits: Limits) -> Any:
-        """Start a task; returns a handle."""
+    def submit(
+        self, lo: np.ndarray, hi: np.ndarray, known: Any, limits: Limits, hints: Any = None
+    ) -> Any:
+        """Start a task (:func:`~.search.run_task`'s arguments); returns a handle."""
 
     @abstractmethod
     def next_done(self) -> tuple[Any, TaskResult | None, BaseException | None]:
@@ -116,8 +118,9 @@ class TaskExecutor(ABC):
         step, state = search.step, search.state
         batch = step.batch_size
         most = 2 * batch if self.slice_size is None else self.slice_size
-        running: dict[Any, tuple[np.ndarray, np.ndarray, int]] = {}
-        retry: deque[tuple[np.ndarray, np.ndarray, int]] = deque()  # slices of lost tasks
+        # a slice: the boxes, their hints, and the attempt
+        running: dict[Any, tuple[np.ndarray, np.ndarray, Any, int]] = {}
+        retry: deque[tuple[np.ndarray, np.ndarray, Any, int]] = deque()  # lost tasks' slices
         while True:
             if not search.stopped():
                 known = None
@@ -125,19 +128,19 @@ class TaskExecutor(ABC):
                     if known is None:
                         known = step.known(state)
                     if retry:
-                        lo, hi, attempt = retry.popleft()
+                        lo, hi, hints, attempt = retry.popleft()
                     else:
                         # an even share, but a full batch if there is one: a small batch
                         # costs nearly what a full one does (numpy calls per batch)
                         share = math.ceil(len(state.stack) / (pool.slots - len(running)))
-                        lo, hi = search.take(min(most, max(share, batch)))
+                        lo, hi, hints = search.take(min(most, max(share, batch)))
                         attempt = 1
                     limits = search.task_limits(pool.slots, self.task_seconds, self.task_max_boxes)
-                    running[pool.submit(lo, hi, known, limits)] = (lo, hi, attempt)
+                    running[pool.submit(lo, hi, known, limits, hints)] = (lo, hi, hints, attempt)
             if not running:
                 break
             handle, result, error = pool.next_done()
-            lo, hi, attempt = running.pop(handle)
+            lo, hi, hints, attempt = running.pop(handle)
             if error is not None:
                 if not pool.lost(error):
                     raise error
@@ -146,7 +149,7 @@ class TaskExecutor(ABC):
                         f"a task failed {attempt} times (its worker was lost each time)"
                     ) from error
                 search.stats.resubmitted += 1
-                retry.append((lo, hi, attempt + 1))
+                retry.append((lo, hi, hints, attempt + 1))
                 continue
             assert result is not None  # a task ends with a result or an error
             search.absorb(lo, result)
@@ -154,8 +157,8 @@ class TaskExecutor(ABC):
             pool.refresh()
             if search.stopped() and search.reason in _PROMPT and running:
                 pool.cancel(list(running))
-                for lo, hi, _ in running.values():
-                    search.give_back(lo, hi)
+                for lo, hi, hints, _ in running.values():
+                    search.give_back(lo, hi, hints)
                 running.clear()
-        for lo, hi, _ in retry:  # stopped before they were handed out again
-            search.give_back(lo, hi)
+        for lo, hi, hints, _ in retry:  # stopped before they were handed out again
+            search.give_back(lo, hi, hints)
