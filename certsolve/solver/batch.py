@@ -219,7 +219,7 @@ class Batch:
             self.hints = no_hints(self.size, hints.shape[1])
         self.hints[rows] = hints
 
-    def row_hints(self, rows: np.ndarray) -> np.ndarray | None:
+    def row_hints(self, rows: np.ndarray | slice) -> np.ndarray | None:
         """The hints of ``rows`` (indices or a mask), or ``None`` if the batch has none."""
         return None if self.hints is None else self.hints[rows]
 
