@@ -184,8 +184,11 @@ def warm_start(
     distinct indices, ``N_W`` invertible) and dual feasible for its objective: the
     multipliers ``λ = -N_W^{-T} c`` are ``>= -tol·max|λ|`` (those slightly below zero are
     set to zero: the method only needs them approximately, as every multiplier it returns
-    is made rigorous by the caller).  Returns the ``(L,)`` mask of the programs so started,
-    and for those rows ``λ`` ``(L, n)`` and ``N_W^{-1}`` ``(L, n, n)`` (other rows: zeros).
+    is made rigorous by the caller).  With ``pair`` (as :func:`dual_active_set`'s), a
+    constraint whose multiplier is negative is first swapped for its opposite, so a basis
+    of paired constraints is always dual feasible.  Returns the ``(L,)`` mask of the
+    programs so started and, for those rows, their active sets (swapped), ``λ`` ``(L, n)``
+    and ``N_W^{-1}`` ``(L, n, n)`` (the other rows: ``W`` as given, zeros).
     """
     L, n = c.shape
     S, M, _ = G.shape

@@ -461,8 +461,9 @@ class PolytopeHull:
         lo[idx] = np.where(emp[:, None], lo[idx], nlo)
         hi[idx] = np.where(emp[:, None], hi[idx], nhi)
         empty[idx] = emp
-        active = np.where(lp.infeasible[:, None], -1, lp.active)
-        new_hints[idx] = active.reshape(S, K * n)
+        if n <= WARM_MAX_VARIABLES:  # (the hints' int16 holds the indices of 8n rows)
+            active = np.where(lp.infeasible[:, None], -1, lp.active)
+            new_hints[idx] = active.reshape(S, K * n)
         return lo, hi, empty, new_hints
 
     def hull_learner(self) -> HullShare | None:
