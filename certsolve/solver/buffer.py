@@ -7,9 +7,11 @@ children of the most recent bisections are processed next, which keeps the buffe
 left for the box's next contraction: the polytope hull's optimal LP active sets
 (:mod:`.relaxation`), which the halves of a bisected box inherit and start from.  A hint
 only changes where a contractor's work starts, never what it proves, so a box may lose its
-hint anywhere (a checkpoint, the pieces of a pruned box: ``-1`` rows, "no hint").  The
-hints' width is set by the first push that brings some; a push of another width is taken
-without them.
+hint wherever keeping it would cost more than it saves (the pieces of a box minus a unicity
+box, a buffer that keeps none such as the certified design's queue: ``-1`` rows, "no
+hint"); the search driver carries them to worker tasks and back, and into checkpoints.
+The hints' width is set by the first push that brings some; a push of another width is
+taken without them.
 """
 
 from __future__ import annotations

@@ -186,21 +186,18 @@ def warm_start(
     set to zero: the method only needs them approximately, as every multiplier it returns
     is made rigorous by the caller).  With ``pair`` (as :func:`dual_active_set`'s), a
     constraint whose multiplier is negative is first swapped for its opposite, so a basis
-    of paired constraints is always dual feasible.  Returns the ``(L,)`` mask of the
-    programs so started and, for those rows, their active sets (swapped), ``λ`` ``(L, n)``
-    and ``N_W^{-1}`` ``(L, n, n)`` (the other rows: ``W`` as given, zeros).
+    of paired constraints is always dual feasible.  Returns the programs so started (their
+    indices) and, for each, its active set (swapped), ``λ`` ``(n,)`` and ``N_W^{-1}``
+    ``(n, n)``: the caller writes them over its own starts.
     """
     L, n = c.shape
     S, M, _ = G.shape
-    lam = np.zeros((L, n))
-    inv = np.zeros((L, n, n))
     ok = all_last((W >= 0) & (W < M))
     if n > 1:
         ok &= all_last(np.diff(np.sort(W, axis=1), axis=1) != 0)
     idx = np.flatnonzero(ok)
-    if idx.size == 0:
-        return ok, W, lam, inv
-    N = G[(idx // (L // S))[:, None], W[idx]]
+    W = W[idx]
+    N = G[(idx // (L // S))[:, None], W]
     with np.errstate(all="ignore"):
         try:
             Ni = np.linalg.inv(N)
@@ -210,23 +207,18 @@ def warm_start(
             Ni = np.full_like(N, np.nan)
             Ni[regular] = np.linalg.inv(N[regular])
         # λ_k = -Σ_i (N^{-1})_{ik} c_i
-        lw = -np.einsum("lik,li->lk", Ni, c[idx])
+        lam = -np.einsum("lik,li->lk", Ni, c[idx])
         if pair is not None:
             # a constraint with a negative multiplier swaps for its opposite (g -> -g):
             # its multiplier and its column of N^{-1} change sign, c + Σ λ g = 0 holds
-            Wi = W[idx]
-            flip = (lw < 0.0) & (pair[Wi] >= 0)
-            W = W.copy()
-            W[idx] = np.where(flip, pair[Wi], Wi)
+            flip = (lam < 0.0) & (pair[W] >= 0)
+            W = np.where(flip, pair[W], W)
             sgn = np.where(flip, -1.0, 1.0)
-            lw *= sgn
+            lam *= sgn
             Ni *= sgn[:, None, :]
-        good = all_last(np.isfinite(lw)) & np.all(np.isfinite(Ni), axis=(1, 2))
-        good &= all_last(lw >= -tol * (1.0 + max_last(np.abs(lw)))[:, None])
-    ok[idx] = good
-    lam[idx[good]] = np.maximum(lw[good], 0.0)
-    inv[idx[good]] = Ni[good]
-    return ok, W, lam, inv
+        good = all_last(np.isfinite(lam)) & np.all(np.isfinite(Ni), axis=(1, 2))
+        good &= all_last(lam >= -tol * (1.0 + max_last(np.abs(lam)))[:, None])
+    return idx[good], W[good], np.maximum(lam[good], 0.0), Ni[good]
 
 
 @dataclass(kw_only=True)

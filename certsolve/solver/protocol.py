@@ -36,7 +36,8 @@ class Tally:
 
 class Step(Protocol):
     """What the driver needs from a search.  The step's *state* must have a ``stack``
-    (:class:`~.buffer.BoxStack`); the rest of it is the step's business.
+    (:class:`~.buffer.BoxStack`: ``push``, ``pop_hinted``, ``snapshot``, ``hints``, ``len``);
+    the rest of it is the step's business.
 
     Executors with workers also use :meth:`known`, :meth:`found` and :meth:`merge`, and
     the step and its state must pickle.
@@ -59,7 +60,11 @@ class Step(Protocol):
         ``deadline``: a :func:`time.monotonic` value (the search's time limit) past which
         the step may cut its work on the batch short, pushing the boxes as far as it got
         (sound: contracting less keeps every solution), so that one long round does not
-        outlast the limit by much."""
+        outlast the limit by much.
+
+        ``hints`` (keyword, only when the buffer holds some): the boxes' hints
+        (:mod:`.buffer`).  A buffer holds hints only if the step's own parts left some, so
+        a step that leaves none need not accept the keyword."""
 
     def tally(self, state: Any) -> Tally: ...
 

@@ -427,10 +427,11 @@ class PolytopeHull:
         if hints is not None:
             # each program starts from its hint's active set where that is a basis
             Wh = hints[idx].reshape(L, n).astype(np.intp)
-            warm, Wh, lam_w, inv_w = warm_start(GA, c, Wh, pair)
-            W0 = np.where(warm[:, None], Wh, W0)
-            lam0 = np.where(warm[:, None], lam_w, lam0)
-            N0inv = np.where(warm[:, None, None], inv_w, N0inv)
+            warm, W_w, lam_w, inv_w = warm_start(GA, c, Wh, pair)
+            # in C order: the lanes' matrix products keep this layout, and their last bits
+            # depend on it
+            N0inv = np.ascontiguousarray(N0inv)
+            W0[warm], lam0[warm], N0inv[warm] = W_w, lam_w, inv_w
         with np.errstate(all="ignore"):
             # a program whose objective passes the far side of the box (min d_j > w_j or
             # max d_j < 0) makes the box empty: the box's other programs stop
