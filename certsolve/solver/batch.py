@@ -66,18 +66,24 @@ Choose = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 Prove = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], None]
 
 
-def log_volume_ratio(lo0, hi0, lo1, hi1) -> np.ndarray:
-    """``Σ_i log(w1_i / w0_i)`` per box (0 for degenerate components): < 0 means it shrank."""
+def log_volume_ratio(lo0, hi0, lo1, hi1, significant: float = 1.0) -> np.ndarray:
+    """``Σ_i log(w1_i / w0_i)`` per box (0 for degenerate components): < 0 means it shrank.
+    Only the components that shrank to ``significant`` of their width or less count."""
     with np.errstate(all="ignore"):  # unbounded boxes: infinite widths are fine here
         w0 = hi0 - lo0
         w1 = np.maximum(hi1 - lo1, 0.0)
         r = np.where(w0 > 0.0, w1 / w0, 1.0)
+        if significant < 1.0:
+            r = np.where(r <= significant, r, 1.0)
         return np.sum(np.log(np.maximum(r, 1e-300)), axis=1)
 
 
-def progress_gain(lo0, hi0, lo1, hi1, eps: float, mask: np.ndarray | None) -> np.ndarray:
+def progress_gain(
+    lo0, hi0, lo1, hi1, eps: float, mask: np.ndarray | None, significant: float = 1.0
+) -> np.ndarray:
     """Log-volume change from ``lo0, hi0`` to ``lo1, hi1`` over the variables a bisection
-    may still split: those of ``mask`` (None: all), wider than ``eps`` in ``lo0, hi0``.
+    may still split: those of ``mask`` (None: all), wider than ``eps`` in ``lo0, hi0``;
+    of them, only those that shrank to ``significant`` of their width or less.
 
     A variable narrower than ``eps`` is never split, so its shrinking is no progress
     towards a decision: counted, a component converging to an exact zero (``[-1e-200,
@@ -88,7 +94,7 @@ def progress_gain(lo0, hi0, lo1, hi1, eps: float, mask: np.ndarray | None) -> np
     if mask is not None:
         count &= mask
     lo0, hi0 = np.where(count, lo0, 0.0), np.where(count, hi0, 0.0)
-    return log_volume_ratio(lo0, hi0, lo1, hi1)
+    return log_volume_ratio(lo0, hi0, lo1, hi1, significant)
 
 
 class Contractor(Protocol):
@@ -223,9 +229,9 @@ class Batch:
         """The hints of ``rows`` (indices or a mask), or ``None`` if the batch has none."""
         return None if self.hints is None else self.hints[rows]
 
-    def gain(self, lo0: np.ndarray, hi0: np.ndarray) -> np.ndarray:
+    def gain(self, lo0: np.ndarray, hi0: np.ndarray, significant: float = 1.0) -> np.ndarray:
         """:func:`progress_gain` of every row from ``lo0, hi0`` (same rows) to its box now."""
-        return progress_gain(lo0, hi0, self.lo, self.hi, self.eps, self.mask)
+        return progress_gain(lo0, hi0, self.lo, self.hi, self.eps, self.mask, significant)
 
     def share_jacobian(self, jlo: np.ndarray, jhi: np.ndarray) -> None:
         """Make ``jlo, jhi`` ``(k, n, n)``, enclosures of the Jacobian over each row's box
