@@ -86,7 +86,7 @@ HULL_SHARE = HullShare(ratio=0.5, window=32)
 #: a little at every round looked like progress: on ExtendedFreud-0100 it narrowed the same
 #: 3 of the 100 variables to 0.74 of their width round after round (together a halving of
 #: the volume) and one box went round 903 times, where the search now takes 21 boxes;
-#: BroydenBanded-020 64 -> 31 boxes (``docs/solver.md``, *What counts as progress in the
+#: BroydenBanded-016 58 -> 37 boxes (``docs/solver.md``, *What counts as progress in the
 #: fixpoint*).  Where HC4 or Newton narrowed the box too, the round's volume counts, as
 #: before: on Bratu and Trigo1 that progress pays.
 HULL_PROGRESS = 0.5
