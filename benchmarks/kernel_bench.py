@@ -103,9 +103,9 @@ def search_boxes(csys, B: int, count: int = 64, seed: int = 0):
             super().__init__(csys)
             self.seen: list = []
 
-        def contract(self, lo, hi):
+        def contract_hinted(self, lo, hi, hints=None):
             self.seen.append((lo.copy(), hi.copy()))
-            return super().contract(lo, hi)
+            return super().contract_hinted(lo, hi, hints)
 
     solver = Solver.default(csys.system)
     hull = find(solver.contractor, PolytopeHull)

@@ -244,8 +244,9 @@ class CompiledSystem:
         for one call, one column program per group (:meth:`eval_fj_columns`, built on
         first use): the same floats.
         """
-        if self._stacks(groups, lo.shape[0]):
-            return self.eval_f_mixed(lo, hi, c, groups)[2:]
+        stacked = self._stacked(groups, lo.shape[0])
+        if stacked is not None:
+            return self._eval_stacked(stacked, lo, hi, c)[2:]
         return self._mixed_by_group(lo, hi, c, groups)
 
     def eval_f_mixed(self, lo, hi, c, groups):
@@ -253,9 +254,12 @@ class CompiledSystem:
         calls of the stacked program (its copy of ``f`` at ``c``): the floats of
         :meth:`eval_f_at` and :meth:`eval_fj_mixed`.  Returns ``(flo, fhi, jlo, jhi,
         defined)``."""
-        if not self._stacks(groups, lo.shape[0]):
+        stacked = self._stacked(groups, lo.shape[0])
+        if stacked is None:
             return (*self.eval_f_at(c), *self._mixed_by_group(lo, hi, c, groups))
-        stacked = self._mixed_program(_group_key(groups))
+        return self._eval_stacked(stacked, lo, hi, c)
+
+    def _eval_stacked(self, stacked: StackedColumns, lo, hi, c):
         plo, phi = self.param_lo, self.param_hi
         return _chunked(
             lambda lo, hi, c: stacked.eval_with_f(lo, hi, c, plo, phi),
@@ -265,12 +269,15 @@ class CompiledSystem:
             c,
         )
 
-    def _stacks(self, groups, boxes: int) -> bool:
-        """Whether the mixed Jacobian over ``groups`` for ``boxes`` boxes is evaluated in
-        the stacked program: in one call of at most :data:`CHUNK_ELEMENTS` node values, or
-        in chunks of at least :data:`STACK_MIN_BOXES` boxes."""
-        nodes = self._mixed_program(_group_key(groups)).program.n_nodes
-        return boxes * nodes <= CHUNK_ELEMENTS or CHUNK_ELEMENTS // nodes >= STACK_MIN_BOXES
+    def _stacked(self, groups, boxes: int) -> StackedColumns | None:
+        """The stacked program of the mixed Jacobian over ``groups`` if ``boxes`` boxes are
+        evaluated in it: in one call of at most :data:`CHUNK_ELEMENTS` node values, or in
+        chunks of at least :data:`STACK_MIN_BOXES` boxes; else ``None``."""
+        stacked = self._mixed_program(_group_key(groups))
+        nodes = stacked.program.n_nodes
+        if boxes * nodes <= CHUNK_ELEMENTS or CHUNK_ELEMENTS // nodes >= STACK_MIN_BOXES:
+            return stacked
+        return None
 
     def _mixed_by_group(self, lo, hi, c, groups):
         """:meth:`eval_fj_mixed` one column program per group."""

@@ -215,11 +215,11 @@ def pow_int(alo: np.ndarray, ahi: np.ndarray, n: int) -> Pair:
         mhi = np.maximum(np.abs(alo), np.abs(ahi))  # magnitude
         lo, hi = _pow_pos(mlo, mhi, n)
     else:
-        # odd powers are increasing: bound sign(x)|x|**n at each end
-        l1, h1 = _pow_pos(np.abs(alo), np.abs(alo), n)
-        l2, h2 = _pow_pos(np.abs(ahi), np.abs(ahi), n)
-        lo = np.where(alo >= 0.0, l1, -h1)
-        hi = np.where(ahi >= 0.0, h2, -l2)
+        # odd powers are increasing: bound sign(x)|x|**n at each end (both ends at once)
+        ends = np.abs(np.stack((alo, ahi)))
+        pl, ph = _pow_pos(ends, ends, n)
+        lo = np.where(alo >= 0.0, pl[0], -ph[0])
+        hi = np.where(ahi >= 0.0, ph[1], -pl[1])
     return _keep_empty(lo, hi, alo, ahi)
 
 

@@ -105,9 +105,14 @@ def _scaled(alo, ahi, mag=None):
     return slack, (alo - slack) / (0.5 * np.pi)
 
 
-def _may_hold(alo, ahi, first: int, step: int, scaled=None):
+def _may_hold(alo, ahi, first, step: int, scaled=None, skip=None):
     """May ``[alo, ahi]`` (narrower than ``step π/2``) contain ``(first + step k) π/2`` for an
     integer ``k``?  (``scaled``: :func:`_scaled` of the interval, if computed already.)
+
+    ``first`` may be an array of candidates' first indices stacked on a new leading axis
+    (shape ``(c, 1, ..., 1)``): the answer then has that axis, one row per candidate, in one
+    pass of numpy calls.  ``skip``: entries whose answer the caller overrides (wide
+    intervals), never sent to the exact test below.
 
     The nearest candidate above ``alo`` is computed in floats and compared with a relative
     slack of 1e-9 (far more than its rounding error): that settles every interval except
@@ -122,11 +127,13 @@ def _may_hold(alo, ahi, first: int, step: int, scaled=None):
     p = (first + step * k) * (0.5 * np.pi)
     hit = p <= ahi + slack
     near = hit & ((p < alo + slack) | (p > ahi - slack))
+    if skip is not None:
+        near &= ~skip
     if not near.any():
         return hit
-    alo, ahi, hit = np.broadcast_arrays(alo, ahi, hit)
+    first, alo, ahi, hit = np.broadcast_arrays(first, alo, ahi, hit)
     idx = np.flatnonzero(near)
-    lo, hi = alo.ravel()[idx], ahi.ravel()[idx]
+    lo, hi, first = alo.ravel()[idx], ahi.ravel()[idx], first.ravel()[idx]
     k = np.floor((lo / (0.5 * _PI_LO) - first) / step)
     k = np.where(np.abs(k) < 2**50, k, 0.0)  # NaN / inf / huge: decided by the caller
     exact = np.zeros(idx.size, dtype=bool)
@@ -138,36 +145,33 @@ def _may_hold(alo, ahi, first: int, step: int, scaled=None):
     return hit.reshape(alo.shape)
 
 
-def cos(alo: np.ndarray, ahi: np.ndarray) -> Pair:
+def _sinusoid(fn, alo: np.ndarray, ahi: np.ndarray, top: int) -> Pair:
+    """``sin`` or ``cos`` (``fn``), whose maxima are at ``(top + 4k) π/2`` and minima at
+    ``(top + 2 + 4k) π/2``: monotone between them, so the image is the hull of the end points'
+    values, widened to ``±1`` where an extremum may lie inside (both candidates tested in one
+    :func:`_may_hold` pass)."""
     with np.errstate(invalid="ignore"):
-        ca = np.cos(alo)
-        cb = np.cos(ahi)
-        lo = widen_down(np.minimum(ca, cb))
-        hi = widen_up(np.maximum(ca, cb))
+        fa = fn(alo)
+        fb = fn(ahi)
+        lo = widen_down(np.minimum(fa, fb))
+        hi = widen_up(np.maximum(fa, fb))
         mag = np.maximum(np.abs(alo), np.abs(ahi))
         wide = ~(ahi - alo < _TWO_PI) | ~(mag < _HUGE)
-        scaled = _scaled(alo, ahi, mag)
-        has_max = wide | _may_hold(alo, ahi, 0, 4, scaled)  # 2kπ
-        has_min = wide | _may_hold(alo, ahi, 2, 4, scaled)  # π + 2kπ
-    lo = np.where(has_min, -1.0, np.maximum(lo, -1.0))
-    hi = np.where(has_max, 1.0, np.minimum(hi, 1.0))
+        firsts = np.array([top, top + 2], dtype=float).reshape((2,) + (1,) * np.ndim(alo))
+        has = wide | _may_hold(alo, ahi, firsts, 4, _scaled(alo, ahi, mag), skip=wide)
+    lo = np.where(has[1], -1.0, np.maximum(lo, -1.0))
+    hi = np.where(has[0], 1.0, np.minimum(hi, 1.0))
     return _keep_empty(lo, hi, alo, ahi)
+
+
+def cos(alo: np.ndarray, ahi: np.ndarray) -> Pair:
+    """Maxima at ``2kπ``, minima at ``π + 2kπ``."""
+    return _sinusoid(np.cos, alo, ahi, 0)
 
 
 def sin(alo: np.ndarray, ahi: np.ndarray) -> Pair:
-    with np.errstate(invalid="ignore"):
-        sa = np.sin(alo)
-        sb = np.sin(ahi)
-        lo = widen_down(np.minimum(sa, sb))
-        hi = widen_up(np.maximum(sa, sb))
-        mag = np.maximum(np.abs(alo), np.abs(ahi))
-        wide = ~(ahi - alo < _TWO_PI) | ~(mag < _HUGE)
-        scaled = _scaled(alo, ahi, mag)
-        has_max = wide | _may_hold(alo, ahi, 1, 4, scaled)  # π/2 + 2kπ
-        has_min = wide | _may_hold(alo, ahi, 3, 4, scaled)  # -π/2 + 2kπ
-    lo = np.where(has_min, -1.0, np.maximum(lo, -1.0))
-    hi = np.where(has_max, 1.0, np.minimum(hi, 1.0))
-    return _keep_empty(lo, hi, alo, ahi)
+    """Maxima at ``π/2 + 2kπ``, minima at ``-π/2 + 2kπ``."""
+    return _sinusoid(np.sin, alo, ahi, 1)
 
 
 def _keep_empty(lo, hi, alo, ahi):
@@ -215,8 +219,8 @@ def tan(alo: np.ndarray, ahi: np.ndarray) -> Pair:
         tb = np.tan(ahi)
         lo = widen_down(ta)
         hi = widen_up(tb)
-        pole = _may_hold(alo, ahi, 1, 2)  # π/2 + kπ
         wide = ~(ahi - alo < np.pi) | ~(np.maximum(np.abs(alo), np.abs(ahi)) < _HUGE)
+        pole = _may_hold(alo, ahi, 1, 2, skip=wide)  # π/2 + kπ
         full = pole | wide | ~(lo <= hi)
     lo = np.where(full, -_INF, lo)
     hi = np.where(full, _INF, hi)
