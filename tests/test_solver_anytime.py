@@ -17,6 +17,7 @@ from certsolve.solver import Solver, solve
 from certsolve.solver.batching import BatchSizer
 from certsolve.solver.bisectors import LargestFirst
 from certsolve.solver.certify import Certifier
+from certsolve.solver.dive import LowerFirst, NewtonSide
 from certsolve.solver.pipeline import FixPoint
 
 SYSTEMS = Path(__file__).resolve().parent.parent / "examples" / "systems"
@@ -62,20 +63,79 @@ class Nothing:
         return "Nothing()"
 
 
-def test_the_lower_half_is_searched_first():
-    """A split box's lower half goes on top of the stack (IBEX's order): the next batch
-    dives into it, the upper half waits below."""
+def _halves_after_one_round(domain, dive):
+    """The top and the next box of the stack after one round (nothing contracts, the
+    widest variable ``x`` is split at 0.45 of its width) on ``x^2 = 2, y = 1``."""
     x, y = var("x"), var("y")
-    system = System(["x", "y"], np.array([[0.0, 4.0], [0.0, 2.0]]), [x * x - 2, y - 1])
+    system = System(["x", "y"], np.array(domain, dtype=float), [x * x - 2, y - 1])
     csys = CompiledSystem(system)
-    solver = Solver(system, Nothing(), Certifier(csys), LargestFirst())
+    solver = Solver(system, Nothing(), Certifier(csys), LargestFirst(), dive=dive)
     state = solver.start()
-    solver.process(np.array([[0.0, 0.0]]), np.array([[4.0, 2.0]]), state)
+    dom = system.domain
+    solver.process(dom[None, :, 0].copy(), dom[None, :, 1].copy(), state)
     assert state.stats.bisections == 1
-    top_lo, top_hi = state.stack.pop(1)
-    below_lo, below_hi = state.stack.pop(1)
-    assert top_lo[0].tolist() == [0.0, 0.0] and below_hi[0].tolist() == [4.0, 2.0]
-    assert top_hi[0, 0] == below_lo[0, 0] < 4.0
+    return state.stack.pop(1), state.stack.pop(1)
+
+
+def test_the_lower_half_is_searched_first_with_ibex_order():
+    """:class:`LowerFirst`: a split box's lower half goes on top of the stack (IBEX's
+    order): the next batch dives into it, the upper half waits below."""
+    (top_lo, top_hi), (below_lo, below_hi) = _halves_after_one_round(
+        [[0.0, 2.0], [0.0, 1.0]], LowerFirst()
+    )
+    assert top_lo[0].tolist() == [0.0, 0.0] and below_hi[0].tolist() == [2.0, 1.0]
+    assert top_hi[0, 0] == below_lo[0, 0] == 0.9
+
+
+@pytest.mark.parametrize(
+    ("domain", "upper"),
+    [
+        ([[0.0, 2.0], [0.0, 1.0]], True),  # N = 1 - (1 - 2) / 2 = 1.5 > 0.9: x* = 1.414 too
+        ([[0.0, 4.0], [0.0, 2.0]], False),  # N = 2 - (4 - 2) / 4 = 1.5 < 1.8
+        ([[-2.0, 2.0], [0.0, 1.0]], False),  # J(c) singular at x = 0: no Newton point
+    ],
+)
+def test_the_half_holding_the_newton_point_is_searched_first(domain, upper):
+    """The default dive (:class:`NewtonSide`) puts on top the half holding the float
+    Newton point of the box's midpoint -- the half holding the solution here -- and the
+    lower half where that point is not defined."""
+    (top_lo, top_hi), (below_lo, below_hi) = _halves_after_one_round(domain, None)
+    cut = domain[0][0] + 0.45 * (domain[0][1] - domain[0][0])
+    lower, higher = (
+        ((below_lo, below_hi), (top_lo, top_hi))
+        if upper
+        else (
+            (top_lo, top_hi),
+            (below_lo, below_hi),
+        )
+    )
+    assert lower[0][0, 0] == domain[0][0] and lower[1][0, 0] == cut == higher[0][0, 0]
+    assert higher[1][0, 0] == domain[0][1]
+
+
+def test_newton_side_needs_a_finite_newton_point():
+    """``f(c)`` not finite (``1/x`` at ``c = 0``) or ``J(c)`` singular: the lower half."""
+    x = var("x")
+    csys = CompiledSystem(System(["x"], np.array([[-1.0, 1.0]]), [1 / x - 2]))
+    lo, hi = np.array([[-1.0], [-1.0], [0.0]]), np.array([[1.0], [0.0], [1.0]])
+    at = np.array([-0.1, -0.55, 0.45])
+    got = NewtonSide().upper_first(csys, lo, hi, np.zeros(3, dtype=int), at)
+    # c = 0: f infinite; c = -0.5: N = -0.5 - (-4)/(-4) = -1.5 < -0.55; c = 0.5: N = 0.5 -
+    # 0/(-4) = 0.5 > 0.45
+    assert got.tolist() == [False, False, True]
+
+
+@pytest.mark.parametrize("name", ["circle-line", "brown-5", "trig-exp", "eco-6", "katsura-5"])
+def test_every_dive_certifies_the_same_solutions(name):
+    """The dive orders the search, never what it proves: a complete search certifies the
+    same solutions with the Newton side first and with IBEX's lower half first."""
+    system = load_minibex(SYSTEMS / f"{name}.mbx")
+    runs = [Solver.default(system, dive=d).solve() for d in (None, LowerFirst())]
+    assert all(r.status == "complete" for r in runs)
+    newton, lower = ([s.box for s in sorted(r.solutions, key=_mid)] for r in runs)
+    assert len(newton) == len(lower) > 0
+    for a, b in zip(newton, lower, strict=True):  # each box of one meets the other's
+        assert all(x0 <= y1 and y0 <= x1 for (x0, x1), (y0, y1) in zip(a, b, strict=True))
 
 
 def test_progress_streams_each_solution_once():

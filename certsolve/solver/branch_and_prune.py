@@ -11,6 +11,8 @@ limits, progress and the executor.  The solver is assembled from parts, as in IB
 * the **certifier** (:class:`~.certify.Certifier`): it classifies, tightens and expands
   the solutions the parts prove, and the pipeline's ``Inflate`` uses its proofs;
 * the **bisector** (:mod:`.bisectors`): the variable each remaining box is split along;
+* the **dive** (:mod:`.dive`): which half of a split box the next round takes (the half
+  holding the float Newton point of its midpoint, by default);
 * the **buffer** (:class:`~.buffer.BoxStack` by default): what holds the pending boxes;
 * the **limits** (:class:`SolverLimits`): ``eps``, the variables a bisection may split,
   the batch size and how many undecided / pending hulls a result lists.
@@ -64,6 +66,7 @@ from .bisectors import SmearCurvatureMix, domain_scale, split
 from .buffer import BoxStack, no_hints
 from .certify import Certifier, SolutionSet
 from .checkpoint import Checkpoint
+from .dive import NewtonSide
 from .executors import resolve_executor
 from .nonsquare import ManifoldPaver, overdetermined
 from .options_schema import SOLVE_OPTIONS_SCHEMA
@@ -146,6 +149,10 @@ class Solver:
     limits:
         :class:`SolverLimits` (eps, the variables a bisection may split, batch size,
         listing caps).
+    dive:
+        ``upper_first(csys, lo, hi, var, at)``: which half of a split box the next round
+        takes (:mod:`.dive`; default :class:`~.dive.NewtonSide`, the half holding the float
+        Newton point of the box's midpoint).
     """
 
     def __init__(
@@ -156,6 +163,7 @@ class Solver:
         bisector: Any,
         buffer: Callable[[int], BoxStack] = BoxStack,
         limits: SolverLimits | None = None,
+        dive: Any = None,
     ):
         self.system = system.system if isinstance(system, CompiledSystem) else system
         #: the compiled system searched (the certifier's); :attr:`system` is the one given
@@ -166,6 +174,7 @@ class Solver:
         self.bisector = bisector
         self.buffer = buffer
         self.limits = limits or SolverLimits()
+        self.dive = dive or NewtonSide()
         #: the box searched by :meth:`solve` (the system's; see :meth:`on_domain`)
         self.domain = self.system.domain
         self.n = self.csys.n
@@ -192,6 +201,7 @@ class Solver:
         batch_start: int | None = None,
         hc4_passes: int = 4,
         bisector: Any = None,
+        dive: Any = None,
         certifier: Certifier | None = None,
         bisect_mask: Any = None,
         subsystems: Seq[tuple[Any, Any]] = (),
@@ -212,8 +222,9 @@ class Solver:
         first solutions earlier on IBEX's files where certsolve is behind (Trigo1-0017,
         Brent-10, CountercurrentReactors2-12, Redeco9 at 6,000 boxes: docs/solver.md).
 
-        ``hc4_passes``, ``bisector``, ``certifier``: swappable parts (defaults: 4 HC4
-        passes, :class:`~.bisectors.SmearCurvatureMix`, Krawczyk).  ``newton_groups``:
+        ``hc4_passes``, ``bisector``, ``dive``, ``certifier``: swappable parts (defaults: 4
+        HC4 passes, :class:`~.bisectors.SmearCurvatureMix`, :class:`~.dive.NewtonSide`,
+        Krawczyk).  ``newton_groups``:
         ``"variables"`` (default): Hansen–Sengupta with Hansen's mixed Jacobian, one
         variable per group; ``None``: the plain interval Jacobian; or a list of boolean
         masks (:class:`~.contractors.IntervalNewton`).  ``cid_slices``: slices of the CID
@@ -287,6 +298,7 @@ class Solver:
             certifier or Certifier(csys, surplus=surplus),
             bisector or SmearCurvatureMix(),
             limits=limits,
+            dive=dive,
         )
 
     @property
@@ -544,10 +556,13 @@ class Solver:
             (alo, ahi), (blo, bhi) = split(lo3, hi3, var[big], self.bisector.ratio)
             state.stats.bisections += lo3.shape[0]
             hints = batch.row_hints(big)  # each half starts from its parent's
-            # the lower halves on top: the next round dives into them (IBEX's order)
+            # the halves the dive chose go on top: the next round takes them (.dive)
+            rows = np.arange(lo3.shape[0])
+            up = self.dive.upper_first(self.csys, lo3, hi3, var[big], ahi[rows, var[big]])
+            first = up[:, None]
             state.stack.push(
-                np.concatenate([blo, alo]),
-                np.concatenate([bhi, ahi]),
+                np.concatenate([np.where(first, alo, blo), np.where(first, blo, alo)]),
+                np.concatenate([np.where(first, ahi, bhi), np.where(first, bhi, ahi)]),
                 None if hints is None else np.concatenate([hints, hints]),
             )
 
