@@ -10,6 +10,9 @@ and the points ``boxes/solutions`` at each of ``--at`` CPU seconds (one search g
 all).  The table of docs/solver.md, *Why 15 files are still behind ibexsolve at 10 s*:
 
     python benchmarks/cpu_budget_bench.py --cpu 12 --at 3,6,9,12 --sizes 128,256,512,1024 FILE...
+
+``--dives newton,lower`` compares the dives (which half of a split box the next round takes,
+``solver/dive.py``): the table of docs/solver.md, *The dive*.
 """
 
 from __future__ import annotations
@@ -19,12 +22,17 @@ import time
 
 from certsolve.expr.minibex import load_system
 from certsolve.solver import Solver
+from certsolve.solver.dive import LowerFirst, NewtonSide
+
+DIVES = {"newton": NewtonSide, "lower": LowerFirst}
 
 
-def run(path: str, batch_size: int, budget: float) -> tuple[str, list[tuple[int, int, float]]]:
+def run(
+    path: str, batch_size: int, budget: float, dive: str = "newton"
+) -> tuple[str, list[tuple[int, int, float]]]:
     """One search of ``path`` cancelled at ``budget`` CPU seconds: its status and the
     ``(boxes, solutions, cpu)`` after every round."""
-    solver = Solver.default(load_system(path), batch_size=batch_size)
+    solver = Solver.default(load_system(path), batch_size=batch_size, dive=DIVES[dive]())
     points: list[tuple[int, int, float]] = []
     c0 = time.process_time()
 
@@ -43,14 +51,18 @@ def main() -> None:
     ap.add_argument("--cpu", type=float, default=9.0, help="CPU seconds a search may take")
     ap.add_argument("--at", default="3,6,9", help="CPU seconds to report solutions at")
     ap.add_argument("--sizes", default="128,256,512,1024", help="batch sizes to compare")
+    ap.add_argument(
+        "--dives", default="newton", help=f"dives to compare ({', '.join(DIVES)}; solver/dive.py)"
+    )
     args = ap.parse_args()
     at = [float(a) for a in args.at.split(",")]
     cols = " | ".join(f"{a:g} s: boxes/solutions" for a in at)
-    print(f"| file | batch | status | solutions | boxes | boxes to 1st | {cols} |")
-    print("|---|--:|---|--:|--:|--:|" + "--:|" * len(at))
+    print(f"| file | batch | dive | status | solutions | boxes | boxes to 1st | {cols} |")
+    print("|---|--:|---|---|--:|--:|--:|" + "--:|" * len(at))
+    runs = [(int(s), d) for s in args.sizes.split(",") for d in args.dives.split(",")]
     for path in args.files:
-        for size in (int(s) for s in args.sizes.split(",")):
-            status, points = run(path, size, args.cpu)
+        for size, dive in runs:
+            status, points = run(path, size, args.cpu, dive)
             boxes, sols, _ = points[-1] if points else (0, 0, 0.0)
             first = next((b for b, s, _ in points if s), None)
             marks = []
@@ -60,7 +72,7 @@ def main() -> None:
                 marks.append(f"{b}/{s}")
             name = path.split("/")[-1]
             print(
-                f"| {name} | {size} | {status} | {sols} | {boxes} | "
+                f"| {name} | {size} | {dive} | {status} | {sols} | {boxes} | "
                 f"{'-' if first is None else first} | {' | '.join(marks)} |",
                 flush=True,
             )
