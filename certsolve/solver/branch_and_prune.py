@@ -556,9 +556,13 @@ class Solver:
             (alo, ahi), (blo, bhi) = split(lo3, hi3, var[big], self.bisector.ratio)
             state.stats.bisections += lo3.shape[0]
             hints = batch.row_hints(big)  # each half starts from its parent's
-            # the halves the dive chose go on top: the next round takes them (.dive)
+            # the halves the dive chose go on top: the next round takes them (.dive); when
+            # the next round takes the whole stack anyway, the order is moot
             rows = np.arange(lo3.shape[0])
-            up = self.dive.upper_first(self.csys, lo3, hi3, var[big], ahi[rows, var[big]])
+            if len(state.stack) + 2 * rows.size + batch.backlog <= self.batch_size:
+                up = np.zeros(rows.size, dtype=bool)
+            else:
+                up = self.dive.upper_first(self.csys, lo3, hi3, var[big], ahi[rows, var[big]])
             first = up[:, None]
             state.stack.push(
                 np.concatenate([np.where(first, alo, blo), np.where(first, blo, alo)]),
