@@ -264,9 +264,10 @@ def _mid(s):
 
 
 def test_newton_steps_of_a_stack_with_singular_and_infinite_members():
-    """One singular member makes numpy refuse the whole stack's solve: the others still
-    get their step (as a solve of each alone gives it, to rounding), those two NaN."""
-    from certsolve.solver.dive import _newton_steps
+    """The dive's Newton steps (:func:`batched_solve`, the certifier's): one singular member
+    makes numpy refuse the whole stack's solve; the others still get their step (as a solve
+    of each alone gives it, to rounding), those two NaN."""
+    from certsolve.solver.newton import batched_solve
 
     rng = np.random.default_rng(3)
     J = rng.standard_normal((6, 3, 3))
@@ -274,7 +275,8 @@ def test_newton_steps_of_a_stack_with_singular_and_infinite_members():
     J[1] = [[1.0, 2.0, 3.0], [2.0, 4.0, 6.0], [0.0, 0.0, 1.0]]  # singular
     J[4, 0, 0] = np.inf
     for stack in (J, J[[0, 2, 3, 4, 5]]):  # with and without the singular member
-        got = _newton_steps(stack, f[: len(stack)])
+        got, ok = batched_solve(stack, f[: len(stack)])
+        assert ok.tolist() == np.all(np.isfinite(got), axis=1).tolist()
         for k, m in enumerate(stack):
             if np.all(np.isfinite(m)) and abs(np.linalg.det(m)) > 1e-9:
                 want = np.linalg.solve(m, f[k])

@@ -73,6 +73,7 @@ __all__ = [
     "mr_matmul",
     "point_matmul_interval",
     "batched_inverse",
+    "stack_or_nan",
     "Preconditioned",
     "precondition",
     "krawczyk_magnitude",
@@ -150,26 +151,28 @@ def batched_inverse(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Y = np.full_like(A, np.nan)
     if not np.any(finite):
         return Y, finite
-    Y[finite] = _inverse_or_nan(A[finite])
+    with np.errstate(all="ignore"):
+        Y[finite] = stack_or_nan(np.linalg.inv, A[finite], like=A[finite])
     ok = np.all(np.isfinite(Y), axis=(-2, -1))
     return Y, ok
 
 
-def _inverse_or_nan(A: np.ndarray) -> np.ndarray:
-    """``np.linalg.inv`` of a stack, NaN for the exactly singular matrices.
+def stack_or_nan(fn, *stacks: np.ndarray, like: np.ndarray) -> np.ndarray:
+    """``fn(*stacks)`` for stacks of matrices along axis 0 (``np.linalg.inv``, ``solve``), NaN
+    rows (shaped as those of ``like``) for the members numpy refuses.
 
-    numpy refuses the whole stack if one matrix is singular; the stack is then halved until
-    the singular ones are alone: a few calls per singular matrix instead of one per matrix
-    (the inverses are the ones a single call would give).
+    numpy refuses the whole stack if one matrix is exactly singular; the stack is then
+    halved until the singular ones are alone: a few calls per singular matrix instead of
+    one per matrix (the results are the ones a single call would give).
     """
     try:
-        with np.errstate(all="ignore"):
-            return np.linalg.inv(A)
+        return fn(*stacks)
     except np.linalg.LinAlgError:
-        if A.shape[0] == 1:
-            return np.full_like(A, np.nan)
-        h = A.shape[0] // 2
-        return np.concatenate([_inverse_or_nan(A[:h]), _inverse_or_nan(A[h:])])
+        if like.shape[0] == 1:
+            return np.full(like.shape, np.nan)
+        h = like.shape[0] // 2
+        first = stack_or_nan(fn, *(a[:h] for a in stacks), like=like[:h])
+        return np.concatenate([first, stack_or_nan(fn, *(a[h:] for a in stacks), like=like[h:])])
 
 
 @dataclass(kw_only=True)

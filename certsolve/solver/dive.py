@@ -12,8 +12,9 @@ proven, only when: how many solutions a search stopped by its limit has certifie
   not a proof); the lower half where ``N`` is not defined (a singular or non-finite
   ``J(c)``, a non-finite ``f(c)``).  Near a regular solution ``x*``, ``|N - x*|`` is of
   the order of ``|c - x*|^2``: the dive follows the solution into the half that holds
-  it.  One float ``f`` and ``J`` program call and one batched LU solve for the round's
-  boxes: ~3.4 us a box on general-19 (2,048 boxes: 1.9 ms, 4.9 ms), ~3 % of a box's
+  it.  One float ``f`` and ``J`` program call and one batched LU solve
+  (:func:`~.newton.batched_solve`, the certifier's) for the round's boxes: ~3.4 us a box on
+  general-19 (2,048 boxes: 1.9 ms, 4.9 ms), ~3 % of a box's
   search there.
 
 A dive is ``upper_first(csys, lo, hi, var, at)``: for each box ``lo, hi`` (``(k, n)``) split
@@ -26,7 +27,7 @@ import numpy as np
 
 from ..expr.compiled import CompiledSystem
 from ..interval.core import midpoint
-from ..interval.linalg import batched_inverse
+from .newton import batched_solve
 
 __all__ = ["LowerFirst", "NewtonSide"]
 
@@ -47,22 +48,6 @@ class NewtonSide:
         rows = np.arange(lo.shape[0])
         with np.errstate(all="ignore"):
             f, J = csys.eval_fj_float(c)
-            newton = c[rows, var] - _newton_steps(J, f)[rows, var]
+            step, _ = batched_solve(J, f)  # NaN where J(c) is singular or not finite
+            newton = c[rows, var] - step[rows, var]
         return np.isfinite(newton) & (newton > at)
-
-
-def _newton_steps(J: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """``J^-1 f`` for stacks ``(k, n, n)`` and ``(k, n)``; NaN rows where ``J`` is singular or
-    not finite.  One LU solve for the stack (a third of the inverses' time on general-19's
-    19x19 matrices); numpy refuses the whole stack for one exactly singular member, and
-    the inverses (:func:`~certsolve.interval.linalg.batched_inverse`) then sort it out."""
-    ok = np.all(np.isfinite(J), axis=(1, 2)) & np.all(np.isfinite(f), axis=1)
-    if not ok.all():
-        J = np.where(ok[:, None, None], J, np.eye(J.shape[1]))
-    try:
-        step = np.linalg.solve(J, f[..., None])[..., 0]
-    except np.linalg.LinAlgError:
-        Y, inv_ok = batched_inverse(J)
-        ok &= inv_ok
-        step = np.einsum("kij,kj->ki", np.where(ok[:, None, None], Y, 0.0), f)
-    return np.where(ok[:, None], step, np.nan)

@@ -40,6 +40,7 @@ from ..interval.linalg import (
     mr_from_bounds,
     mr_matmul,
     precondition,
+    stack_or_nan,
 )
 from ..interval.reductions import all_last
 
@@ -65,19 +66,13 @@ def batched_solve(A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     x = np.full(b.shape, np.nan)
     if not np.any(finite):
         return x, finite
-    Af, bf = A[finite], b[finite]
-    try:
-        with np.errstate(all="ignore"):
-            xf = np.linalg.solve(Af, bf[:, :, None])[:, :, 0]
-    except np.linalg.LinAlgError:
-        xf = np.full(bf.shape, np.nan)
-        for k in range(Af.shape[0]):  # rare: some exactly singular matrix in the batch
-            try:
-                xf[k] = np.linalg.solve(Af[k], bf[k])
-            except np.linalg.LinAlgError:
-                pass
-    x[finite] = xf
+    with np.errstate(all="ignore"):
+        x[finite] = stack_or_nan(_solve, A[finite], b[finite], like=b[finite])
     return x, all_last(np.isfinite(x))
+
+
+def _solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.linalg.solve(A, b[:, :, None])[:, :, 0]
 
 
 @dataclass
