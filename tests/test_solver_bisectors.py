@@ -3,7 +3,8 @@
 The scores are checked on hand-computed Jacobian enclosures; the coin for its share and
 for not depending on the batch a box is in; the mix for taking smear's choice on one side
 of the coin and curvature's on the other; the fallback where no score is positive for splitting
-the variable widest relative to the domain.  That the default solver (the mix) loses no
+the variable widest relative to the domain; the sign split at 0, and the solutions it puts on
+a bisection face.  That the default solver (the mix) loses no
 solution is checked by every solver test on the reference systems, and on a quadratic
 eigenvalue problem in ``test_solver_geneig.py``.
 """
@@ -23,6 +24,7 @@ from certsolve.solver.bisectors import (
     box_coin,
     curvature_scores,
     smear_scores,
+    split,
 )
 
 
@@ -141,3 +143,61 @@ def test_a_pole_inside_the_domain_and_a_wide_multiplier():
     got = sorted(((s.lo + s.hi) / 2).tolist() for s in r.solutions)
     want = sorted([[math.pi / 4, 2 / 3, 1.0], [math.atan(8 / 3), 0.25, -0.25]])
     assert np.allclose(got, want, atol=1e-9)
+
+
+def test_the_sign_split_cuts_at_zero_well_inside_only():
+    """``at_zero``: 0 where it lies at least 5 % of the width inside; elsewhere, unbounded
+    intervals and without ``at_zero``, the ratio's point as before."""
+    inf = math.inf
+    cases = [  # (lo, hi, the point with at_zero)
+        (-1.0, 3.0, 0.0),
+        (-0.01, 3.0, -0.01 + 0.45 * 3.01),  # 0 within 5 % of the end
+        (2.0, 4.0, 2.9),
+        (-inf, inf, 0.0),  # the unbounded rule's point
+        (-1e8, 20.0, -1e8 + 0.45 * (1e8 + 20)),
+    ]
+    lo = np.array([[c[0]] for c in cases])
+    hi = np.array([[c[1]] for c in cases])
+    var = np.zeros(len(cases), dtype=int)
+    (alo, ahi), (blo, bhi) = split(lo, hi, var, 0.45, at_zero=True)
+    assert ahi[:, 0] == pytest.approx([c[2] for c in cases])
+    assert np.array_equal(blo, ahi) and np.array_equal(alo, lo) and np.array_equal(bhi, hi)
+    (_, plain), _ = split(lo, hi, var, 0.45)
+    assert plain[0, 0] == pytest.approx(0.8)  # without at_zero: the ratio
+    assert np.array_equal(plain[1:], ahi[1:])
+    mask = np.array([False, True])  # at_zero as a mask: only the variables it names
+    two_lo, two_hi = np.array([[-1.0, -1.0], [-1.0, -1.0]]), np.array([[3.0, 3.0], [3.0, 3.0]])
+    (_, masked), _ = split(two_lo, two_hi, np.array([0, 1]), 0.45, at_zero=mask)
+    assert masked[0, 0] == pytest.approx(0.8) and masked[1, 1] == 0.0
+    assert not SmearCurvatureMix().at_zero and not hasattr(SmearSumRelative(), "at_zero")
+
+
+def test_split_at_zero_names_the_variables_that_multiply_others():
+    """``split_at_zero``'s mask is :attr:`CompiledSystem.coupled`: a variable whose
+    Jacobian column depends on another variable (``x`` and ``y`` of ``x y``, ``w`` of
+    ``w^2 + sin(w + y)``), not one that only enters by itself (``z^3``, ``sin(v)``)."""
+    s = parse_minibex(
+        "Variables x in [-1, 1]; y in [-1, 1]; z in [-1, 1]; v in [-1, 1]; w in [-1, 1];"
+        "Constraints x*y = 0.1; z^3 + x = 0; sin(v) + z = 0; w^2 + sin(w + y) = 0.5;"
+        "v + w = 0; end"
+    )
+    solver = Solver.default(s, split_at_zero=True)
+    assert solver.csys.coupled.tolist() == [True, True, False, False, True]
+    assert solver.bisector.at_zero.tolist() == [True, True, False, False, True]
+    assert Solver.default(s).bisector.at_zero is False  # off by default
+
+
+AXES = """Variables x in [-2, 2]; y in [-2, 2];
+Constraints x^2 + y^2 = 1; x*y = 0; end"""
+
+
+@pytest.mark.parametrize("at_zero", [True, False])
+def test_solutions_on_the_sign_split_faces(at_zero):
+    """The four solutions (±1, 0), (0, ±1) each have a coordinate at 0, the first face a sign
+    split makes: each is still certified once (the inflated proof crosses the face, its
+    unicity box prunes the other side), nothing undecided, the same with the ratio's split."""
+    bisector = SmearCurvatureMix(at_zero=at_zero)
+    r = Solver.default(parse_minibex(AXES), bisector=bisector).solve(timeout=60, verify=True)
+    assert r.status == "complete" and not r.undecided
+    got = sorted(np.round((s.lo + s.hi) / 2, 9).tolist() for s in r.solutions)
+    assert got == [[-1.0, 0.0], [0.0, -1.0], [0.0, 1.0], [1.0, 0.0]]

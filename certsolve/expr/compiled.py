@@ -60,6 +60,11 @@ def _chunked(fn, nodes: int, *boxes: np.ndarray) -> tuple:
     return tuple(np.concatenate(p) for p in zip(*parts, strict=True))
 
 
+def _coupled(g: Graph, node: int | None, j: int) -> bool:
+    """The Jacobian entry ``node`` of variable ``j`` depends on another variable."""
+    return node is not None and bool(g.depends[node] & ~(1 << j))
+
+
 def _group_key(groups) -> tuple[tuple[int, ...], ...]:
     """The variables of each group (boolean masks) as tuples: one ``nonzero`` for all."""
     rows, cols = np.nonzero(np.asarray(groups, dtype=bool))
@@ -83,6 +88,12 @@ class CompiledSystem:
         check_deadline(deadline, "building the programs")
         self.graph = g
         self.jac_structure = np.array([[d is not None for d in row] for row in jac])
+        #: ``(n,)`` variables whose Jacobian column depends on another variable: each is a
+        #: factor of a product with another (``x y``, ``(1 - x) y``), or is otherwise coupled
+        #: with one nonlinearly; a sign split pays on these (:func:`.solver.bisectors.split`)
+        self.coupled = np.array(
+            [any(_coupled(g, row[j], j) for row in jac) for j in range(n)], dtype=np.bool_
+        )
 
         hc4_out = self.eq_roots + self.cons_roots
         self.hc4 = Program(g, hc4_out)

@@ -143,7 +143,8 @@ class Solver:
         the :class:`~.certify.Certifier` on the compiled system the parts search (that
         system is :attr:`csys`; ``verify`` re-proves certificates on it).
     bisector:
-        ``choose(lo, hi, jlo, jhi, eps, mask, scale=...)`` and ``ratio`` (:mod:`.bisectors`).
+        ``choose(lo, hi, jlo, jhi, eps, mask, scale=...)``, ``ratio`` and optionally
+        ``at_zero`` (:func:`.bisectors.split`).
     buffer:
         ``buffer(n)`` makes the search's box buffer (default :class:`~.buffer.BoxStack`).
     limits:
@@ -201,6 +202,7 @@ class Solver:
         batch_start: int | None = None,
         hc4_passes: int = 4,
         bisector: Any = None,
+        split_at_zero: bool = False,
         dive: Any = None,
         certifier: Certifier | None = None,
         bisect_mask: Any = None,
@@ -224,7 +226,13 @@ class Solver:
 
         ``hc4_passes``, ``bisector``, ``dive``, ``certifier``: swappable parts (defaults: 4
         HC4 passes, :class:`~.bisectors.SmearCurvatureMix`, :class:`~.dive.NewtonSide`,
-        Krawczyk).  ``newton_groups``:
+        Krawczyk).  ``split_at_zero``: the default bisector splits the variables that
+        multiply others (:attr:`~certsolve.expr.compiled.CompiledSystem.coupled`) at 0 while
+        0 is well inside their interval (:func:`.bisectors.split`), a *sign split*; off by
+        default (``docs/solver.md``, *The split point*: it finds the first solutions of Eco10,
+        Redeco10 and CountercurrentReactors2-12 to -28 within 10 s, where the default finds
+        none, but puts Katsura's solutions with zero coordinates on bisection faces, katsura-6
+        2.5 -> 3.0 CPU s).  ``newton_groups``:
         ``"variables"`` (default): Hansen–Sengupta with Hansen's mixed Jacobian, one
         variable per group; ``None``: the plain interval Jacobian; or a list of boolean
         masks (:class:`~.contractors.IntervalNewton`).  ``cid_slices``: slices of the CID
@@ -296,7 +304,7 @@ class Solver:
             system,
             contractor,
             certifier or Certifier(csys, surplus=surplus),
-            bisector or SmearCurvatureMix(),
+            bisector or SmearCurvatureMix(at_zero=csys.coupled if split_at_zero else False),
             limits=limits,
             dive=dive,
         )
@@ -553,7 +561,8 @@ class Solver:
         big = ~small
         if np.any(big):
             lo3, hi3 = batch.lo[big], batch.hi[big]
-            (alo, ahi), (blo, bhi) = split(lo3, hi3, var[big], self.bisector.ratio)
+            at_zero = getattr(self.bisector, "at_zero", False)
+            (alo, ahi), (blo, bhi) = split(lo3, hi3, var[big], self.bisector.ratio, at_zero=at_zero)
             state.stats.bisections += lo3.shape[0]
             hints = batch.row_hints(big)  # each half starts from its parent's
             # the halves the dive chose go on top: the next round takes them (.dive); when
