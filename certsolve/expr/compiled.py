@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import copy
 import math
+from functools import cached_property
 
 import numpy as np
 
@@ -60,11 +61,6 @@ def _chunked(fn, nodes: int, *boxes: np.ndarray) -> tuple:
     return tuple(np.concatenate(p) for p in zip(*parts, strict=True))
 
 
-def _coupled(g: Graph, node: int | None, j: int) -> bool:
-    """The Jacobian entry ``node`` of variable ``j`` depends on another variable."""
-    return node is not None and bool(g.depends[node] & ~(1 << j))
-
-
 def _group_key(groups) -> tuple[tuple[int, ...], ...]:
     """The variables of each group (boolean masks) as tuples: one ``nonzero`` for all."""
     rows, cols = np.nonzero(np.asarray(groups, dtype=bool))
@@ -88,12 +84,6 @@ class CompiledSystem:
         check_deadline(deadline, "building the programs")
         self.graph = g
         self.jac_structure = np.array([[d is not None for d in row] for row in jac])
-        #: ``(n,)`` variables whose Jacobian column depends on another variable: each is a
-        #: factor of a product with another (``x y``, ``(1 - x) y``), or is otherwise coupled
-        #: with one nonlinearly; a sign split pays on these (:func:`.solver.bisectors.split`)
-        self.coupled = np.array(
-            [any(_coupled(g, row[j], j) for row in jac) for j in range(n)], dtype=np.bool_
-        )
 
         hc4_out = self.eq_roots + self.cons_roots
         self.hc4 = Program(g, hc4_out)
@@ -120,6 +110,19 @@ class CompiledSystem:
         self._col_programs: dict = {}  # column subsets -> (Program, flat indices)
         self._mixed_programs: dict = {}  # groups of columns -> StackedColumns
         self.set_parameters(system.parameters)
+
+    @cached_property
+    def coupled(self) -> np.ndarray:
+        """``(n,)`` variables whose Jacobian column depends on another variable: each is a
+        factor of a product with another (``x y``, ``(1 - x) y``), or is otherwise coupled
+        with one nonlinearly; a sign split pays on these (:func:`.solver.bisectors.split`).
+        Computed on first use (only ``Solver.default(split_at_zero=True)`` asks)."""
+        out = np.zeros(self.n, dtype=np.bool_)
+        nodes = self.fj.global_ids[self._fj_jac].tolist()  # the entries, row by row
+        for node, j in zip(nodes, (self._jac_flat % self.n).tolist(), strict=True):
+            if self.graph.depends[node] & ~(1 << j):
+                out[j] = True
+        return out
 
     # -- parameters -------------------------------------------------------------------------
     def set_parameters(self, values) -> None:
