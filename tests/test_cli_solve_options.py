@@ -92,7 +92,11 @@ def args_of(*argv: str) -> argparse.Namespace:
 
 @pytest.mark.parametrize(
     "argv",
-    [(), ("--max-boxes", "7", "--eps", "1e-6"), ("--cid-vars", "all", "--verify")],
+    [
+        (),
+        ("--max-boxes", "7", "--eps", "1e-6"),
+        ("--cid-vars", "all", "--verify", "--no-split-at-zero"),
+    ],
 )
 def test_surely_valid_options_are_the_models_values(argv):
     """Without the model, the params are what the model makes of the same options."""
@@ -129,6 +133,7 @@ def _recorded(monkeypatch, call) -> dict:
         (),
         ("--max-boxes", "7", "--eps", "1e-6", "--max-solutions", "2", "--max-pending", "9"),
         ("--cid-vars", "all", "--verify", "--max-undecided", "0"),
+        ("--no-split-at-zero",),
         ("--cid-vars", "3"),  # not surely valid: through the model
     ],
 )

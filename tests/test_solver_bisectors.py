@@ -181,10 +181,14 @@ def test_split_at_zero_names_the_variables_that_multiply_others():
         "Constraints x*y = 0.1; z^3 + x = 0; sin(v) + z = 0; w^2 + sin(w + y) = 0.5;"
         "v + w = 0; end"
     )
-    solver = Solver.default(s, split_at_zero=True)
+    solver = Solver.default(s)  # on by default
     assert solver.csys.coupled.tolist() == [True, True, False, False, True]
     assert solver.bisector.at_zero.tolist() == [True, True, False, False, True]
-    assert Solver.default(s).bisector.at_zero is False  # off by default
+    assert solver.faces.tolist() == [True, True, False, False, True]  # 0 inside each domain
+    assert Solver.default(s, split_at_zero=False).bisector.at_zero is False
+    assert Solver.default(s, split_at_zero=False).faces is None
+    s.domain[0] = [0.0, 1.0]  # x can no longer be split at 0
+    assert Solver.default(s).faces.tolist() == [False, True, False, False, True]
 
 
 AXES = """Variables x in [-2, 2]; y in [-2, 2];

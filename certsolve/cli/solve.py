@@ -46,6 +46,7 @@ PARAMS_SCHEMA: dict[str, Any] = {
                 {"enum": ["all", "auto"], "type": "string"},
             ]
         },
+        "split_at_zero": {"type": "boolean"},
     },
 }
 
@@ -90,6 +91,13 @@ def register(sub) -> None:
         help="variables shaved by CID before each bisection: the chosen one (1), the first "
         "K by smear score, all (fewer boxes, more time per box), or auto (default: the count "
         "learnt during the search, as IBEX's ACID)",
+    )
+    p.add_argument(
+        "--split-at-zero",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="split the variables that multiply others at 0 while 0 is well inside their "
+        "interval (default: on; --no-split-at-zero: at the bisector's ratio everywhere)",
     )
     add_executor_options(p)
     add_checkpoint_options(p)

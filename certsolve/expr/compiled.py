@@ -116,7 +116,8 @@ class CompiledSystem:
         """``(n,)`` variables whose Jacobian column depends on another variable: each is a
         factor of a product with another (``x y``, ``(1 - x) y``), or is otherwise coupled
         with one nonlinearly; a sign split pays on these (:func:`.solver.bisectors.split`).
-        Computed on first use (only ``Solver.default(split_at_zero=True)`` asks)."""
+        Computed on first use (``Solver.default``'s sign split asks; forward kinematics,
+        with its own bisector, does not)."""
         out = np.zeros(self.n, dtype=np.bool_)
         nodes = self.fj.global_ids[self._fj_jac].tolist()  # the entries, row by row
         for node, j in zip(nodes, (self._jac_flat % self.n).tolist(), strict=True):

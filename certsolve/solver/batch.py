@@ -56,11 +56,22 @@ if TYPE_CHECKING:
     from .certify import Certifier
     from .newton import Linearization
 
-__all__ = ["BISECTION_GAIN", "Batch", "Contractor", "log_volume_ratio", "progress_gain"]
+__all__ = [
+    "BISECTION_GAIN",
+    "NARROW_SHARE",
+    "Batch",
+    "Contractor",
+    "log_volume_ratio",
+    "progress_gain",
+]
 
 #: the progress gain of a bisection, ``log 1/2``: a contraction that shrank a box at least
 #: this much was worth as much as a split (the fixpoint's and Newton's repeat rule)
 BISECTION_GAIN = float(np.log(0.5))
+
+#: :func:`progress_gain` counts a variable the bisector splits at 0 only where it is at
+#: least this share of the box's widest counted variable
+NARROW_SHARE = 0.01
 
 Choose = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 Prove = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], None]
@@ -79,20 +90,47 @@ def log_volume_ratio(lo0, hi0, lo1, hi1, significant: float = 1.0) -> np.ndarray
 
 
 def progress_gain(
-    lo0, hi0, lo1, hi1, eps: float, mask: np.ndarray | None, significant: float = 1.0
+    lo0,
+    hi0,
+    lo1,
+    hi1,
+    eps: float,
+    mask: np.ndarray | None,
+    significant: float = 1.0,
+    *,
+    faces: np.ndarray | None = None,
+    scale: np.ndarray | None = None,
 ) -> np.ndarray:
     """Log-volume change from ``lo0, hi0`` to ``lo1, hi1`` over the variables a bisection
     may still split: those of ``mask`` (None: all), wider than ``eps`` in ``lo0, hi0``;
-    of them, only those that shrank to ``significant`` of their width or less.
+    of them, only those that shrank to ``significant`` of their width or less.  Of the
+    variables of ``faces`` (``(n,)``, those the bisector splits at 0; None: none), only
+    those at least :data:`NARROW_SHARE` as wide as the box's widest counted variable, in
+    units of ``scale`` (the domain's widths; None: 1).
 
     A variable narrower than ``eps`` is never split, so its shrinking is no progress
     towards a decision: counted, a component converging to an exact zero (``[-1e-200,
     1e-200]``, then ``[-1e-250, 1e-250]`` ...) looked like a halving of the volume at every
     round, and one box went round again ~180 times (katsura-5, batches of 1024).
+
+    The sign split (:func:`.bisectors.split`) puts solutions with zero coordinates on the
+    faces of its halves, and HC4 narrows those coordinates onto the face linearly, by about
+    half a round, while the others stay wide: ``x1`` in ``[0, 5e-3]`` and ``x5`` in ``[0,
+    1e-2]`` halving round after round, ``x0`` staying ``[0.19, 0.38]``.  Counted, that sent
+    the boxes round again where a bisection lets Newton converge (katsura-6: 83 rounds
+    where the midpoint split takes 42; 50 now, ``docs/solver.md``, *Going round again on
+    the faces*).  Elsewhere the narrow variables' shrinking pays, and counts (Trigo1,
+    Discrete-Integralf2: their searches lean on it).
     """
-    count = (hi0 - lo0) > eps
+    with np.errstate(invalid="ignore"):  # inf - inf: nan, never counted
+        width = hi0 - lo0
+    count = width > eps
     if mask is not None:
         count &= mask
+    if faces is not None:
+        rel = width if scale is None else width / scale
+        widest = np.max(np.where(count, rel, 0.0), axis=1, initial=0.0, keepdims=True)
+        count &= ~faces | (rel >= NARROW_SHARE * widest)
     lo0, hi0 = np.where(count, lo0, 0.0), np.where(count, hi0, 0.0)
     return log_volume_ratio(lo0, hi0, lo1, hi1, significant)
 
@@ -125,6 +163,8 @@ class Batch:
     csys: CompiledSystem  # the system searched
     eps: float  # boxes narrower than eps in every splittable variable are not split
     mask: np.ndarray | None = None  # variables the bisector may split (None: all)
+    faces: np.ndarray | None = None  # (n,) the variables split at 0 (:func:`progress_gain`)
+    scale: np.ndarray | None = None  # the domain's widths (:func:`progress_gain`)
     choose: Choose | None = None  # the bisector: (lo, hi, jlo, jhi) -> variable per box
     certifier: Certifier | None = None
     stack: BoxStack | None = None  # the buffer: boxes sent back reach it at :meth:`flush`
@@ -231,7 +271,14 @@ class Batch:
 
     def gain(self, lo0: np.ndarray, hi0: np.ndarray, significant: float = 1.0) -> np.ndarray:
         """:func:`progress_gain` of every row from ``lo0, hi0`` (same rows) to its box now."""
-        return progress_gain(lo0, hi0, self.lo, self.hi, self.eps, self.mask, significant)
+        return self.progress(lo0, hi0, self.lo, self.hi, significant)
+
+    def progress(self, lo0, hi0, lo1, hi1, significant: float = 1.0) -> np.ndarray:
+        """:func:`progress_gain` from ``lo0, hi0`` to ``lo1, hi1`` with this search's
+        ``eps``, mask, sign-split variables and domain widths."""
+        return progress_gain(
+            lo0, hi0, lo1, hi1, self.eps, self.mask, significant, faces=self.faces, scale=self.scale
+        )
 
     def share_jacobian(self, jlo: np.ndarray, jhi: np.ndarray) -> None:
         """Make ``jlo, jhi`` ``(k, n, n)``, enclosures of the Jacobian over each row's box

@@ -11,10 +11,10 @@ Where the Jacobian gives no information, the variable widest relative to the dom
 :class:`LargestFirst` splits the widest variable.  All split at ``lo + ratio * w`` with
 ``ratio = 0.45`` by default, off-centre so that a solution lying exactly at the centre of a
 symmetric domain does not land on a bisection face.  A :class:`SmearCurvatureMix` with
-``at_zero`` (``Solver.default(split_at_zero=True)``: for the variables that multiply others)
-splits an interval that holds 0 well inside at 0 instead (:func:`split`): each half then has
-a sign, which a product over it is tight for.  Variables narrower than ``eps`` are
-never chosen, nor variables outside an optional mask (IBEX's "auxiliary" variables:
+``at_zero`` (``Solver.default``'s, unless ``split_at_zero=False``: for the variables that
+multiply others) splits an interval that holds 0 well inside at 0 instead (:func:`split`):
+each half then has a sign, which a product over it is tight for.  Variables narrower than
+``eps`` are never chosen, nor variables outside an optional mask (IBEX's "auxiliary" variables:
 quantities determined by the others, like the wire lengths of forward kinematics, which
 contraction narrows as the others shrink).
 
@@ -213,8 +213,8 @@ class SmearCurvatureMix:
         self.share = float(share)
         self.ratio = ratio
         #: split an interval holding 0 at 0 (:func:`split`): ``True``, ``False`` or an
-        #: ``(n,)`` mask of the variables (``Solver.default(split_at_zero=True)``: those that
-        #: multiply others, :attr:`~certsolve.expr.compiled.CompiledSystem.coupled`)
+        #: ``(n,)`` mask of the variables (``Solver.default``'s: those that multiply
+        #: others, :attr:`~certsolve.expr.compiled.CompiledSystem.coupled`)
         self.at_zero = np.array(at_zero, dtype=bool) if np.ndim(at_zero) else bool(at_zero)
 
     def choose(self, lo, hi, jlo, jhi, eps: float = 0.0, mask=None, scale=None) -> np.ndarray:

@@ -202,7 +202,7 @@ class Solver:
         batch_start: int | None = None,
         hc4_passes: int = 4,
         bisector: Any = None,
-        split_at_zero: bool = False,
+        split_at_zero: bool = True,
         dive: Any = None,
         certifier: Certifier | None = None,
         bisect_mask: Any = None,
@@ -228,11 +228,12 @@ class Solver:
         HC4 passes, :class:`~.bisectors.SmearCurvatureMix`, :class:`~.dive.NewtonSide`,
         Krawczyk).  ``split_at_zero``: the default bisector splits the variables that
         multiply others (:attr:`~certsolve.expr.compiled.CompiledSystem.coupled`) at 0 while
-        0 is well inside their interval (:func:`.bisectors.split`), a *sign split*; off by
-        default (``docs/solver.md``, *The split point*: it finds the first solutions of Eco10,
-        Redeco10 and CountercurrentReactors2-12 to -28 within 10 s, where the default finds
-        none, but puts Katsura's solutions with zero coordinates on bisection faces, katsura-6
-        2.5 -> 3.0 CPU s).  ``newton_groups``:
+        0 is well inside their interval (:func:`.bisectors.split`), a *sign split*; on by
+        default (``docs/solver.md``, *The split point* and *Going round again on the faces*:
+        it finds the first solutions of Eco10, Redeco10 and CountercurrentReactors2-12 to
+        -28 within 10 s, where the midpoint finds none; Katsura's solutions with zero
+        coordinates then lie on bisection faces, katsura-6 2.3 -> 2.5 CPU s).  ``False``:
+        the ratio's point everywhere.  ``newton_groups``:
         ``"variables"`` (default): Hansen–Sengupta with Hansen's mixed Jacobian, one
         variable per group; ``None``: the plain interval Jacobian; or a list of boolean
         masks (:class:`~.contractors.IntervalNewton`).  ``cid_slices``: slices of the CID
@@ -536,6 +537,8 @@ class Solver:
             csys=self.csys,
             eps=self.eps,
             mask=self.bisect_mask,
+            faces=self.faces,
+            scale=self.scale,
             choose=self._choose,
             certifier=self.certifier,
             stack=state.stack,
@@ -561,7 +564,8 @@ class Solver:
         big = ~small
         if np.any(big):
             lo3, hi3 = batch.lo[big], batch.hi[big]
-            at_zero = getattr(self.bisector, "at_zero", False)
+            faces = self.faces
+            at_zero = False if faces is None else faces
             (alo, ahi), (blo, bhi) = split(lo3, hi3, var[big], self.bisector.ratio, at_zero=at_zero)
             state.stats.bisections += lo3.shape[0]
             hints = batch.row_hints(big)  # each half starts from its parent's
@@ -584,6 +588,17 @@ class Solver:
         return self.bisector.choose(lo, hi, jlo, jhi, self.eps, self.bisect_mask, scale=self.scale)
 
     @property
+    def faces(self) -> np.ndarray | None:
+        """``(n,)`` the variables the bisector splits at 0 (its ``at_zero``, where the
+        domain holds 0 inside), None if none: the fixpoints count them only where not far
+        narrower than the box's widest (:func:`.batch.progress_gain`)."""
+        at_zero = getattr(self.bisector, "at_zero", False)
+        faces = (
+            np.asarray(at_zero, dtype=bool) & (self.domain[:, 0] < 0.0) & (self.domain[:, 1] > 0.0)
+        )
+        return faces if faces.any() else None
+
+    @property
     def scale(self) -> np.ndarray:
         """The domain's widths: a box on which the Jacobian tells the bisector nothing is
         split along its variable widest relative to them (:func:`~.bisectors.domain_scale`)."""
@@ -591,8 +606,11 @@ class Solver:
 
     def _gain(self, lo0, hi0, lo1, hi1) -> np.ndarray:
         """Progress from ``lo0, hi0`` to ``lo1, hi1`` as the fixpoints measure it
-        (:func:`.batch.progress_gain` with this solver's ``eps`` and mask)."""
-        return progress_gain(lo0, hi0, lo1, hi1, self.eps, self.bisect_mask)
+        (:func:`.batch.progress_gain` with this solver's ``eps``, mask, sign-split variables
+        and domain widths, as :meth:`.Batch.progress`)."""
+        return progress_gain(
+            lo0, hi0, lo1, hi1, self.eps, self.bisect_mask, faces=self.faces, scale=self.scale
+        )
 
     def _record(self, state: SearchState, elo, ehi, ulo, uhi, tight: bool = True) -> None:
         """Record proven solutions; existence boxes are tightened only for new ones."""

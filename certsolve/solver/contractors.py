@@ -25,7 +25,7 @@ import numpy as np
 from ..expr.compiled import CompiledSystem
 from ..interval.core import midpoint
 from ..interval.reductions import all_last
-from .batch import BISECTION_GAIN, Batch, log_volume_ratio, progress_gain
+from .batch import BISECTION_GAIN, Batch, log_volume_ratio
 from .newton import (
     Linearization,
     hansen_sengupta,
@@ -177,7 +177,7 @@ class IntervalNewton:
         active = np.flatnonzero(~proven & ~empty)
         xlo, xhi = lo0[active], hi0[active]  # the last step's input boxes of ``active``
         for k in range(1, self.iterations):
-            gain = progress_gain(xlo, xhi, lo[active], hi[active], batch.eps, batch.mask)
+            gain = batch.progress(xlo, xhi, lo[active], hi[active])
             active = active[gain <= BISECTION_GAIN]
             if active.size == 0:
                 break

@@ -47,4 +47,5 @@ def solve_keywords(params: Mapping[str, Any]) -> dict[str, Any]:
         "max_undecided": params["max_undecided"],
         "max_pending": params["max_pending"],
         "cid_vars": None if cid_vars == "all" else cid_vars,
+        "split_at_zero": params["split_at_zero"],
     }

@@ -79,7 +79,7 @@ from ..expr.compiled import CompiledSystem
 from ..interval.linalg import gamma
 from ..interval.reductions import all_last, any_last, to_front
 from ..interval.rounding import down, up
-from .batch import BISECTION_GAIN, Batch, progress_gain
+from .batch import BISECTION_GAIN, Batch
 from .bisectors import smear_scores
 from .buffer import no_hints
 from .lp import StallRule, dual_active_set, warm_start
@@ -497,7 +497,7 @@ class PolytopeHull:
             return
         lo, hi = (batch.lo, batch.hi) if rows.all() else (batch.lo[rows], batch.hi[rows])
         clo, chi, cemp, hints = self.contract_hinted(lo, hi, self._hints_of(batch, rows))
-        gain = progress_gain(lo, hi, clo, chi, batch.eps, batch.mask)
+        gain = batch.progress(lo, hi, clo, chi)
         learnt.done((cemp | (gain <= learnt.gain))[~sure[rows]], offered.size)
         batch.with_rows(rows, clo, chi, cemp)
         self._leave_hints(batch, rows, hints)

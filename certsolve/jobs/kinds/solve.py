@@ -29,6 +29,11 @@ class SolveParams(SolveOptions, Params):  # the library's options, and the answe
         "first k by smear score, all (fewer boxes, more time per box), or auto (default: "
         "the count learnt during the search, as IBEX's ACID)",
     )
+    split_at_zero: bool = Field(
+        default=True,
+        description="split the variables that multiply others at 0 while 0 is well inside "
+        "their interval (a sign split; false: at the bisector's ratio everywhere)",
+    )
 
     @field_validator("cid_vars", mode="before")
     @classmethod
