@@ -112,6 +112,8 @@ def _repair_params(kind: str, robot: dict | None, params: dict) -> None:
     if kind == "trajectory":
         params["controls"] = [(list(row) + [0.0] * m)[:m] for row in params["controls"]]
         params.pop("formulation", None)  # as fk's
+    if kind == "ik" and params.get("method") == "alg1" and (params.get("timeout") or 0) > 5.0:
+        params["timeout"] = 5.0  # Algorithm 1 searches that long: within a quick call's cost
     if kind == "ik" and robot and m != robot["dof"] + 1:  # closed form: m = w + 1 wires
         params.pop("distribution", None)
     if kind == "ik" and robot and params.get("tau_fixed") is not None:  # eq. 5: tau < k
