@@ -122,8 +122,7 @@ def progress_gain(
     the faces*).  Elsewhere the narrow variables' shrinking pays, and counts (Trigo1,
     Discrete-Integralf2: their searches lean on it).
     """
-    with np.errstate(invalid="ignore"):  # inf - inf: nan, never counted
-        width = hi0 - lo0
+    width = hi0 - lo0
     count = width > eps
     if mask is not None:
         count &= mask

@@ -66,7 +66,9 @@ def split(lo, hi, var, ratio: float, *, at_zero: Any = False):
     CountercurrentReactors2-12 to -28 in 10 s; on every variable it also cost Yamamura's and
     Trigo1's (cubes and sines of single variables, where a sign buys nothing); Katsura's
     solutions with zero coordinates land on faces, whose boxes then converge in a tail of
-    small rounds (katsura-6: 42 -> 83 rounds).  Off by default.
+    small rounds (katsura-6: 42 -> 83 rounds; 50 since the fixpoints leave such narrow
+    variables out, :func:`.batch.progress_gain`).  ``Solver.default`` splits its variables
+    that multiply others so, unless ``split_at_zero=False``.
     """
     rows = np.arange(lo.shape[0])
     a, b = lo[rows, var], hi[rows, var]
