@@ -3,8 +3,9 @@
 The scores are checked on hand-computed Jacobian enclosures; the coin for its share and
 for not depending on the batch a box is in; the mix for taking smear's choice on one side
 of the coin and curvature's on the other; the fallback where no score is positive for splitting
-the variable widest relative to the domain; the sign split at 0, and the solutions it puts on
-a bisection face.  That the default solver (the mix) loses no
+the variable widest relative to the domain; the mix leaving out variables already far
+narrower than the box's widest; the sign split at 0, and the solutions it puts on a
+bisection face.  That the default solver (the mix) loses no
 solution is checked by every solver test on the reference systems, and on a quadratic
 eigenvalue problem in ``test_solver_geneig.py``.
 """
@@ -19,8 +20,10 @@ import pytest
 from certsolve.expr.minibex import parse_minibex
 from certsolve.solver import Solver
 from certsolve.solver.bisectors import (
+    NARROW_SPLIT,
     SmearCurvatureMix,
     SmearSumRelative,
+    _negligible,
     box_coin,
     curvature_scores,
     smear_scores,
@@ -123,6 +126,60 @@ def test_the_solver_scale_is_its_domain():
     solver = Solver.default(s)
     assert solver.scale.tolist() == [2.0, 1.0, 1.0]  # unbounded, degenerate: 1
     assert solver.on_domain(np.array([[0, 4], [0, 1], [1, 1]])).scale.tolist() == [4, 1, 1]
+
+
+def narrow_box():
+    """``f = (x + s - 1, y + s - 1, s + t² - 2)`` on a box where ``x``, ``y`` and ``s`` are
+    1e-7 wide and ``t`` is 0.5 wide: the relative smear gives ``s`` half of the first two
+    equations (2 x 0.5) and ``t`` most of the third (< 1)."""
+    lo = np.array([[0.5, 0.5, 0.5, 1.0]])
+    hi = lo + np.array([[1e-7, 1e-7, 1e-7, 0.5]])
+    one = np.ones((1, 3, 4))
+    jlo = np.array([[[1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 1.0, 0.0], [0.0, 0.0, 1.0, 2.0]]])
+    jhi = np.array([[[1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 1.0, 0.0], [0.0, 0.0, 1.0, 3.0]]])
+    return lo, hi, jlo * one, jhi * one
+
+
+def test_a_variable_far_narrower_than_the_widest_is_not_split():
+    lo, hi, jlo, jhi = narrow_box()
+    assert smear_scores(lo, hi, jlo, jhi).argmax() == 2  # the plain score picks s
+    assert SmearSumRelative().choose(lo, hi, jlo, jhi).tolist() == [2]
+    mix = SmearCurvatureMix(share=0.0)  # smear on every box
+    assert mix.narrow == NARROW_SPLIT
+    assert mix.choose(lo, hi, jlo, jhi).tolist() == [3]
+    assert SmearCurvatureMix(share=0.0, narrow=0.0).choose(lo, hi, jlo, jhi).tolist() == [2]
+    # narrow in width but not relative to its domain: s is still split
+    scale = np.array([1.0, 1.0, 1e-6, 1.0])
+    assert mix.choose(lo, hi, jlo, jhi, scale=scale).tolist() == [2]
+    # an unbounded variable sets no scale: beside t = [1, inf] nothing is narrow
+    wide = hi.copy()
+    wide[0, 3] = np.inf
+    score = np.ones((1, 4))
+    assert _negligible(score, lo, hi, None, NARROW_SPLIT).tolist() == [[True] * 3 + [False]]
+    assert not _negligible(score, lo, wide, None, NARROW_SPLIT).any()
+
+
+TRIGO = """Variables x[4] in [1.e-8, 2*pi - 1.e-8]; s in [-10, 10];
+Constraints
+  5 - cos(x(1)) + s - sin(x(1)) = 0;
+  4 + 2*(1 - cos(x(2))) + s - sin(x(2)) = 0;
+  4 + 3*(1 - cos(x(3))) + s - sin(x(3)) = 0;
+  4 + 4*(1 - cos(x(4))) + s - sin(x(4)) = 0;
+  -cos(x(1)) - cos(x(2)) - cos(x(3)) - cos(x(4)) - s = 0;
+end"""
+
+
+def test_leaving_narrow_variables_out_loses_no_solution():
+    """IBEX's Trigo1 at n = 4 (its Trigo1-0010sp made the rule): the same certified
+    solutions with the rule and without, and nothing undecided."""
+    system = parse_minibex(TRIGO)
+    answers = []
+    for narrow in (NARROW_SPLIT, 0.0):
+        bisector = SmearCurvatureMix(narrow=narrow)
+        r = Solver.default(system, bisector=bisector).solve(timeout=60)
+        assert r.status == "complete" and not r.undecided
+        answers.append(sorted(((s.lo + s.hi) / 2).round(9).tolist() for s in r.solutions))
+    assert answers[0] == answers[1] and len(answers[0]) > 0
 
 
 POLE = """Variables x in [0, 1.5707963]; y in [0, 2]; z in [-1e8, 1e8];

@@ -16,7 +16,10 @@ multiply others) splits an interval that holds 0 well inside at 0 instead (:func
 each half then has a sign, which a product over it is tight for.  Variables narrower than
 ``eps`` are never chosen, nor variables outside an optional mask (IBEX's "auxiliary" variables:
 quantities determined by the others, like the wire lengths of forward kinematics, which
-contraction narrows as the others shrink).
+contraction narrows as the others shrink).  :class:`SmearCurvatureMix` also leaves out, while
+a wider variable scores, a variable far narrower than the box's widest (:func:`_best`,
+``narrow``): the relative smear of an equation whose variables are all tiny gives them a
+share as large as that of an equation still wide.
 
 Split points and widths come from :mod:`certsolve.interval.core` (:func:`split_point`,
 :func:`splittable_width`): an unbounded interval is split at a finite point, and an interval
@@ -43,6 +46,12 @@ __all__ = [
     "smear_scores",
     "split",
 ]
+
+
+#: :class:`SmearCurvatureMix` ``narrow``: a variable narrower than this share of the box's
+#: widest, both in width and in width relative to the domain, is not split while a wider
+#: one scores (:func:`_best`)
+NARROW_SPLIT = 1e-3
 
 
 #: :func:`split` ``at_zero``: 0 is the split point when it lies at least this fraction of
@@ -138,11 +147,22 @@ def _relative_scores(lo, hi, jlo, jhi, eps, mask, curvature: bool) -> np.ndarray
     return np.where(allowed, score, -1.0)
 
 
-def _best(score, lo, hi, scale=None) -> np.ndarray:
+def _best(score, lo, hi, scale=None, narrow: float = 0.0) -> np.ndarray:
     """The best-scoring variable per box; where no score is positive (all zero, or an infinite
     Jacobian) the widest allowed one (score >= 0: the scores are -1 exactly where a variable is
     not allowed), its width divided by ``scale`` (``(n,)``, the widths of the search domain)
     when given.
+
+    ``narrow`` > 0: an allowed variable narrower than ``narrow`` times the box's widest
+    allowed one, in width and (with ``scale``) in width relative to the domain, scores 0.
+    Smear-sum-relative scores are shares of each equation's variation: an equation whose
+    variables have all been narrowed to ~1e-7 still hands them a whole share.  On IBEX's
+    Trigo1-0010sp (``x_i`` in ``[0, 2π]``, ``x_i`` and ``SE`` in equation ``i``), six such
+    equations kept ``SE`` being split from 5e-7 down to 1e-8, doubling the boxes every round,
+    while ``x_7`` stayed 0.18 wide around two of its roots: 5,069 boxes, 127-191 with the
+    rule (``docs/solver.md``, *Variables already narrow*).  Both widths must be narrow, so
+    that a variable whose unit makes all its widths small (a domain of ``[0, 1e-6]`` beside
+    ``[0, 1e3]``) is still split.
 
     Widths relative to the domain make that choice unit-free: on IBEX's AOL-legentil (two
     angles in ``[0, π/2]``, a multiplier ``z`` in ``[-1e8, 1e8]``, and poles where every
@@ -150,6 +170,8 @@ def _best(score, lo, hi, scale=None) -> np.ndarray:
     boxes in 60 s), where splitting each variable in turn proves in 27 boxes that there is no
     solution.
     """
+    if narrow > 0.0:
+        score = np.where(_negligible(score, lo, hi, scale, narrow), 0.0, score)
     best = np.argmax(score, axis=1)
     stuck = max_last(score) <= 0.0
     if np.any(stuck):
@@ -158,6 +180,19 @@ def _best(score, lo, hi, scale=None) -> np.ndarray:
             w = w / scale
         best[stuck] = np.argmax(np.where(score[stuck] >= 0.0, w, -1.0), axis=1)
     return best
+
+
+def _negligible(score, lo, hi, scale, narrow: float) -> np.ndarray:
+    """``(B, n)``: allowed variables narrower than ``narrow`` times the box's widest allowed
+    bounded one, in width and, with ``scale``, in width relative to the domain."""
+    allowed = score >= 0.0
+    w = splittable_width(lo, hi)
+    finite = allowed & np.isfinite(w)  # an unbounded variable sets no scale, is never narrow
+    out = allowed & (w < narrow * max_last(np.where(finite, w, 0.0))[:, None])
+    if scale is not None:
+        r = w / scale
+        out &= r < narrow * max_last(np.where(finite, r, 0.0))[:, None]
+    return out
 
 
 def domain_scale(domain) -> np.ndarray:
@@ -211,9 +246,18 @@ class SmearCurvatureMix:
     the box, so a search is reproducible and does not depend on batch sizes or workers.
     """
 
-    def __init__(self, share: float = 1 / 3, ratio: float = 0.45, *, at_zero: Any = False):
+    def __init__(
+        self,
+        share: float = 1 / 3,
+        ratio: float = 0.45,
+        *,
+        at_zero: Any = False,
+        narrow: float = NARROW_SPLIT,
+    ):
         self.share = float(share)
         self.ratio = ratio
+        #: variables narrower than this share of the box's widest are left out (:func:`_best`)
+        self.narrow = float(narrow)
         #: split an interval holding 0 at 0 (:func:`split`): ``True``, ``False`` or an
         #: ``(n,)`` mask of the variables (``Solver.default``'s: those that multiply
         #: others, :attr:`~certsolve.expr.compiled.CompiledSystem.coupled`)
@@ -226,7 +270,7 @@ class SmearCurvatureMix:
             curv = curvature_scores(lo[rows], hi[rows], jlo[rows], jhi[rows], eps, mask)
             linear = max_last(curv) <= 0.0  # no curvature left: smear decides
             score[rows[~linear]] = curv[~linear]
-        return _best(score, lo, hi, scale)
+        return _best(score, lo, hi, scale, self.narrow)
 
 
 class Prioritized:
