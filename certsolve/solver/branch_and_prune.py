@@ -60,7 +60,7 @@ from ..expr.node import to_string
 from ..expr.polynomial import reduce_degree as lower_degree
 from ..expr.system import System
 from ..lazy import surely_valid
-from .batch import Batch, Contractor, progress_gain
+from .batch import Batch, Contractor
 from .batching import BatchSizer
 from .bisectors import SmearCurvatureMix, domain_scale, split
 from .buffer import BoxStack, no_hints
@@ -603,14 +603,6 @@ class Solver:
         """The domain's widths: a box on which the Jacobian tells the bisector nothing is
         split along its variable widest relative to them (:func:`~.bisectors.domain_scale`)."""
         return domain_scale(self.domain)
-
-    def _gain(self, lo0, hi0, lo1, hi1) -> np.ndarray:
-        """Progress from ``lo0, hi0`` to ``lo1, hi1`` as the fixpoints measure it
-        (:func:`.batch.progress_gain` with this solver's ``eps``, mask, sign-split variables
-        and domain widths, as :meth:`.Batch.progress`)."""
-        return progress_gain(
-            lo0, hi0, lo1, hi1, self.eps, self.bisect_mask, faces=self.faces, scale=self.scale
-        )
 
     def _record(self, state: SearchState, elo, ehi, ulo, uhi, tight: bool = True) -> None:
         """Record proven solutions; existence boxes are tightened only for new ones."""
