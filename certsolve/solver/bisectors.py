@@ -17,7 +17,8 @@ each half then has a sign, which a product over it is tight for.  Variables narr
 ``eps`` are never chosen, nor variables outside an optional mask (IBEX's "auxiliary" variables:
 quantities determined by the others, like the wire lengths of forward kinematics, which
 contraction narrows as the others shrink).  :class:`SmearCurvatureMix` also leaves out, while
-a wider variable scores, a variable far narrower than the box's widest (:func:`_best`,
+another variable scores, a variable whose impact on the equations (:func:`smear_impact`) and
+width relative to the domain are both far below the box's largest (:func:`_best`,
 ``narrow``): the relative smear of an equation whose variables are all tiny gives them a
 share as large as that of an equation still wide.
 
@@ -43,14 +44,15 @@ __all__ = [
     "box_coin",
     "curvature_scores",
     "domain_scale",
+    "smear_impact",
     "smear_scores",
     "split",
 ]
 
 
-#: :class:`SmearCurvatureMix` ``narrow``: a variable narrower than this share of the box's
-#: widest, both in width and in width relative to the domain, is not split while a wider
-#: one scores (:func:`_best`)
+#: :class:`SmearCurvatureMix` ``narrow``: a variable below this share of the box's largest,
+#: both in impact (:func:`smear_impact`) and in width relative to the domain, is not split
+#: while another one scores (:func:`_best`)
 NARROW_SPLIT = 1e-3
 
 
@@ -133,6 +135,16 @@ def curvature_scores(lo, hi, jlo, jhi, eps: float = 0.0, mask=None) -> np.ndarra
     return _relative_scores(lo, hi, jlo, jhi, eps, mask, curvature=True)
 
 
+def smear_impact(lo, hi, jlo, jhi) -> np.ndarray:
+    """``(B, n)``: ``max_i |J_ij| w_j``, the largest variation ``x_j`` alone can cause in one
+    equation over the box (IBEX's ``SmearMax`` score); unlike a width, it does not depend on
+    the variable's unit."""
+    w = splittable_width(lo, hi)
+    with np.errstate(all="ignore"):
+        mag = np.maximum(np.abs(jlo), np.abs(jhi))
+        return np.max(mag * w[:, None, :], axis=1, initial=0.0)
+
+
 def _relative_scores(lo, hi, jlo, jhi, eps, mask, curvature: bool) -> np.ndarray:
     w = splittable_width(lo, hi)
     with np.errstate(all="ignore"):
@@ -147,22 +159,27 @@ def _relative_scores(lo, hi, jlo, jhi, eps, mask, curvature: bool) -> np.ndarray
     return np.where(allowed, score, -1.0)
 
 
-def _best(score, lo, hi, scale=None, narrow: float = 0.0) -> np.ndarray:
+def _best(score, lo, hi, scale=None, narrow: float = 0.0, impact=None) -> np.ndarray:
     """The best-scoring variable per box; where no score is positive (all zero, or an infinite
     Jacobian) the widest allowed one (score >= 0: the scores are -1 exactly where a variable is
     not allowed), its width divided by ``scale`` (``(n,)``, the widths of the search domain)
     when given.
 
-    ``narrow`` > 0: an allowed variable narrower than ``narrow`` times the box's widest
-    allowed one, in width and (with ``scale``) in width relative to the domain, scores 0.
+    ``narrow`` > 0: an allowed variable below ``narrow`` times the box's largest, in impact
+    (``impact``, :func:`smear_impact`; its width when not given) and (with ``scale``) in
+    width relative to the domain, scores 0.
     Smear-sum-relative scores are shares of each equation's variation: an equation whose
     variables have all been narrowed to ~1e-7 still hands them a whole share.  On IBEX's
     Trigo1-0010sp (``x_i`` in ``[0, 2π]``, ``x_i`` and ``SE`` in equation ``i``), six such
     equations kept ``SE`` being split from 5e-7 down to 1e-8, doubling the boxes every round,
     while ``x_7`` stayed 0.18 wide around two of its roots: 5,069 boxes, 127-191 with the
-    rule (``docs/solver.md``, *Variables already narrow*).  Both widths must be narrow, so
-    that a variable whose unit makes all its widths small (a domain of ``[0, 1e-6]`` beside
-    ``[0, 1e3]``) is still split.
+    rule (``docs/solver.md``, *Variables already narrow*).  Both must be small, so that a
+    variable whose unit makes all its widths small (a domain of ``[0, 1e-6]`` beside ``[0,
+    1e3]``) is still split.  The impact, not the width: an eigenvalue ``λ`` 1-2,500 wide that
+    multiplies ``x_j`` in ``[-1e8, 1e8]`` beside products 1e9 wide (IBEX's Geneig-icse) is far
+    narrower than the widest, yet it moves the equations as much as they do; left out by
+    width, Geneig, Geneigbis and Geneig-icse no longer completed (4,864 boxes -> 110k in
+    160 s on Geneig-icse, ``docs/solver.md``, *The narrow rule compares impacts*).
 
     Widths relative to the domain make that choice unit-free: on IBEX's AOL-legentil (two
     angles in ``[0, π/2]``, a multiplier ``z`` in ``[-1e8, 1e8]``, and poles where every
@@ -171,7 +188,7 @@ def _best(score, lo, hi, scale=None, narrow: float = 0.0) -> np.ndarray:
     solution.
     """
     if narrow > 0.0:
-        score = np.where(_negligible(score, lo, hi, scale, narrow), 0.0, score)
+        score = np.where(_negligible(score, lo, hi, scale, narrow, impact), 0.0, score)
     best = np.argmax(score, axis=1)
     stuck = max_last(score) <= 0.0
     if np.any(stuck):
@@ -182,16 +199,18 @@ def _best(score, lo, hi, scale=None, narrow: float = 0.0) -> np.ndarray:
     return best
 
 
-def _negligible(score, lo, hi, scale, narrow: float) -> np.ndarray:
-    """``(B, n)``: allowed variables narrower than ``narrow`` times the box's widest allowed
-    bounded one, in width and, with ``scale``, in width relative to the domain."""
+def _negligible(score, lo, hi, scale, narrow: float, impact=None) -> np.ndarray:
+    """``(B, n)``: allowed variables below ``narrow`` times the box's largest allowed finite
+    value of each measure: the variable's ``impact`` (:func:`smear_impact`) when given, else
+    its width; and, with ``scale``, its width relative to the domain."""
     allowed = score >= 0.0
     w = splittable_width(lo, hi)
-    finite = allowed & np.isfinite(w)  # an unbounded variable sets no scale, is never narrow
-    out = allowed & (w < narrow * max_last(np.where(finite, w, 0.0))[:, None])
-    if scale is not None:
-        r = w / scale
-        out &= r < narrow * max_last(np.where(finite, r, 0.0))[:, None]
+    out = allowed
+    for size in (w if impact is None else impact, None if scale is None else w / scale):
+        if size is None:
+            continue
+        finite = allowed & np.isfinite(size)  # an unbounded one sets no scale, is never narrow
+        out = out & (size < narrow * max_last(np.where(finite, size, 0.0))[:, None])
     return out
 
 
@@ -256,7 +275,8 @@ class SmearCurvatureMix:
     ):
         self.share = float(share)
         self.ratio = ratio
-        #: variables narrower than this share of the box's widest are left out (:func:`_best`)
+        #: variables below this share of the box's largest impact and relative width are
+        #: left out (:func:`_best`)
         self.narrow = float(narrow)
         #: split an interval holding 0 at 0 (:func:`split`): ``True``, ``False`` or an
         #: ``(n,)`` mask of the variables (``Solver.default``'s: those that multiply
@@ -270,7 +290,8 @@ class SmearCurvatureMix:
             curv = curvature_scores(lo[rows], hi[rows], jlo[rows], jhi[rows], eps, mask)
             linear = max_last(curv) <= 0.0  # no curvature left: smear decides
             score[rows[~linear]] = curv[~linear]
-        return _best(score, lo, hi, scale, self.narrow)
+        impact = smear_impact(lo, hi, jlo, jhi) if self.narrow > 0.0 else None
+        return _best(score, lo, hi, scale, self.narrow, impact)
 
 
 class Prioritized:
