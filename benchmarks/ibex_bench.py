@@ -20,6 +20,12 @@ runs it, one subprocess per run, start-up included:
   solution twice, in adjacent boxes, so solution boxes that overlap or lie within 1e-6 of
   each other (in every variable) are counted once.
 
+certsolve runs with Python's bytecode caches, as an installed package does: its modules are
+compiled once (``compileall``) before the first run, and ``PYTHONDONTWRITEBYTECODE`` is not
+passed on; without them every run compiles its ~100 modules again (0.1-0.2 s of CPU on a
+2-core VM, the whole of ibexsolve's time on the small files).  ``--no-bytecode`` runs it as
+the environment says (``benchmarks/startup_bench.py`` measures the same two ways).
+
 Reported per file and solver: the status (``complete``: nothing pending; ``timeout``;
 ``refused``: the solver did not run it, with its message), the certified solutions, the
 undecided boxes (certsolve's undecided, ibexsolve's unknown), the boxes processed
@@ -196,6 +202,24 @@ def children_cpu() -> float:
 
 
 # -- certsolve --------------------------------------------------------------------------------
+def certsolve_env(args: argparse.Namespace) -> dict[str, str]:
+    """The environment of certsolve's runs: without ``PYTHONDONTWRITEBYTECODE`` unless
+    ``--no-bytecode`` (the module docstring)."""
+    env = dict(os.environ)
+    if not args.no_bytecode:
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+    return env
+
+
+def compile_certsolve() -> None:
+    """Write the bytecode caches of the certsolve package (as ``pip install`` does)."""
+    import compileall
+
+    import certsolve
+
+    compileall.compile_dir(Path(certsolve.__file__).parent, quiet=1)
+
+
 def run_certsolve(path: Path, args: argparse.Namespace, square: bool = True) -> Run:
     cmd = [sys.executable, "-m", "certsolve", "solve", str(path), "--json", "--timeout",
            str(args.timeout), "--eps", str(args.eps), "--cid-vars", args.cid_vars]  # fmt: skip
@@ -203,7 +227,8 @@ def run_certsolve(path: Path, args: argparse.Namespace, square: bool = True) -> 
         cmd += ["--workers", args.workers]
     t0, c0 = time.perf_counter(), children_cpu()
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout * 3 + 60)
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout * 3 + 60,
+                              env=certsolve_env(args))  # fmt: skip
     except subprocess.TimeoutExpired:
         return Run(status="error", wall=time.perf_counter() - t0, message="killed: no answer",
                    cpu=children_cpu() - c0)  # fmt: skip
@@ -432,7 +457,9 @@ def markdown(rows: list[Row], args: argparse.Namespace, command: str) -> str:
         f"Written {date} from runs on the project's shared 2-core machine (other work beside),",
         f"wall-time limit {args.timeout:g} s per run for both solvers, `--eps` / `--eps-min`",
         f"{args.eps:g}; the time is the median wall time of the runs (their number in parentheses",
-        "when more than one) of the whole subprocess, start-up included, and `cpu` its median CPU",
+        "when more than one) of the whole subprocess, start-up included"
+        + (" (certsolve without bytecode caches)" if args.no_bytecode else "")
+        + ", and `cpu` its median CPU",
         "time (user + system, children included): the machine is shared by other work, so wall",
         f"times there carry its load; CPU times less so.  A file is run again (up to {args.runs}",
         "runs) only while its runs complete under `--repeat-below` seconds (default 5).",
@@ -515,6 +542,8 @@ def main() -> None:
     ap.add_argument("--csv", type=Path, default=None, help="also write the table as CSV")
     ap.add_argument("--cid-vars", default="auto", help="certsolve solve --cid-vars")
     ap.add_argument("--workers", default=None, help="certsolve solve --workers (default auto)")
+    ap.add_argument("--no-bytecode", action="store_true",
+                    help="run certsolve without its bytecode caches")  # fmt: skip
     args = ap.parse_args()
     solvers = [s for s in args.solvers.split(",") if s and s != "none"]
     for s in solvers:
@@ -527,6 +556,8 @@ def main() -> None:
     keep = None if args.both_complete is None else both_complete(args)
     files = sorted(p for p in args.dir.rglob("*") if p.suffix in (".bch", ".mbx"))
     stores = {s: load_store(store_path(args, s)) for s in SOLVERS}
+    if "certsolve" in solvers and not args.no_bytecode:
+        compile_certsolve()
     rows = []
     for path in files:
         rel = path.relative_to(args.dir).as_posix()

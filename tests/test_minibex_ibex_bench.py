@@ -95,7 +95,7 @@ def test_traced_solutions_reads_the_boxes_ibexsolve_prints():
 
 def test_the_table_summarises_parses_completions_ratios_and_disagreements():
     Run, Row, Parsed = bench.Run, bench.Row, bench.Parsed
-    args = bench.argparse.Namespace(timeout=5.0, eps=1e-8, runs=3)
+    args = bench.argparse.Namespace(timeout=5.0, eps=1e-8, runs=3, no_bytecode=False)
     rows = [
         Row(path="a.bch", parsed=Parsed(n=2, m=2), runs={
             "certsolve": [Run(status="complete", wall=w, solutions=2) for w in (1.0, 3.0, 2.0)],
