@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from certsolve.expr.compiled import CompiledSystem
-from certsolve.expr.minibex import load_minibex
+from certsolve.expr.minibex import load_minibex, parse_minibex
 from certsolve.solver import Solver, solve
 from certsolve.solver.bisectors import smear_scores
 from certsolve.solver.contractors import HC4, IntervalNewton, PartialNewton, log_volume_ratio
@@ -182,16 +182,21 @@ def test_solver_with_mixed_newton_matches_reference(name):
         assert sum(holds(s.lo, s.hi, p) for s in res.solutions) == 1
 
 
-@pytest.mark.parametrize("stacked", [0, 10**9], ids=["sequence", "side-by-side"])
+@pytest.mark.parametrize(
+    "stacked, swept",
+    [(0, 0), (10**9, 0), (10**9, 10**9)],
+    ids=["sequence", "side-by-side", "swept"],
+)
 @pytest.mark.parametrize("name", NAMES)
-def test_cid_on_several_variables_keeps_solutions(name, stacked):
+def test_cid_on_several_variables_keeps_solutions(name, stacked, swept):
     """The solver's CID before bisection (chosen variable, then the others by smear score,
-    one after the other or side by side) never loses a reference point, and contracts at
-    least as much as CID on one variable."""
+    one after the other, side by side, or side by side swept again on every batch) never
+    loses a reference point, and contracts at least as much as CID on one variable."""
     csys, _ = compiled(name)
     rng = np.random.default_rng(5)
     every = find(Solver.default(csys, cid_vars=None).contractor, Shave)  # all the variables
     every.stacked_pairs = stacked
+    every.sweep_rows = swept
     one = find(Solver.default(csys, cid_vars=1).contractor, Shave)  # the chosen variable only
     assert every.count == csys.n and one.count == 1
     gains = []
@@ -211,6 +216,49 @@ def test_cid_on_several_variables_keeps_solutions(name, stacked):
     check_contractor(name, contract)
     if csys.n > 2:
         assert gains[0] < 0.0  # the other variables contracted some boxes further
+
+
+BROYDEN_TRI = (
+    "Variables x[8] in [-100, 100]; Constraints\n"
+    + "\n".join(
+        f"1 {'' if i == 1 else f'- x({i - 1}) '}+ (3 - 2*x({i}))*x({i})"
+        + ("" if i == 8 else f" - 2*x({i + 1})")
+        + " = 0;"
+        for i in range(1, 9)
+    )
+    + "\nend"
+)
+
+
+def test_a_small_batch_is_swept_again_and_keeps_its_solutions():
+    """IBEX's BroydenTri at n = 8 (a tridiagonal chain): on a box of one batch row, the
+    side-by-side sweep repeated while it pays contracts more than one sweep, inside it, and
+    keeps both solutions; a batch wider than ``sweep_rows`` is swept once."""
+    system = parse_minibex(BROYDEN_TRI)
+    sols = solve(system, timeout=120)
+    assert sols.status == "complete" and len(sols.solutions) == 2
+    csys = CompiledSystem(system)
+    shave = find(Solver.default(csys, cid_vars=None).contractor, Shave)
+    assert shave.sweep_rows >= 1 and shave.sweeps > 1
+    points = np.array([(s.lo + s.hi) / 2 for s in sols.solutions])
+    lo, hi = points.min(axis=0)[None, :] - 0.3, points.max(axis=0)[None, :] + 0.3  # both
+    _, _, jlo, jhi = csys.eval_fj(lo, hi)
+    var = np.array([0])
+    out = {}
+    for sweeps in (1, shave.sweeps):
+        shave.sweeps = sweeps
+        out[sweeps] = shave.contract(lo, hi, jlo, jhi, var, eps=1e-8)
+    (alo, ahi, aemp), (blo, bhi, bemp) = out[1], out[shave.sweeps]
+    assert not aemp[0] and not bemp[0]
+    assert np.all(blo >= alo) and np.all(bhi <= ahi)
+    assert log_volume_ratio(alo, ahi, blo, bhi)[0] < 0.0  # the sweeps after the first paid
+    for s in sols.solutions:
+        assert np.all(blo[0] <= s.lo) and np.all(s.hi <= bhi[0])
+    # the same box beside more rows than sweep_rows: swept once, as the first contract above
+    many = shave.sweep_rows + 1
+    rep = [np.repeat(a, many, axis=0) for a in (lo, hi, jlo, jhi)]
+    clo, chi, _ = shave.contract(*rep, np.zeros(many, dtype=np.int64), eps=1e-8)
+    assert np.array_equal(clo[0], alo[0]) and np.array_equal(chi[0], ahi[0])
 
 
 def test_cid_vars_needs_fewer_boxes_and_keeps_the_solutions():

@@ -25,7 +25,7 @@ import numpy as np
 
 from ..interval.core import cut_points
 from ..interval.reductions import any_last
-from .batch import Batch, log_volume_ratio
+from .batch import BISECTION_GAIN, Batch, log_volume_ratio
 from .bisectors import smear_scores
 
 __all__ = ["CID", "AdaptiveCount", "Shave", "check_count"]
@@ -215,6 +215,11 @@ class Shave:
         #: 2.36 -> 2.46, katsura-6 2.49 -> 2.55; the others within 2 %.  Side by side on
         #: every batch (no limit) loses on the large ones (Katsura-14, Brent-8, 1 run).
         self.stacked_pairs = 512
+        #: a batch of at most this many boxes (a chain's front, a box converging alone) is
+        #: shaved side by side again, up to :attr:`sweeps` times in all, each box while its
+        #: last sweep shrank it as much as a bisection (:meth:`_side_by_side`)
+        self.sweep_rows = 2
+        self.sweeps = 4
 
     def learner(self) -> AdaptiveCount | None:
         """A fresh learnt state for a search (``count="auto"``), else ``None``."""
@@ -312,19 +317,35 @@ class Shave:
         each variable of an already shaved box, so it contracts more per box; side by side
         costs one call instead of one per variable, which wins when the batch is small (a
         numpy call costs nearly the same for 50 rows as for 500).  ACID learns from each
-        variable's gain over the same starting box.
+        variable's gain over the same starting box (the first sweep).
+
+        A batch of at most :attr:`sweep_rows` boxes is swept again (up to :attr:`sweeps`),
+        each box while its last sweep shrank its volume at least as much as a bisection
+        (:data:`~.batch.BISECTION_GAIN`): on a chain (a tridiagonal or banded system) a sweep
+        moves the bounds a link or two along it, and a box converging alone to a solution
+        goes round the search loop once per sweep otherwise.  Measured on IBEX's files
+        (``docs/solver.md``, *A small batch swept again*): Trigexp2-13sp 57 -> 2 boxes,
+        BroydenTri-0030 384 -> 120, Trigexp1-100 96 -> 27; Bratu-0030 523 -> 735 (its first
+        rounds are of one or two boxes too).  Swept again at every batch size, the wide
+        searches lost more (CountercurrentReactors2-8 no longer completed in 10 s).
         """
-        box, k = np.nonzero(useful & ~cemp[:, None])
-        if box.size == 0:
-            return
-        nlo, nhi, emp = self.cid.contract(clo[box], chi[box], order[box, k])
-        if acid is not None:
-            shrank = _learnt(acid, learns[box], clo[box], chi[box], nlo, nhi, emp)
-            np.maximum.at(needed, box[shrank], k[shrank] + 2)
-        np.maximum.at(clo, box, nlo)
-        np.minimum.at(chi, box, nhi)
-        np.logical_or.at(cemp, box, emp)
-        cemp |= any_last(clo > chi)
+        sweeps = self.sweeps if clo.shape[0] <= self.sweep_rows else 1
+        for _ in range(sweeps):
+            box, col = np.nonzero(useful & ~cemp[:, None])
+            if box.size == 0:
+                return
+            lo0, hi0 = clo.copy(), chi.copy()
+            nlo, nhi, emp = self.cid.contract(clo[box], chi[box], order[box, col])
+            if acid is not None:
+                shrank = _learnt(acid, learns[box], clo[box], chi[box], nlo, nhi, emp)
+                np.maximum.at(needed, box[shrank], col[shrank] + 2)
+            np.maximum.at(clo, box, nlo)
+            np.minimum.at(chi, box, nhi)
+            np.logical_or.at(cemp, box, emp)
+            cemp |= any_last(clo > chi)
+            # again on the boxes this sweep shrank as much as a bisection, learning no more
+            useful = useful & (log_volume_ratio(lo0, hi0, clo, chi) < BISECTION_GAIN)[:, None]
+            learns, acid = np.zeros_like(learns), None
 
 
 def _learnt(acid: AdaptiveCount, learns, lo, hi, nlo, nhi, empty) -> np.ndarray:
