@@ -330,11 +330,12 @@ class Shave:
         searches lost more (CountercurrentReactors2-8 no longer completed in 10 s).
         """
         sweeps = self.sweeps if clo.shape[0] <= self.sweep_rows else 1
-        for _ in range(sweeps):
+        for sweep in range(1, sweeps + 1):
             box, col = np.nonzero(useful & ~cemp[:, None])
             if box.size == 0:
                 return
-            lo0, hi0 = clo.copy(), chi.copy()
+            if sweep < sweeps:  # the gain decides the next sweep
+                lo0, hi0 = clo.copy(), chi.copy()
             nlo, nhi, emp = self.cid.contract(clo[box], chi[box], order[box, col])
             if acid is not None:
                 shrank = _learnt(acid, learns[box], clo[box], chi[box], nlo, nhi, emp)
@@ -343,6 +344,8 @@ class Shave:
             np.minimum.at(chi, box, nhi)
             np.logical_or.at(cemp, box, emp)
             cemp |= any_last(clo > chi)
+            if sweep == sweeps:
+                return
             # again on the boxes this sweep shrank as much as a bisection, learning no more
             useful = useful & (log_volume_ratio(lo0, hi0, clo, chi) < BISECTION_GAIN)[:, None]
             learns, acid = np.zeros_like(learns), None
