@@ -176,7 +176,7 @@ def test_a_narrow_variable_with_a_large_impact_is_still_split():
     """The rule compares impacts (``max_i |J_ij| w_j``), not widths: IBEX's Geneig-icse (an
     eigenvalue ``λ`` multiplying ``x_j`` in ``[-1e8, 1e8]``) left ``λ``, 1-2,500 wide beside
     products 1e9 wide, out of the split by width, and took 110k boxes and 160 s where it took
-    4,864 (``docs/solver.md``, *Variables already narrow*)."""
+    4,864 (``docs/solver.md``, *The narrow rule compares impacts*)."""
     lo, hi, jlo, jhi = multiplier_box()
     impact = smear_impact(lo, hi, jlo, jhi)
     assert np.allclose(impact, [[0.3, 0.25, 0.25]])

@@ -205,10 +205,11 @@ def _negligible(score, lo, hi, scale, narrow: float, impact=None) -> np.ndarray:
     its width; and, with ``scale``, its width relative to the domain."""
     allowed = score >= 0.0
     w = splittable_width(lo, hi)
+    sizes = [w if impact is None else impact]
+    if scale is not None:
+        sizes.append(w / scale)
     out = allowed
-    for size in (w if impact is None else impact, None if scale is None else w / scale):
-        if size is None:
-            continue
+    for size in sizes:
         finite = allowed & np.isfinite(size)  # an unbounded one sets no scale, is never narrow
         out = out & (size < narrow * max_last(np.where(finite, size, 0.0))[:, None])
     return out
