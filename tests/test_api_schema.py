@@ -39,7 +39,11 @@ from certsolve.jobs.access import load_access
 ROOT = Path(__file__).resolve().parents[1]
 CIRCLE = (ROOT / "examples/systems/circle-line.mbx").read_text()
 TOKEN = "schemathesis-admin-token-0123"
-N_EXAMPLES = 15
+#: examples per operation and mode in the default run (``test_job_submission``): a
+#: schema-conforming job body costs hypothesis about a second to draw (the robot and its
+#: parameters are large objects), so 15 made that test the suite's slowest (55 s of 900
+#: here); ``test_whole_schema`` (slow) draws 60 of each operation
+N_EXAMPLES = 5
 
 
 # -- the rules JSON Schema cannot state ----------------------------------------------------------

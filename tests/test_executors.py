@@ -26,7 +26,6 @@ from certsolve.solver import ProcessExecutor, solve
 
 K5 = "examples/systems/katsura-5.mbx"  # 16 solutions
 K6 = "examples/systems/katsura-6.mbx"  # 32 solutions, ~22k boxes
-K7 = "benchmarks/systems/katsura-7.mbx"  # 44 solutions, ~126k boxes
 ROBOTS = "examples/robots"
 TASK = {"warmup": 0.0, "grow": 0.0, "task_seconds": 0.25}
 
@@ -231,11 +230,13 @@ def test_cli_scheduler_runs_on_the_cluster(capsys, client):
     # could outlast the serial warm-up, and the search would then run without the cluster
     client.run(importlib.import_module, "certsolve.solver.dask_executor")
     address = client.scheduler.address
-    # katsura-7 (~17 CPU s) outlasts the 2 s serial warm-up on any machine, so the cluster
-    # does take part (katsura-6, ~2.5 s since the affine relaxation, could end within it)
-    code, out, _ = cli(capsys, "solve", K7, "--scheduler", address, "--json")
+    # katsura-6 (22k boxes, 2.5 s on the fastest machine measured) outlasts the Dask
+    # executor's serial warm-up (0.5 s, then the buffer grows for 0.5 s at most), so the
+    # cluster does take part; katsura-7 (~17 CPU s there, 46 s on a slower one) took this
+    # test's time for nothing more
+    code, out, _ = cli(capsys, "solve", K6, "--scheduler", address, "--json")
     d = json.loads(out)
-    assert code == 0 and d["status"] == "complete" and len(d["solutions"]) == 44
+    assert code == 0 and d["status"] == "complete" and len(d["solutions"]) == 32
     assert d["stats"]["executor"] == "dask" and d["stats"]["tasks"] >= 1
 
 

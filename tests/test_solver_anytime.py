@@ -142,7 +142,17 @@ def test_newton_side_needs_a_finite_newton_point():
     assert got.tolist() == [False, False, True]
 
 
-@pytest.mark.parametrize("name", ["circle-line", "brown-5", "trig-exp", "eco-6", "katsura-5"])
+@pytest.mark.parametrize(
+    "name",
+    # katsura-5 (two searches of ~4,200 boxes in rounds of 16: 21 s) runs with -m slow
+    [
+        "circle-line",
+        "brown-5",
+        "trig-exp",
+        "eco-6",
+        pytest.param("katsura-5", marks=pytest.mark.slow),
+    ],
+)
 def test_every_dive_certifies_the_same_solutions(name):
     """The dive orders the search, never what it proves: a complete search certifies the
     same solutions with the Newton side first and with IBEX's lower half first (the
