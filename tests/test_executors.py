@@ -153,7 +153,8 @@ def test_max_solutions_is_honoured(katsura, any_executor):
     system, _ = katsura
     res = solve(system, max_solutions=3, executor=any_executor)
     assert res.status == "max_solutions" and len(res.pending) > 0
-    assert 3 <= len(res.solutions) < 16
+    # at least 3; a round may prove more, and so may a phase of Newton starts (up to all 16)
+    assert len(res.solutions) >= 3
     assert_nothing_lost(res, katsura[1])  # the running tasks' boxes came back pending
 
 

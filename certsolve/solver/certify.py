@@ -220,11 +220,14 @@ class Certifier:
         )
 
     # -- float Newton -----------------------------------------------------------------------
-    def newton_point(self, x0: np.ndarray, lo=None, hi=None) -> tuple[np.ndarray, np.ndarray]:
+    def newton_point(
+        self, x0: np.ndarray, lo=None, hi=None, *, iterations: int | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Float Newton iterations from ``x0`` (B, n); returns points and a converged mask.
 
         With ``lo, hi``, iterates that leave the box widened by its width on every side
-        are abandoned (the caller only uses points near the box).
+        are abandoned (the caller only uses points near the box).  ``iterations``: at most
+        that many steps (default :attr:`newton_iterations`).
         """
         x = x0.copy()
         conv = np.zeros(x.shape[0], dtype=bool)
@@ -232,7 +235,7 @@ class Certifier:
         if lo is not None:
             w = hi - lo
             far_lo, far_hi = lo - w - 1e-9 * (1.0 + np.abs(lo)), hi + w + 1e-9 * (1.0 + np.abs(hi))
-        for _ in range(self.newton_iterations):
+        for _ in range(self.newton_iterations if iterations is None else iterations):
             idx = np.flatnonzero(alive & ~conv)
             if idx.size == 0:
                 break

@@ -82,7 +82,8 @@ class Limits:
 
     ``timeout``: wall seconds; ``max_boxes``: boxes processed by the step; ``max_solutions``:
     results the step certifies (:attr:`Tally.solutions`).  Limits are checked between
-    batches, so a search may overshoot by one batch (one task per worker with workers);
+    batches, so a search may overshoot by one batch (one task per worker with workers;
+    the solver's batch may end with a phase of Newton starts, :mod:`.starts`);
     a :class:`~.batching.BatchSizer` cuts a batch to what the remaining time fits.
     """
 

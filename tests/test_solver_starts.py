@@ -1,0 +1,83 @@
+"""Multistart float Newton, certified (:mod:`certsolve.solver.starts`): solutions early,
+nothing lost, nothing certified that the search would not certify."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_solver_systems import SYSTEMS, check_against_reference, in_box, ref_points
+
+from certsolve.expr.minibex import load_minibex, parse_minibex
+from certsolve.solver.branch_and_prune import Solver
+from certsolve.solver.starts import NEAR, NewtonStarts, draw_points
+
+#: a phase after the first bisection: every search below runs all three phases early
+EARLY = NewtonStarts(after=1)
+
+
+@pytest.mark.parametrize(
+    "name",
+    ["circle-line", "brown-5", "troesch-10", "broyden-banded-10", "eco-6", "trig-exp", "katsura-5"],
+)
+def test_a_search_with_early_phases_finds_exactly_the_reference_solutions(name):
+    """The phases' solutions are the search's: each reference solution in exactly one
+    certified box, each box holding exactly one, the search complete and nothing undecided."""
+    system = load_minibex(SYSTEMS / f"{name}.mbx")
+    result = Solver.default(system, starts=EARLY).solve(timeout=300)
+    check_against_reference(name, system, result)
+
+
+def test_a_singular_root_found_by_newton_is_still_not_certified():
+    """Float Newton converges (slowly) to double-root's root; the proof fails there, so the
+    root stays undecided and nothing is certified."""
+    system = load_minibex(SYSTEMS / "double-root.mbx")
+    result = Solver.default(system, starts=EARLY).solve(timeout=60)
+    assert result.status == "complete" and result.solutions == []
+    (root,) = ref_points("double-root")
+    assert any(in_box(root, u.lo, u.hi) for u in result.undecided)
+
+
+def test_a_root_on_the_domain_boundary_found_by_newton_stays_undecided():
+    system = parse_minibex(
+        "Variables\n  x in [0, 1];\n  y in [0, 1];\n"
+        "Constraints\n  x^2 + y^2 = 2;\n  x - y = 0;\nend\n"
+    )
+    result = Solver.default(system, starts=EARLY).solve(timeout=60)
+    assert result.status == "complete" and result.solutions == []
+    assert any(in_box([1, 1], u.lo, u.hi) for u in result.undecided)
+
+
+def test_phases_certify_solutions_the_search_has_not_reached():
+    """katsura-6 stopped after 300 boxes: the search alone has certified none of its 32
+    solutions, the phases most of them, each a true solution."""
+    system = load_minibex(SYSTEMS / "katsura-6.mbx")
+    alone = Solver.default(system, starts=None).solve(max_boxes=300)
+    early = Solver.default(system, starts=EARLY).solve(max_boxes=300)
+    assert alone.status == early.status == "max_boxes"
+    assert len(early.solutions) >= 16 > len(alone.solutions)
+    ref = ref_points("katsura-6")
+    for s in early.solutions:
+        assert s.certificate == "unique"
+        assert sum(in_box(p, s.lo, s.hi) for p in ref) == 1
+
+
+def test_phases_come_at_their_bisection_counts_and_not_in_tasks():
+    starts = NewtonStarts(after=10)
+    assert [starts.due(b, b + 5) for b in (0, 5, 9, 10, 38, 39, 150, 159, 700)] == [
+        None, 0, 0, None, 1, 1, None, 2, None,
+    ]  # fmt: skip
+    solver = Solver.default(load_minibex(SYSTEMS / "circle-line.mbx"))
+    state = solver.start()
+    assert state.starts  # the search's own state
+    assert not solver.start(solver.known(state)).starts  # a worker task's
+
+
+def test_points_are_drawn_in_their_boxes_near_zero_where_they_reach_it():
+    lo = np.array([[-1e8, 1e9, -np.inf, -np.inf, 0.5]])
+    hi = np.array([[1e8, 1e10, -1e12, np.inf, 0.75]])
+    x = draw_points(lo, hi, 200, np.random.default_rng(1))
+    assert np.all(np.abs(x[:, 0]) <= NEAR) and np.all(np.abs(x[:, 3]) <= NEAR)
+    assert np.all((x[:, 1] >= 1e9) & (x[:, 1] <= 2e9))
+    assert np.all((x[:, 2] >= -2e12) & (x[:, 2] <= -1e12))
+    assert np.all((x[:, 4] >= 0.5) & (x[:, 4] <= 0.75))
+    assert np.ptp(x, axis=0).min() > 0  # random, not a fixed point
