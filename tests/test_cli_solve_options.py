@@ -95,7 +95,7 @@ def args_of(*argv: str) -> argparse.Namespace:
     [
         (),
         ("--max-boxes", "7", "--eps", "1e-6"),
-        ("--cid-vars", "all", "--verify", "--no-split-at-zero"),
+        ("--cid-vars", "all", "--verify", "--no-split-at-zero", "--no-newton-starts"),
     ],
 )
 def test_surely_valid_options_are_the_models_values(argv):
@@ -134,6 +134,7 @@ def _recorded(monkeypatch, call) -> dict:
         ("--max-boxes", "7", "--eps", "1e-6", "--max-solutions", "2", "--max-pending", "9"),
         ("--cid-vars", "all", "--verify", "--max-undecided", "0"),
         ("--no-split-at-zero",),
+        ("--no-newton-starts",),
         ("--cid-vars", "3"),  # not surely valid: through the model
     ],
 )

@@ -81,3 +81,18 @@ def test_points_are_drawn_in_their_boxes_near_zero_where_they_reach_it():
     assert np.all((x[:, 2] >= -2e12) & (x[:, 2] <= -1e12))
     assert np.all((x[:, 4] >= 0.5) & (x[:, 4] <= 0.75))
     assert np.ptp(x, axis=0).min() > 0  # random, not a fixed point
+
+
+def test_the_command_line_turns_the_phases_off(capsys):
+    """``certsolve solve`` runs the phases by default (katsura-6 at 300 boxes: all 32 of
+    its solutions); ``--no-newton-starts`` is the search alone (none)."""
+    import json
+
+    from certsolve.cli import main
+
+    counts = []
+    for flag in ((), ("--no-newton-starts",)):
+        argv = ["solve", str(SYSTEMS / "katsura-6.mbx"), "--max-boxes", "300", "--workers", "1"]
+        assert main([*argv, "--json", *flag]) == 0
+        counts.append(len(json.loads(capsys.readouterr().out)["solutions"]))
+    assert counts[0] >= 16 and counts[1] == 0

@@ -47,6 +47,7 @@ PARAMS_SCHEMA: dict[str, Any] = {
             ]
         },
         "split_at_zero": {"type": "boolean"},
+        "newton_starts": {"type": "boolean"},
     },
 }
 
@@ -98,6 +99,14 @@ def register(sub) -> None:
         default=True,
         help="split the variables that multiply others at 0 while 0 is well inside their "
         "interval (default: on; --no-split-at-zero: at the bisector's ratio everywhere)",
+    )
+    p.add_argument(
+        "--newton-starts",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="certify solutions early: float Newton from random points of the pending "
+        "boxes, each point proven as the search proves its solutions (default: on; "
+        "--no-newton-starts: the search alone)",
     )
     add_executor_options(p)
     add_checkpoint_options(p)

@@ -48,4 +48,6 @@ def solve_keywords(params: Mapping[str, Any]) -> dict[str, Any]:
         "max_pending": params["max_pending"],
         "cid_vars": None if cid_vars == "all" else cid_vars,
         "split_at_zero": params["split_at_zero"],
+        # the solver's own multistart unless turned off (:mod:`.starts`)
+        **({} if params["newton_starts"] else {"starts": None}),
     }

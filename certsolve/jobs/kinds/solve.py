@@ -34,6 +34,12 @@ class SolveParams(SolveOptions, Params):  # the library's options, and the answe
         description="split the variables that multiply others at 0 while 0 is well inside "
         "their interval (a sign split; false: at the bisector's ratio everywhere)",
     )
+    newton_starts: bool = Field(
+        default=True,
+        description="certify solutions early: float Newton from random points of the "
+        "pending boxes, each point proven as the search proves its solutions (false: the "
+        "search alone)",
+    )
 
     @field_validator("cid_vars", mode="before")
     @classmethod
