@@ -11,7 +11,8 @@ from certsolve.expr.minibex import load_minibex, parse_minibex
 from certsolve.solver.branch_and_prune import Solver
 from certsolve.solver.starts import NEAR, NewtonStarts, draw_points
 
-#: a phase after the first bisection: every search below runs all three phases early
+#: the first phase after the first bisection, the next ones at 4, 16 and 64: every search
+#: below runs its phases early
 EARLY = NewtonStarts(after=1)
 
 
@@ -28,8 +29,9 @@ def test_a_search_with_early_phases_finds_exactly_the_reference_solutions(name):
 
 
 def test_a_singular_root_found_by_newton_is_still_not_certified():
-    """Float Newton converges (slowly) to double-root's root; the proof fails there, so the
-    root stays undecided and nothing is certified."""
+    """At double-root's root Newton converges only linearly and Krawczyk cannot prove
+    anything: with the phases on, the root still stays undecided and nothing is
+    certified."""
     system = load_minibex(SYSTEMS / "double-root.mbx")
     result = Solver.default(system, starts=EARLY).solve(timeout=60)
     assert result.status == "complete" and result.solutions == []
