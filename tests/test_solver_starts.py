@@ -98,3 +98,19 @@ def test_the_command_line_turns_the_phases_off(capsys):
         assert main([*argv, "--json", *flag]) == 0
         counts.append(len(json.loads(capsys.readouterr().out)["solutions"]))
     assert counts[0] >= 16 and counts[1] == 0
+
+
+def test_a_task_brought_home_past_a_phase_runs_it_in_the_driver_a_restore_does_not():
+    """With workers the bisections come home with the tasks (``Solver.merge``): the
+    driver runs the phase they reach; a checkpoint restored into a new state (from 0
+    bisections) runs none, as its search already did."""
+    system = load_minibex(SYSTEMS / "katsura-5.mbx")
+    solver = Solver.default(system, starts=NewtonStarts(after=50))
+    dom = solver.domain
+    home = ([], [], (100, 0, 0))  # a task's findings: nothing but 100 bisections
+    for before, phases in ((10, True), (0, False)):
+        state = solver.start()
+        state.stack.push(dom[:, 0][None], dom[:, 1][None])
+        state.stats.bisections = before
+        solver.merge(state, home)
+        assert (len(state.solutions) > 0) is phases

@@ -508,6 +508,7 @@ class Solver:
     def merge(self, state: SearchState, found) -> None:
         """Add a task's findings; a solution two tasks proved is recorded once.  The learnt
         states are the task's (the latest a task brings home; a checkpoint's on restore)."""
+        before = state.stats.bisections
         entries, undecided, (bisections, certified, duplicates), *rest = found
         # absent from checkpoints written before they were kept
         acid, hull = (*rest, None, None)[:2]
@@ -524,6 +525,8 @@ class Solver:
             state.acid = copy.copy(acid)
         if hull is not None and state.hull is not None:
             state.hull = copy.copy(hull)
+        if before > 0:  # a task's work (a restore starts from 0 and replays no phase)
+            self._phase_if_due(state, before)
 
     def listed(self, state: SearchState, start: int) -> tuple[list[Solution], int]:
         """The solutions recorded from position ``start`` of the solution set on (for
@@ -580,19 +583,25 @@ class Solver:
         if batch.size:
             self._split(batch, state)
         batch.flush()  # what the parts sent back goes on top: the next round takes it
+        self._phase_if_due(state, bisections)
+
+    def _phase_if_due(self, state: SearchState, before: int) -> None:
+        """The phase of :class:`~.starts.NewtonStarts` the bisections since ``before``
+        reached, if any, on the search's own state (a worker task's runs none)."""
         if self.starts is not None and state.starts:
-            phase = self.starts.due(bisections, state.stats.bisections)
+            phase = self.starts.due(before, state.stats.bisections)
             if phase is not None:
                 self._newton_starts(state, phase)
 
     def _newton_starts(self, state: SearchState, phase: int) -> None:
         """A phase of :class:`~.starts.NewtonStarts`: float Newton from random points of the
-        pending boxes, and the points it converged to proven (inflated Krawczyk) and
-        recorded as any solution the search proves."""
+        pending boxes (of the domain when the workers hold them all), and the points it
+        converged to proven (inflated Krawczyk) and recorded as any solution the search
+        proves."""
         assert self.starts is not None
         lo, hi = state.stack.snapshot()
-        if lo.shape[0] == 0:
-            return
+        if lo.shape[0] == 0:  # all handed out to workers: start anywhere in the domain
+            lo, hi = self.domain[:, 0][None], self.domain[:, 1][None]
         x = self.starts.points(self.certifier, self.domain, lo, hi, phase)
         if x.shape[0] == 0:
             return

@@ -18,8 +18,9 @@ does not prove is forgotten, and the search goes on over the whole domain as bef
 complete search is still complete, and finds nothing twice.
 
 The phases are a function of the bisection count, so a search resumed from a checkpoint
-runs them where the uninterrupted one did; worker tasks run none (their solutions come
-from the driver's search).
+runs them where the uninterrupted one did.  Worker tasks run none: the driver runs a phase
+when its own rounds, or the bisections a task brings home (``Solver.merge``), reach it,
+and the tasks that follow get its solutions with the others.
 """
 
 from __future__ import annotations
