@@ -57,6 +57,7 @@ def test_phases_certify_solutions_the_search_has_not_reached():
     early = Solver.default(system, starts=EARLY).solve(max_boxes=300)
     assert alone.status == early.status == "max_boxes"
     assert len(early.solutions) >= 16 > len(alone.solutions)
+    assert alone.stats.started == 0 and 16 <= early.stats.started <= len(early.solutions)
     ref = ref_points("katsura-6")
     for s in early.solutions:
         assert s.certificate == "unique"
@@ -114,3 +115,19 @@ def test_a_task_brought_home_past_a_phase_runs_it_in_the_driver_a_restore_does_n
         state.stats.bisections = before
         solver.merge(state, home)
         assert (len(state.solutions) > 0) is phases
+
+
+def test_a_phase_does_not_prove_a_known_solution_again():
+    """The same phase twice on one state: the second draws the same points, all in known
+    unicity boxes, and proves nothing (no Krawczyk test, no duplicate, nothing started)."""
+    system = load_minibex(SYSTEMS / "katsura-5.mbx")
+    solver = Solver.default(system, starts=EARLY)
+    dom = solver.domain
+    state = solver.start()
+    state.stack.push(dom[:, 0][None], dom[:, 1][None])
+    solver._newton_starts(state, 0)
+    first = (len(state.solutions), state.stats.certified, state.stats.started)
+    assert first[0] > 0 and first[0] == first[2]
+    solver._newton_starts(state, 0)
+    assert (len(state.solutions), state.stats.certified, state.stats.started) == first
+    assert state.stats.duplicates == 0

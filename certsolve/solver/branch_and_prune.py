@@ -502,14 +502,14 @@ class Solver:
             (sols.E_lo[i], sols.E_hi[i], sols.U_lo[i], sols.U_hi[i], sols.kind[i]) for i in new
         ]
         st = state.stats
-        counters = (st.bisections, st.certified, st.duplicates)
+        counters = (st.bisections, st.certified, st.duplicates, st.started)
         return entries, state.undecided, counters, copy.copy(state.acid), copy.copy(state.hull)
 
     def merge(self, state: SearchState, found) -> None:
         """Add a task's findings; a solution two tasks proved is recorded once.  The learnt
         states are the task's (the latest a task brings home; a checkpoint's on restore)."""
         before = state.stats.bisections
-        entries, undecided, (bisections, certified, duplicates), *rest = found
+        entries, undecided, (bisections, certified, duplicates, *started), *rest = found
         # absent from checkpoints written before they were kept
         acid, hull = (*rest, None, None)[:2]
         for e0, e1, u0, u1, kind in entries:
@@ -521,6 +521,7 @@ class Solver:
         state.stats.bisections += bisections
         state.stats.certified += certified
         state.stats.duplicates += duplicates
+        state.stats.started += sum(started)  # absent from checkpoints written before it
         if acid is not None and state.acid is not None:
             state.acid = copy.copy(acid)
         if hull is not None and state.hull is not None:
@@ -599,16 +600,19 @@ class Solver:
         converged to proven (inflated Krawczyk) and recorded as any solution the search
         proves."""
         assert self.starts is not None
-        lo, hi = state.stack.snapshot()
+        lo, hi = state.stack.view()
         if lo.shape[0] == 0:  # all handed out to workers: start anywhere in the domain
             lo, hi = self.domain[:, 0][None], self.domain[:, 1][None]
         x = self.starts.points(self.certifier, self.domain, lo, hi, phase)
+        w = 1e-9 * (1.0 + np.abs(x))
+        # a point in a known solution's unicity box is that solution: not proven again
+        keep, _, _ = state.solutions.prune(x - w, x + w)
+        x, w = x[keep], w[keep]
         if x.shape[0] == 0:
             return
-        w = 1e-9 * (1.0 + np.abs(x))
         idx, elo, ehi, ulo, uhi = self.certifier.inflate(x - w, x + w)
         if idx.size:
-            self._record(state, elo, ehi, ulo, uhi, tight=False)
+            state.stats.started += self._record(state, elo, ehi, ulo, uhi, tight=False)
 
     def _split(self, batch: Batch, state: SearchState) -> None:
         """Report the rows narrower than ``eps`` as undecided, push the halves of the
@@ -660,8 +664,9 @@ class Solver:
         split along its variable widest relative to them (:func:`~.bisectors.domain_scale`)."""
         return domain_scale(self.domain)
 
-    def _record(self, state: SearchState, elo, ehi, ulo, uhi, tight: bool = True) -> None:
-        """Record proven solutions; existence boxes are tightened only for new ones."""
+    def _record(self, state: SearchState, elo, ehi, ulo, uhi, tight: bool = True) -> int:
+        """Record proven solutions; existence boxes are tightened only for new ones.
+        Returns how many were new."""
         state.stats.certified += elo.shape[0]
         new = np.array(
             [state.solutions.find(elo[k], ehi[k], ulo[k], uhi[k]) < 0 for k in range(len(elo))],
@@ -671,15 +676,19 @@ class Solver:
             state.solutions.add(elo[j], ehi[j], ulo[j], uhi[j], "alias")
             state.stats.duplicates += 1
         if not np.any(new):
-            return
+            return 0
         elo, ehi, ulo, uhi = elo[new], ehi[new], ulo[new], uhi[new]
         if not tight:
             elo, ehi = self.certifier.tighten(elo, ehi)
         ulo, uhi = self.certifier.expand(elo, ehi, ulo, uhi)
         kinds = self.certifier.classify(elo, ehi)
+        added = 0
         for k, kind in enumerate(kinds):
-            if not state.solutions.add(elo[k], ehi[k], ulo[k], uhi[k], kind):
+            if state.solutions.add(elo[k], ehi[k], ulo[k], uhi[k], kind):
+                added += 1
+            else:
                 state.stats.duplicates += 1
+        return added
 
     # -- results -----------------------------------------------------------------------------
     def result(self, run: SearchRun) -> SolveResult:

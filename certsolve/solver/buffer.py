@@ -90,7 +90,16 @@ class BoxStack:
 
     def snapshot(self) -> tuple[np.ndarray, np.ndarray]:
         """Copies of every box in the buffer (for reporting pending boxes)."""
-        return self._lo[: self._size].copy(), self._hi[: self._size].copy()
+        lo, hi = self.view()
+        return lo.copy(), hi.copy()
+
+    def view(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every box in the buffer, as read-only views: valid until the next push or pop
+        (for reading a few rows without copying the whole buffer)."""
+        lo, hi = self._lo[: self._size], self._hi[: self._size]
+        lo, hi = lo.view(), hi.view()
+        lo.flags.writeable = hi.flags.writeable = False
+        return lo, hi
 
     def hints(self) -> np.ndarray | None:
         """A copy of every box's hints (``None``: the buffer holds none)."""

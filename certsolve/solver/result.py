@@ -115,6 +115,7 @@ class Stats:
     bisections: int = 0
     certified: int = 0  # Krawczyk proofs (before removing duplicates)
     duplicates: int = 0
+    started: int = 0  # solutions first proven from a Newton-starts phase (.starts)
     max_pending: int = 0
     time: float = 0.0  # wall seconds
     cpu: float = 0.0  # CPU seconds, this process and every worker task
@@ -135,6 +136,7 @@ class Stats:
             bisections=step.bisections,
             certified=step.certified,
             duplicates=step.duplicates,
+            started=step.started,
             max_pending=search.max_pending,
             time=search.time,
             cpu=search.cpu,
