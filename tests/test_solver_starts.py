@@ -131,3 +131,34 @@ def test_a_phase_does_not_prove_a_known_solution_again():
     solver._newton_starts(state, 0)
     assert (len(state.solutions), state.stats.certified, state.stats.started) == first
     assert state.stats.duplicates == 0
+
+
+def test_a_phase_a_task_brings_home_draws_from_the_boxes_it_brings():
+    """``Search.absorb`` puts a task's unfinished boxes back on the driver's stack before
+    it merges the task's findings: the phase the merge runs draws from them, not from the
+    whole domain (with 2 workers every other pending box is out at a task)."""
+    from certsolve.solver.search import Search, TaskResult
+
+    system = load_minibex(SYSTEMS / "katsura-5.mbx")
+    solver = Solver.default(system, starts=NewtonStarts(after=50))
+    state = solver.start()
+    state.stats.bisections = 10
+    search = Search(solver, state)
+    dom = solver.domain
+    state.stack.push(dom[:, 0][None], dom[:, 1][None])
+    lo, _, _ = search.take(1)  # the whole domain out at a task: the stack is empty
+    seen = []
+    draw = solver.starts.points
+
+    def points(certifier, domain, blo, bhi, phase):
+        seen.append(blo.shape[0])
+        return draw(certifier, domain, blo, bhi, phase)
+
+    object.__setattr__(solver.starts, "points", points)
+    back = np.repeat(dom[None], 3, axis=0)
+    result = TaskResult(
+        found=([], [], (100, 0, 0)), lo=back[:, :, 0], hi=back[:, :, 1],
+        boxes=1, batches=1, cpu=0.0, wall=0.0,
+    )  # fmt: skip
+    search.absorb(lo, result)
+    assert seen == [3]  # the task's three boxes, not the domain's one

@@ -283,8 +283,9 @@ class Search:
         records, its unfinished boxes."""
         self.in_flight -= lo.shape[0]
         self._out.pop(id(lo), None)
-        self.step.merge(self.state, result.found)
+        # the boxes first: a phase the merge runs (.starts) draws from them too
         self.state.stack.push(result.lo, result.hi, result.hints)
+        self.step.merge(self.state, result.found)
         self.stats.boxes += result.boxes
         self.stats.batches += result.batches
         self.stats.tasks += 1
