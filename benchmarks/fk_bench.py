@@ -26,7 +26,9 @@ tension range, each split by the test's outcome (``--max-boxes`` stops the searc
 ``--position-newton on|off``: the searches with the position's Newton step on or off
 (:mod:`certsolve.kinematics.fk_position`; off by default, as in FKSolver).  ``--relax
 on|off``: with or without the polytope hull once a round (``FKSolver(relax=...)``; by
-default FKSolver's default: on for spatial robots).
+default FKSolver's default: on for spatial robots).  ``--newton-starts on|off``: with or
+without the phases of float Newton from random points (``FKSolver(newton_starts=...)``, on
+by default; never in the stable-only cases).
 
 ``--curve``: how time and boxes grow with tau_max (10, 20, 40, 60 N) and with the stroke
 range (u drawn in 1/4, 1/2 and all of the strokes, seed 1), for T-16 and general-19, one
@@ -173,6 +175,7 @@ def run_case(robot: Robot, u, args, workers: int, stable_only: bool = False):
             stable_only=stable_only,
             position_newton=args.position_newton == "on",
             relax=None if args.relax == "default" else args.relax == "on",
+            newton_starts=args.newton_starts == "on",
         )
         t, c = time.perf_counter(), time.process_time()
         res = fk.solve(u, timeout=args.timeout, workers=workers)
@@ -403,6 +406,13 @@ def main() -> None:
         default="off",
         help="the searches with FKSolver(position_newton=True / False) "
         "(kinematics/fk_position.py; default off, FKSolver's default)",
+    )
+    ap.add_argument(
+        "--newton-starts",
+        choices=("on", "off"),
+        default="on",
+        help="the searches with FKSolver(newton_starts=True / False): float Newton from "
+        "random points of the pending boxes, proven (default on, FKSolver's default)",
     )
     ap.add_argument(
         "--relax",

@@ -72,6 +72,13 @@ def register(sub) -> None:
         "poses) first (same answer; by default they come first)",
     )
     p.add_argument(
+        "--no-newton-starts",
+        dest="newton_starts",
+        action="store_false",
+        help="no float Newton from random points (the poses it reaches proven) during the "
+        "search: the search alone (same complete answer; by default the poses come early)",
+    )
+    p.add_argument(
         "--seeded-only",
         action="store_true",
         help="with --seed-planar: skip the rest of the domain (incomplete answer)",

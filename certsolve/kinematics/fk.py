@@ -35,6 +35,7 @@ def forward_kinematics(
     seeded_only: bool = False,
     stable_only: bool = False,
     seed_minima: bool = True,
+    newton_starts: bool = True,
     progress=None,
     executor: Any = None,
     verify: bool = False,
@@ -58,7 +59,10 @@ def forward_kinematics(
     equilibrium is in the domain (:mod:`.stable_only`).  ``seed_minima`` (spatial robots):
     search first around the local minima of the potential energy, found in floats -- the
     stable poses, where a robot at rest is -- then the whole domain (the same answer, the
-    stable poses in the first rounds: :meth:`.FKSolver.seeded_boxes`).  ``executor`` (or
+    stable poses in the first rounds: :meth:`.FKSolver.seeded_boxes`).  ``newton_starts``:
+    float Newton from random points of the pending boxes, the points it reaches proven as
+    the search's own poses (:data:`.fk_solver.FK_STARTS`; not with ``stable_only``): every
+    equilibrium early, the same complete answer.  ``executor`` (or
     the older ``workers``), ``verify``, the limits, ``progress`` and ``cancel`` apply to
     either search (see :meth:`.Solver.solve`); ``checkpoint``
     (:class:`~certsolve.solver.checkpoint.Checkpoint`) to the one-phase search only (not
@@ -83,6 +87,7 @@ def forward_kinematics(
             "seeded_only": seeded_only,
             "stable_only": stable_only,
             "seed_minima": seed_minima,
+            "newton_starts": newton_starts,
         },
     )
     check_controls(robot.m, opts.u)
@@ -111,6 +116,7 @@ def forward_kinematics(
         "verify": verify,
         "cancel": cancel,
         "stable_only": stable_only,
+        "newton_starts": newton_starts,
     }
     if seed_planar:
         return seeded_forward_kinematics(
@@ -123,6 +129,7 @@ def forward_kinematics(
         eps=eps,
         stable_only=search.pop("stable_only"),
         seed_minima=seed_minima,
+        newton_starts=search.pop("newton_starts"),
     )
     compile_time = time.perf_counter() - t0
     res = fk.solve(u, checkpoint=checkpoint, **search)

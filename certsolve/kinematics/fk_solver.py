@@ -29,6 +29,7 @@ from ..solver.contractors import HC4
 from ..solver.pipeline import FixPoint, Inflate, Sequence, core
 from ..solver.relaxation import PolytopeHull
 from ..solver.result import SolveResult
+from ..solver.starts import NewtonStarts
 from .energy_minima import energy_minima
 from .fk_formulation import FKFormulation
 from .fk_position import ForceBalance, PositionNewton
@@ -36,11 +37,15 @@ from .fk_systems import build_formulation
 from .stability import EnergyHessian, Stability, StabilityVerdict
 from .stable_only import StableOnly
 
-__all__ = ["SEED_RADIUS", "FKPose", "FKResult", "FKSearch", "FKSolver", "with_tau_max"]
+__all__ = ["FK_STARTS", "SEED_RADIUS", "FKPose", "FKResult", "FKSearch", "FKSolver", "with_tau_max"]
 
 #: half-width (cm) of the seed boxes around the energy's local minima, in every chosen
 #: point's coordinates (``seed_minima``)
 SEED_RADIUS = 0.5
+#: float Newton from random points of the pending boxes (``newton_starts``): drawn uniformly
+#: in the boxes (the domain is the robot's, in cm), six phases, at 64 to 65,536 bisections
+#: (a general-19 search at 60 N makes ~7,000 a CPU second)
+FK_STARTS = NewtonStarts(near=None, phases=6)
 
 
 @dataclass
@@ -182,6 +187,15 @@ class FKSolver:
     u = IK(P), 331,313 -> 257,034 boxes, 22.4 -> 22.2 CPU s; general-19 at 10 N 128,721 ->
     124,533, 11.3 -> 13.5 s; T-16 at 10 N 1,694 -> 1,570, 0.71 -> 0.76 s.
 
+    ``newton_starts``: float Newton from random points of the pending boxes, the points it
+    converges to proven as the search's own solutions (:mod:`certsolve.solver.starts`,
+    :data:`FK_STARTS`: drawn uniformly in the boxes, six phases, from 64 to 65,536
+    bisections).  The poses, stable and unstable, come in the first seconds where the
+    search alone reaches them late; the search still covers the domain, so a complete
+    answer is the same.  Off for ``stable_only`` (the energy's minima seed the stable
+    poses; a phase would prove unstable ones, which ``max_solutions`` would count) and for
+    a robot set's search (:mod:`.fk_tolerance`).
+
     ``relax``: the polytope hull of the X-Taylor and affine relaxation
     (:class:`.PolytopeHull`, one direction) once a round, after the contraction fixpoint,
     on every box narrower than the formulation's hull widths
@@ -207,6 +221,7 @@ class FKSolver:
         seed_minima: bool = True,
         position_newton: bool = False,
         relax: bool | None = None,
+        newton_starts: bool = True,
         prepare_search: bool = True,
     ):
         # batch_size: boxes per numpy call.  The FK systems' batches are large enough for
@@ -232,6 +247,8 @@ class FKSolver:
         #: the polytope hull once a round (default: the general-19 system only; on the
         #: smaller systems its LPs cost more than the boxes they save)
         self.relax = "general-19" in self.form.name if relax is None else bool(relax)
+        #: the phases of float Newton from random points (:data:`FK_STARTS`)
+        self.newton_starts = newton_starts and not stable_only
         # the parts' compiled programs (Newton's columns, the sub-systems', the energy's
         # Hessian for stable_only) are made now, once, and shared by every search's copy;
         # prepare_search=False: the formulation and its compiled system only (a tracker
@@ -288,6 +305,7 @@ class FKSolver:
             limits=SolverLimits(
                 eps=self.eps, batch_size=self.batch_size, bisect_mask=form.bisect_mask()
             ),
+            starts=FK_STARTS if self.newton_starts and not extra else None,
         )
         return FKSearch(u=u, domain=dom, ok=ok, solver=solver.on_domain(dom))
 

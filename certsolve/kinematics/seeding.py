@@ -69,6 +69,7 @@ def seeded_forward_kinematics(
     max_solutions: int | None = None,
     seeded_only: bool = False,
     stable_only: bool = False,
+    newton_starts: bool = True,
     radius: float = 6.0,
     progress=None,
     executor: Any = None,
@@ -81,7 +82,8 @@ def seeded_forward_kinematics(
     limits, ``progress`` and ``cancel``, as :meth:`.FKSolver.solve`; ``max_boxes`` applies
     to each.  If the seeded search stops early, or with ``seeded_only``, the rest of the
     domain is reported *pending* (status: the limit that stopped it, or ``cancelled``).
-    ``stable_only`` as :class:`.FKSolver` (the planar search is not restricted).
+    ``stable_only`` and ``newton_starts`` as :class:`.FKSolver` (the planar search is not
+    restricted).
     """
     t0 = time.perf_counter()
     u = np.asarray(u, dtype=float)
@@ -90,7 +92,7 @@ def seeded_forward_kinematics(
     res2 = fk2.solve(u, timeout=timeout, cancel=cancel)
     t_planar = time.perf_counter() - t0
 
-    fk = FKSolver(robot, formulation, eps=eps, stable_only=stable_only)
+    fk = FKSolver(robot, formulation, eps=eps, stable_only=stable_only, newton_starts=newton_starts)
     form = fk.form
     if not isinstance(form, PlatformFormulation) or form.n_points != 3:
         raise ValueError("planar seeding needs a 3-point formulation (almost-planar-13)")

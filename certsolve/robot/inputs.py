@@ -103,6 +103,11 @@ class FkOptions(StrictModel):
         default=False,
         description="stable equilibria only; complete then means no other stable one exists",
     )
+    newton_starts: bool = Field(
+        default=True,
+        description="float Newton from random points, the points it reaches proven: the "
+        "poses early, the same complete answer (not with stable_only)",
+    )
 
 
 class TrackOptions(StrictModel):

@@ -666,7 +666,8 @@ class Solver:
 
     def _record(self, state: SearchState, elo, ehi, ulo, uhi, tight: bool = True) -> int:
         """Record proven solutions; existence boxes are tightened only for new ones.
-        Returns how many were new."""
+        Returns how many new ones are reported as solutions (not ``boundary``,
+        ``constraint`` or ``rejected``)."""
         state.stats.certified += elo.shape[0]
         new = np.array(
             [state.solutions.find(elo[k], ehi[k], ulo[k], uhi[k]) < 0 for k in range(len(elo))],
@@ -685,7 +686,7 @@ class Solver:
         added = 0
         for k, kind in enumerate(kinds):
             if state.solutions.add(elo[k], ehi[k], ulo[k], uhi[k], kind):
-                added += 1
+                added += kind in _PROVEN
             else:
                 state.stats.duplicates += 1
         return added

@@ -40,13 +40,18 @@ __all__ = ["NewtonStarts", "draw_points"]
 NEAR = 10.0
 
 
-def draw_points(lo: np.ndarray, hi: np.ndarray, count: int, rng) -> np.ndarray:
+def draw_points(
+    lo: np.ndarray, hi: np.ndarray, count: int, rng, near: float | None = NEAR
+) -> np.ndarray:
     """``(count, n)`` points, each in a box of ``lo, hi`` drawn at random; on each variable
-    uniform in the box's interval met with ``[-NEAR, NEAR]``, or, where they do not meet,
-    within one magnitude of the box's bound nearest 0."""
+    uniform in the box's interval met with ``[-near, near]``, or, where they do not meet,
+    within one magnitude of the box's bound nearest 0 (``near=None``: uniform in the box,
+    for bounded domains in the equations' own units)."""
     k = rng.integers(0, lo.shape[0], size=count)
     blo, bhi = lo[k], hi[k]
-    a, b = np.maximum(blo, -NEAR), np.minimum(bhi, NEAR)
+    if near is None:
+        return np.clip(blo + (bhi - blo) * rng.random(blo.shape), blo, bhi)
+    a, b = np.maximum(blo, -near), np.minimum(bhi, near)
     meet = a <= b
     near = np.where(blo > 0.0, blo, bhi)  # the box lies beyond +NEAR or -NEAR
     a = np.where(meet, a, np.where(blo > 0.0, near, 2.0 * near))
@@ -71,6 +76,7 @@ class NewtonStarts:
     count: int = 256
     iterations: int = 30
     seed: int = 0
+    near: float | None = NEAR
 
     def due(self, before: int, now: int) -> int | None:
         """The phase whose bisection count lies in ``(before, now]``, if any."""
@@ -84,7 +90,7 @@ class NewtonStarts:
         converged inside ``domain`` ((n, 2)): candidates, proven by the caller."""
         n = domain.shape[0]
         rng = np.random.default_rng(self.seed + phase)
-        x0 = draw_points(lo, hi, max(32, self.count * 16 // max(n, 16)), rng)
+        x0 = draw_points(lo, hi, max(32, self.count * 16 // max(n, 16)), rng, self.near)
         dlo, dhi = domain[:, 0], domain[:, 1]
         with np.errstate(all="ignore"):
             x, conv = certifier.newton_point(

@@ -160,6 +160,7 @@ def run_fk(p: FkParams, robot: RobotSpec, ctx: RunContext) -> Any:
         seeded_only=p.seeded_only,
         stable_only=p.stable_only,
         seed_minima=p.seed_minima,
+        newton_starts=p.newton_starts,
         progress=ctx.progress,
         executor=ctx.executor,
         cancel=ctx.cancel,
