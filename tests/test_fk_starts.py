@@ -67,3 +67,20 @@ def test_no_phase_in_a_stable_only_search():
     robot, _ = _general19_real_u()
     assert not FKSolver(robot, stable_only=True).newton_starts
     assert FKSolver(robot).newton_starts
+
+
+def test_the_command_line_turns_the_phases_off(capsys):
+    """``certsolve fk`` runs the phases by default; ``--no-newton-starts`` is the search
+    alone (general-19, 60 N, u = IK(P), 500 boxes: at least 5 poses, and 1)."""
+    import json
+
+    from certsolve.cli import main
+
+    _, u = _general19_real_u()
+    argv = ["fk", str(ROBOTS / "marionet.json"), "--u", ",".join(f"{v:.17g}" for v in u)]
+    argv += ["--tau-max", "60", "--max-boxes", "500", "--workers", "1", "--json"]
+    counts = []
+    for flag in ((), ("--no-newton-starts",)):
+        main([*argv, *flag])
+        counts.append(len(json.loads(capsys.readouterr().out)["solutions"]))
+    assert counts[0] >= 5 > counts[1]
