@@ -605,12 +605,12 @@ class Solver:
             lo, hi = self.domain[:, 0][None], self.domain[:, 1][None]
         x = self.starts.points(self.certifier, self.domain, lo, hi, phase)
         w = 1e-9 * (1.0 + np.abs(x))
+        xlo, xhi = x - w, x + w
         # a point in a known solution's unicity box is that solution: not proven again
-        keep, _, _ = state.solutions.prune(x - w, x + w)
-        x, w = x[keep], w[keep]
-        if x.shape[0] == 0:
+        keep, _, _ = state.solutions.prune(xlo, xhi)
+        if not np.any(keep):
             return
-        idx, elo, ehi, ulo, uhi = self.certifier.inflate(x - w, x + w)
+        idx, elo, ehi, ulo, uhi = self.certifier.inflate(xlo[keep], xhi[keep])
         if idx.size:
             state.stats.started += self._record(state, elo, ehi, ulo, uhi, tight=False)
 

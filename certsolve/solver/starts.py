@@ -53,9 +53,9 @@ def draw_points(
         return np.clip(blo + (bhi - blo) * rng.random(blo.shape), blo, bhi)
     a, b = np.maximum(blo, -near), np.minimum(bhi, near)
     meet = a <= b
-    near = np.where(blo > 0.0, blo, bhi)  # the box lies beyond +NEAR or -NEAR
-    a = np.where(meet, a, np.where(blo > 0.0, near, 2.0 * near))
-    b = np.where(meet, b, np.where(blo > 0.0, 2.0 * near, near))
+    edge = np.where(blo > 0.0, blo, bhi)  # the box lies beyond +near or -near
+    a = np.where(meet, a, np.where(blo > 0.0, edge, 2.0 * edge))
+    b = np.where(meet, b, np.where(blo > 0.0, 2.0 * edge, edge))
     x = a + (b - a) * rng.random(blo.shape)
     return np.clip(x, blo, bhi)
 
