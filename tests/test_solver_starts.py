@@ -84,6 +84,11 @@ def test_points_are_drawn_in_their_boxes_near_zero_where_they_reach_it():
     assert np.all((x[:, 2] >= -2e12) & (x[:, 2] <= -1e12))
     assert np.all((x[:, 4] >= 0.5) & (x[:, 4] <= 0.75))
     assert np.ptp(x, axis=0).min() > 0  # random, not a fixed point
+    # near=None (forward kinematics' robot domains, in cm): uniform in the whole box
+    lo, hi = np.array([[0.0, -300.0]]), np.array([[300.0, 300.0]])
+    x = draw_points(lo, hi, 400, np.random.default_rng(2), near=None)
+    assert np.all((x >= lo) & (x <= hi))
+    assert x[:, 0].max() > 200.0 and x[:, 1].min() < -200.0  # not held near 0
 
 
 def test_the_command_line_turns_the_phases_off(capsys):
