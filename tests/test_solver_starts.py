@@ -7,8 +7,10 @@ import numpy as np
 import pytest
 from test_solver_systems import SYSTEMS, check_against_reference, in_box, ref_points
 
+from certsolve.expr.compiled import CompiledSystem
 from certsolve.expr.minibex import load_minibex, parse_minibex
 from certsolve.solver.branch_and_prune import Solver
+from certsolve.solver.certify import Certifier
 from certsolve.solver.starts import NEAR, NewtonStarts, draw_points
 
 #: the first phase after the first bisection, the next ones at 4, 16 and 64: every search
@@ -73,6 +75,102 @@ def test_phases_come_at_their_bisection_counts_and_not_in_tasks():
     state = solver.start()
     assert state.starts  # the search's own state
     assert not solver.start(solver.known(state)).starts  # a worker task's
+
+
+def test_larger_systems_run_their_first_phase_sooner():
+    """A bisection of ``n`` variables costs more past 16: the first phase comes after
+    ``after * (16 / n)^2`` bisections, at least one; the others at 4, 16 ... times that."""
+    starts = NewtonStarts(after=64)
+    assert [starts.first(n) for n in (1, 10, 16, 32, 64, 100, 1000)] == [64, 64, 64, 16, 4, 2, 1]
+    assert starts.due(0, 15, n=32) is None and starts.due(15, 16, n=32) == 0
+    assert starts.due(16, 64, n=32) == 1 and starts.due(16, 64) == 0
+    assert NewtonStarts(after=10, spacing=2).due(10, 20) == 1
+
+
+ATAN = "Variables\n  x in [-10, 10];\nConstraints\n  atan(x) = 0;\nend\n"
+
+
+def test_a_damped_step_converges_where_a_full_step_runs_away():
+    """Full Newton steps on ``atan(x)`` from ``|x| >= 1.4`` overshoot further every time;
+    halved until ``|f|`` falls, they reach the root 0.  A point already at a root (``f =
+    0``: no step makes ``|f|`` fall) counts as converged."""
+    certifier = Certifier(CompiledSystem(parse_minibex(ATAN)))
+    x0 = np.array([[3.0], [3.0], [-2.0], [0.0]])
+    x, conv = certifier.newton_point(x0, iterations=60)
+    assert conv.tolist() == [False, False, False, True]
+    damped = np.array([True, False, True, True])
+    x, conv = certifier.newton_point(x0, iterations=60, damped=damped)
+    assert conv.tolist() == [True, False, True, True]
+    assert np.all(np.abs(x[damped]) <= 1e-12)
+
+
+def test_newton_takes_no_step_past_its_deadline():
+    certifier = Certifier(CompiledSystem(parse_minibex(ATAN)))
+    x0 = np.array([[0.5], [-1.5]])
+    x, conv = certifier.newton_point(x0, iterations=60, damped=True, deadline=0.0)
+    assert not conv.any() and np.array_equal(x, x0)
+
+
+def test_a_phase_damps_its_share_of_the_points(monkeypatch):
+    """``damped=0.5``: every other point of a phase takes damped steps."""
+    certifier = Certifier(CompiledSystem(parse_minibex(ATAN)))
+    seen = []
+    newton = certifier.newton_point
+
+    def spy(x0, lo=None, hi=None, **kw):
+        seen.append(np.broadcast_to(kw["damped"], x0.shape[:1]).copy())
+        return newton(x0, lo, hi, **kw)
+
+    monkeypatch.setattr(certifier, "newton_point", spy)
+    dom = np.array([[-10.0, 10.0]])
+    for share in (0.0, 0.5, 1.0):
+        x = NewtonStarts(count=8, damped=share).points(certifier, dom, dom[:, :1], dom[:, 1:], 0)
+        assert np.allclose(x, [[0.0]], atol=1e-12)
+    assert [m[:4].tolist() for m in seen] == [
+        [False] * 4, [False, True, False, True], [True] * 4,
+    ]  # fmt: skip
+    assert [int(m.sum()) for m in seen] == [0, 16, 32]  # 32 points at least a phase
+
+
+GRID = (
+    "Variables\n  x in [0, 5];\n  y in [0, 5];\nConstraints\n"
+    "  (x - 1)*(x - 2)*(x - 3)*(x - 4) = 0;\n  (y - 1)*(y - 2)*(y - 3)*(y - 4) = 0;\nend\n"
+)
+
+
+def test_a_phase_draws_again_while_a_quarter_of_its_points_prove_new_solutions():
+    """16 solutions on a grid, 32 points a draw: the first draw proves at least 8 new
+    ones, so with ``draws=4`` the phase draws again, each draw its own points, and stops
+    once a draw proves fewer than 8; with ``draws=1`` it does not.  Every proven point is
+    a grid point."""
+    system = parse_minibex(GRID)
+    for draws in (1, 4):
+        solver = Solver.default(system, starts=NewtonStarts(count=32, again=0.25, draws=draws))
+        news = _phase_news(solver)
+        state = solver.start()
+        dom = solver.domain
+        state.stack.push(dom[:, 0][None], dom[:, 1][None])
+        solver._newton_starts(state, 0)
+        assert news[0] >= 8
+        assert len(news) == 1 if draws == 1 else 2 <= len(news) <= 4
+        assert all(k >= 8 for k in news[:-1]) and (len(news) == draws or news[-1] < 8)
+        assert state.stats.started == sum(news) == len(state.solutions) <= 16
+        mid = (np.array(state.solutions.E_lo) + np.array(state.solutions.E_hi)) / 2
+        assert np.allclose(mid, np.round(mid), atol=1e-9)
+        assert np.all(np.isin(np.round(mid), [1, 2, 3, 4]))
+
+
+def _phase_news(solver) -> list[int]:
+    """The new solutions each ``_record`` call of ``solver`` brings, as they come."""
+    news: list[int] = []
+    record = solver._record
+
+    def counted(*args, **kw):
+        news.append(record(*args, **kw))
+        return news[-1]
+
+    object.__setattr__(solver, "_record", counted)
+    return news
 
 
 def test_points_are_drawn_in_their_boxes_near_zero_where_they_reach_it():
@@ -155,9 +253,9 @@ def test_a_phase_a_task_brings_home_draws_from_the_boxes_it_brings():
     seen = []
     draw = solver.starts.points
 
-    def points(certifier, domain, blo, bhi, phase):
+    def points(certifier, domain, blo, bhi, *args, **kw):
         seen.append(blo.shape[0])
-        return draw(certifier, domain, blo, bhi, phase)
+        return draw(certifier, domain, blo, bhi, *args, **kw)
 
     object.__setattr__(solver.starts, "points", points)
     back = np.repeat(dom[None], 3, axis=0)

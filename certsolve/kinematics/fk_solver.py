@@ -44,7 +44,8 @@ __all__ = ["FK_STARTS", "SEED_RADIUS", "FKPose", "FKResult", "FKSearch", "FKSolv
 SEED_RADIUS = 0.5
 #: float Newton from random points of the pending boxes (``newton_starts``): drawn uniformly
 #: in the boxes (the domain is the robot's, in cm), six phases, at 64 to 65,536 bisections
-#: (a general-19 search at 60 N makes ~7,000 a CPU second)
+#: (45 to 46,080 on general-19's 19 variables; such a search at 60 N makes ~7,000 a CPU
+#: second); full Newton steps, as measured in docs/fk-cost.md
 FK_STARTS = NewtonStarts(near=None, phases=6)
 
 
@@ -190,11 +191,12 @@ class FKSolver:
     ``newton_starts``: float Newton from random points of the pending boxes, the points it
     converges to proven as the search's own solutions (:mod:`certsolve.solver.starts`,
     :data:`FK_STARTS`: drawn uniformly in the boxes, six phases, from 64 to 65,536
-    bisections).  The poses, stable and unstable, come in the first seconds where the
-    search alone reaches them late; the search still covers the domain, so a complete
-    answer is the same.  Off for ``stable_only`` (the energy's minima seed the stable
-    poses; a phase would prove unstable ones, which ``max_solutions`` would count) and for
-    a robot set's search (:mod:`.fk_tolerance`).
+    bisections on T-16, from 45 to 46,080 on general-19's 19 variables).  The poses,
+    stable and unstable, come in the first seconds where the search alone reaches them
+    late; the search still covers the domain, so a complete answer is the same.  Off for
+    ``stable_only`` (the energy's minima seed the stable poses; a phase would prove
+    unstable ones, which ``max_solutions`` would count) and for a robot set's search
+    (:mod:`.fk_tolerance`).
 
     ``relax``: the polytope hull of the X-Taylor and affine relaxation
     (:class:`.PolytopeHull`, one direction) once a round, after the contraction fixpoint,

@@ -79,8 +79,10 @@ from .starts import NewtonStarts
 from .summary import MAX_LISTED
 
 #: the solver's multistart Newton (:mod:`.starts`), in :meth:`Solver.default` unless
-#: ``starts=None``
-STARTS = NewtonStarts()
+#: ``starts=None``: 512 points a draw (fewer past 16 variables), half of them damped, 100
+#: steps, eight phases, up to 8 draws a phase while a quarter of the points prove new
+#: solutions (docs/solver.md, *Damped starts*)
+STARTS = NewtonStarts(count=512, iterations=100, damped=0.5, phases=8, again=0.25, draws=8)
 
 __all__ = ["SearchState", "Solver", "SolverLimits", "solve"]
 
@@ -273,8 +275,9 @@ class Solver:
         system.
 
         ``starts``: certified solutions early (:class:`~.starts.NewtonStarts`, default
-        :data:`STARTS`): once the search has made 64 bisections, and at 256, 1,024 and 4,096,
-        float Newton from random points of the pending boxes, each point it converges to
+        :data:`STARTS`): once the search has made 64 bisections (fewer past 16 variables), and
+        at 4, 16 ... 4^7 times that, float Newton from random points of the pending boxes
+        (half of them damped), each point it converges to
         proven by the certifier's inflated Krawczyk test; ``None``: the search alone.  On
         IBEX's files neither solver completes in 10 s it raised certsolve's certified
         solutions at the limit from 460 to 2,352 (``docs/solver.md``, *Certified solutions
@@ -584,35 +587,44 @@ class Solver:
         if batch.size:
             self._split(batch, state)
         batch.flush()  # what the parts sent back goes on top: the next round takes it
-        self._phase_if_due(state, bisections)
+        self._phase_if_due(state, bisections, deadline)
 
-    def _phase_if_due(self, state: SearchState, before: int) -> None:
+    def _phase_if_due(self, state: SearchState, before: int, deadline: float | None = None) -> None:
         """The phase of :class:`~.starts.NewtonStarts` the bisections since ``before``
         reached, if any, on the search's own state (a worker task's runs none)."""
         if self.starts is not None and state.starts:
-            phase = self.starts.due(before, state.stats.bisections)
+            phase = self.starts.due(before, state.stats.bisections, self.csys.n)
             if phase is not None:
-                self._newton_starts(state, phase)
+                self._newton_starts(state, phase, deadline)
 
-    def _newton_starts(self, state: SearchState, phase: int) -> None:
+    def _newton_starts(self, state: SearchState, phase: int, deadline: float | None = None) -> None:
         """A phase of :class:`~.starts.NewtonStarts`: float Newton from random points of the
         pending boxes (of the domain when the workers hold them all), and the points it
         converged to proven (inflated Krawczyk) and recorded as any solution the search
-        proves."""
-        assert self.starts is not None
+        proves; another draw while the last proved ``again`` of its size as new solutions,
+        up to ``draws``.  Past ``deadline`` (:func:`time.monotonic`) Newton stops
+        iterating, and no draw starts."""
+        starts = self.starts
+        assert starts is not None
         lo, hi = state.stack.view()
         if lo.shape[0] == 0:  # all handed out to workers: start anywhere in the domain
             lo, hi = self.domain[:, 0][None], self.domain[:, 1][None]
-        x = self.starts.points(self.certifier, self.domain, lo, hi, phase)
-        w = 1e-9 * (1.0 + np.abs(x))
-        xlo, xhi = x - w, x + w
-        # a point in a known solution's unicity box is that solution: not proven again
-        keep, _, _ = state.solutions.prune(xlo, xhi)
-        if not np.any(keep):
-            return
-        idx, elo, ehi, ulo, uhi = self.certifier.inflate(xlo[keep], xhi[keep])
-        if idx.size:
-            state.stats.started += self._record(state, elo, ehi, ulo, uhi, tight=False)
+        for draw in range(starts.draws):
+            if draw and deadline is not None and time.monotonic() > deadline:
+                return
+            x = starts.points(self.certifier, self.domain, lo, hi, phase, draw, deadline=deadline)
+            w = 1e-9 * (1.0 + np.abs(x))
+            xlo, xhi = x - w, x + w
+            # a point in a known solution's unicity box is that solution: not proven again
+            keep, _, _ = state.solutions.prune(xlo, xhi)
+            new = 0
+            if np.any(keep):
+                idx, elo, ehi, ulo, uhi = self.certifier.inflate(xlo[keep], xhi[keep])
+                if idx.size:
+                    new = self._record(state, elo, ehi, ulo, uhi, tight=False)
+                    state.stats.started += new
+            if new < starts.again * starts.size(self.csys.n):
+                return
 
     def _split(self, batch: Batch, state: SearchState) -> None:
         """Report the rows narrower than ``eps`` as undecided, push the halves of the

@@ -19,6 +19,8 @@ holds exactly one solution, and that solution lies in the tight existence box ``
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from ..expr.compiled import CompiledSystem
@@ -183,6 +185,10 @@ class SolutionSet:
                 yield self.E_lo[i], self.E_hi[i], self.U_lo[i], self.U_hi[i]
 
 
+#: the most halvings of a damped Newton step (:meth:`Certifier.newton_point`): ``λ >= 2^-10``
+HALVINGS = 10
+
+
 class Certifier:
     """Krawczyk-based proofs and the classification of proven solutions."""
 
@@ -221,37 +227,76 @@ class Certifier:
 
     # -- float Newton -----------------------------------------------------------------------
     def newton_point(
-        self, x0: np.ndarray, lo=None, hi=None, *, iterations: int | None = None
+        self,
+        x0: np.ndarray,
+        lo=None,
+        hi=None,
+        *,
+        iterations: int | None = None,
+        damped: bool | np.ndarray = False,
+        deadline: float | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Float Newton iterations from ``x0`` (B, n); returns points and a converged mask.
 
         With ``lo, hi``, iterates that leave the box widened by its width on every side
         are abandoned (the caller only uses points near the box).  ``iterations``: at most
-        that many steps (default :attr:`newton_iterations`).
+        that many steps (default :attr:`newton_iterations`).  ``damped``: each step
+        ``x + λ s`` halves ``λ`` from 1 until ``|f|_2`` falls (at most :data:`HALVINGS`
+        times, then takes the last ``λ``): far from a solution the full step of a
+        high-degree system overshoots, and a point that would wander off converges
+        (IBEX's I5, 256 points in ``[-10, 10]^10``, 70 steps: 6 converge plain, 105
+        damped).  Convergence is judged on the full step ``s``.  No step starts past
+        ``deadline`` (:func:`time.monotonic`).
         """
         x = x0.copy()
         conv = np.zeros(x.shape[0], dtype=bool)
         alive = np.ones(x.shape[0], dtype=bool)
+        damp = np.broadcast_to(np.asarray(damped, dtype=bool), conv.shape)
         if lo is not None:
             w = hi - lo
             far_lo, far_hi = lo - w - 1e-9 * (1.0 + np.abs(lo)), hi + w + 1e-9 * (1.0 + np.abs(hi))
         for _ in range(self.newton_iterations if iterations is None else iterations):
             idx = np.flatnonzero(alive & ~conv)
-            if idx.size == 0:
+            if idx.size == 0 or (deadline is not None and time.monotonic() > deadline):
                 break
             f, J = self.csys.eval_fj_float(x[idx])
             step, ok = batched_solve(J, f)
             with np.errstate(all="ignore"):
                 step = -np.where(ok[:, None], step, 0.0)
                 xn = x[idx] + step
+                small = all_last(np.abs(step) <= 1e-12 * (1.0 + np.abs(xn)))
+                # a full step this small is taken: |f| is at its rounding there
+                d = np.flatnonzero(damp[idx] & ~small)
+                if d.size:
+                    xn[d], fell = self._damped(x[idx[d]], step[d], f[d])
+                    ok[d] &= fell
             good = ok & all_last(np.isfinite(xn))
             if lo is not None:
                 good &= all_last((xn >= far_lo[idx]) & (xn <= far_hi[idx]))
             x[idx[good]] = xn[good]
             alive[idx[~good]] = False
-            small = all_last(np.abs(step) <= 1e-12 * (1.0 + np.abs(xn))) & good
-            conv[idx[small]] = True
+            conv[idx[small & good]] = True
         return x, conv & alive
+
+    def _damped(self, x: np.ndarray, step: np.ndarray, f: np.ndarray):
+        """``x + λ step`` with the largest ``λ`` of ``1, 1/2, ..., 2^-HALVINGS`` where
+        ``|f|_2`` falls below ``|f(x)|_2``, and whether one did (a row where none does is at
+        a local minimum of ``|f|`` or a singular ``J``: :meth:`newton_point` abandons it).
+        The full step first, then the others for the rows it did not serve, in one call."""
+        norm = np.linalg.norm(f, axis=1)
+        xn = x + step
+        fell = np.linalg.norm(self.csys.eval_f_float(xn), axis=1) < norm  # NaN: not
+        rows = np.flatnonzero(~fell)
+        if rows.size == 0:
+            return xn, fell
+        lam = 0.5 ** np.arange(1, HALVINGS + 1)
+        tries = x[rows][None] + lam[:, None, None] * step[rows][None]  # (HALVINGS, k, n)
+        fn = self.csys.eval_f_float(tries.reshape(-1, x.shape[1]))
+        falls = np.linalg.norm(fn, axis=1).reshape(HALVINGS, rows.size) < norm[rows]
+        some = np.any(falls, axis=0)
+        xn[rows[some]] = tries[np.argmax(falls, axis=0)[some], np.flatnonzero(some)]
+        fell[rows[some]] = True
+        return xn, fell
 
     # -- proofs -------------------------------------------------------------------------------
     def inflate(self, lo, hi):

@@ -2,25 +2,28 @@
 
 A search stopped by its limit reports what it has certified, and branch and prune reaches
 the leaves of a wide domain late: on IBEX's CountercurrentReactors2-14 (14 variables in
-``[-1e8, 1e8]``) the search had certified 1 solution after 10 s, where ibexsolve had 16,
-yet float Newton from 256 random points converges to 31 distinct solutions in 0.15 s.  So
-the solver runs :class:`NewtonStarts` once its search is seen not to be short: after
-:attr:`~NewtonStarts.after` bisections (64), and again at 4, 16 and 64 times that.
+``[-1e8, 1e8]``) the search had certified 1 solution after 10 s, where ibexsolve had 16, yet
+float Newton from 256 random points converges to 31 distinct solutions in 0.15 s.  So the
+solver runs :class:`NewtonStarts` once its search is seen not to be short: after
+:attr:`~NewtonStarts.after` bisections (64, fewer past 16 variables), and again at 4, 16 ...
+times that.
 
-A phase draws :attr:`~NewtonStarts.count` points in the boxes still pending (a box drawn
-at random, then a point in it, near 0 where the box reaches that far:
-:func:`draw_points`), runs float Newton from them (:meth:`.Certifier.newton_point`) and
-hands the points that converged inside the domain to the certifier's inflated Krawczyk
-test (:meth:`.Certifier.inflate`) -- the proof the search itself makes.  A point that
-proves is a solution like any other: recorded with its unicity box, which prunes the
-boxes it holds (:meth:`.certify.SolutionSet.prune`).  Nothing is trusted: a point that
-does not prove is forgotten, and the search goes on over the whole domain as before, so a
-complete search is still complete, and finds nothing twice.
+A phase draws :attr:`~NewtonStarts.count` points in the boxes still pending (a box drawn at
+random, then a point in it, near 0 where the box reaches that far: :func:`draw_points`),
+runs float Newton from them (:meth:`.Certifier.newton_point`; a share of them damped: each
+step halved until the residual falls, which brings home points that full steps throw away on
+high-degree systems) and hands the points that converged inside the domain to the
+certifier's inflated Krawczyk test (:meth:`.Certifier.inflate`) -- the proof the search
+itself makes.  A point that proves is a solution like any other: recorded with its unicity
+box, which prunes the boxes it holds (:meth:`.certify.SolutionSet.prune`).  Nothing is
+trusted: a point that does not prove is forgotten, and the search goes on over the whole
+domain as before, so a complete search is still complete, and finds nothing twice.
 
-The phases are a function of the bisection count, so a search resumed from a checkpoint
-runs them where the uninterrupted one did.  Worker tasks run none: the driver runs a phase
-when its own rounds, or the bisections a task brings home (``Solver.merge``), reach it,
-and the tasks that follow get its solutions with the others.
+The phases are a function of the bisection count, so a search resumed from a checkpoint runs
+them where the uninterrupted one did (a phase's Newton stops at the search's time limit:
+only the last phase of a search stopped by it may be cut short).  Worker tasks run none: the
+driver runs a phase when its own rounds, or the bisections a task brings home
+(``Solver.merge``), reach it, and the tasks that follow get its solutions with the others.
 """
 
 from __future__ import annotations
@@ -64,33 +67,68 @@ def draw_points(
 class NewtonStarts:
     """Multistart float Newton, certified (module docstring).
 
-    ``after``: bisections before the first phase (a search that ends sooner never runs
-    one); phases follow at ``4x``, ``16x``, ... that (``phases`` in all).  ``count``: points
-    a phase draws for a system of at most 16 variables, fewer for larger ones (a Newton
-    step costs ``n^3``): ``max(32, count * 16 / n)``.  ``iterations``: Newton steps from a
-    point at most.  ``seed``: phase ``k`` draws with ``seed + k``.
+    ``after``: bisections before the first phase for a system of at most 16 variables, and
+    ``after * (16 / n)^2`` (at least 1) for ``n`` variables, whose bisections cost more (a
+    box's Jacobian holds ``n^2`` entries: Yamamura1-0080sp made 21 bisections in 10 s);
+    a search that ends sooner never runs one.  Phases follow at ``spacing``, ``spacing^2``
+    ... times that (``phases`` in all).  ``count``: points a phase draws for a system of at most 16
+    variables, fewer for larger ones (a Newton step costs ``n^3``):
+    ``max(32, count * 16 / n)``.  ``iterations``: Newton steps from a point at most;
+    ``damped``: the share of the points (every ``1/damped``-th) whose steps are halved
+    until the residual falls (:meth:`.Certifier.newton_point`); the others take full
+    steps, which jump between basins where a damped step settles in a local minimum of
+    the residual (both kinds find solutions the other does not).  ``again``, ``draws``: a draw
+    whose points prove at least the share ``again`` of its size as new solutions is
+    followed by another in the same phase, up to ``draws`` (IBEX's Brent-10 has ~1,000
+    solutions, and the first draw of 512 points proves 295 of them).  ``seed``: the draws
+    of phase ``k`` are seeded with ``(seed, k, draw)``.
     """
 
     after: int = 64
     phases: int = 4
+    spacing: int = 4
     count: int = 256
     iterations: int = 30
+    damped: float = 0.0
+    again: float = 1.0
+    draws: int = 1
     seed: int = 0
     near: float | None = NEAR
 
-    def due(self, before: int, now: int) -> int | None:
-        """The phase whose bisection count lies in ``(before, now]``, if any."""
+    def size(self, n: int) -> int:
+        """The points a draw takes for ``n`` variables."""
+        return max(32, self.count * 16 // max(n, 16))
+
+    def first(self, n: int) -> int:
+        """The bisections before the first phase, for ``n`` variables."""
+        return max(1, round(self.after * min(1.0, (16 / max(n, 1)) ** 2)))
+
+    def due(self, before: int, now: int, n: int = 16) -> int | None:
+        """The phase whose bisection count lies in ``(before, now]``, if any (``n``: the
+        system's variables)."""
+        first = self.first(n)
         for k in range(self.phases):
-            if before < self.after * 4**k <= now:
+            if before < first * self.spacing**k <= now:
                 return k
         return None
 
-    def points(self, certifier, domain: np.ndarray, lo, hi, phase: int) -> np.ndarray:
+    def points(
+        self,
+        certifier,
+        domain: np.ndarray,
+        lo,
+        hi,
+        phase: int,
+        draw: int = 0,
+        *,
+        deadline: float | None = None,
+    ) -> np.ndarray:
         """Distinct points where float Newton from random points of the boxes ``lo, hi``
-        converged inside ``domain`` ((n, 2)): candidates, proven by the caller."""
-        n = domain.shape[0]
-        rng = np.random.default_rng(self.seed + phase)
-        x0 = draw_points(lo, hi, max(32, self.count * 16 // max(n, 16)), rng, self.near)
+        converged inside ``domain`` ((n, 2)): candidates, proven by the caller.  ``draw``:
+        the draw of the phase (each its own points).  Newton stops iterating past
+        ``deadline`` (:func:`time.monotonic`)."""
+        rng = np.random.default_rng([self.seed, phase, draw])
+        x0 = draw_points(lo, hi, self.size(domain.shape[0]), rng, self.near)
         dlo, dhi = domain[:, 0], domain[:, 1]
         with np.errstate(all="ignore"):
             x, conv = certifier.newton_point(
@@ -98,6 +136,8 @@ class NewtonStarts:
                 np.broadcast_to(dlo, x0.shape),
                 np.broadcast_to(dhi, x0.shape),
                 iterations=self.iterations,
+                damped=np.diff(np.floor(np.arange(x0.shape[0] + 1) * self.damped)) > 0,
+                deadline=deadline,
             )
         x = x[conv & all_last((x >= dlo) & (x <= dhi))]
         if x.shape[0] == 0:
