@@ -240,13 +240,14 @@ class Certifier:
 
         With ``lo, hi``, iterates that leave the box widened by its width on every side
         are abandoned (the caller only uses points near the box).  ``iterations``: at most
-        that many steps (default :attr:`newton_iterations`).  ``damped``: each step
-        ``x + λ s`` halves ``λ`` from 1 until ``|f|_2`` falls (at most :data:`HALVINGS`
-        times, then takes the last ``λ``): far from a solution the full step of a
-        high-degree system overshoots, and a point that would wander off converges
-        (IBEX's I5, 256 points in ``[-10, 10]^10``, 70 steps: 6 converge plain, 105
-        damped).  Convergence is judged on the full step ``s``.  No step starts past
-        ``deadline`` (:func:`time.monotonic`).
+        that many steps (default :attr:`newton_iterations`).  ``damped`` (one flag, or one
+        per point): each step ``x + λ s`` takes the largest ``λ`` of ``1, 1/2, ...,
+        2^-HALVINGS`` where ``|f|_2`` falls, and a point where none does is abandoned (a
+        local minimum of ``|f|``): far from a solution the full step of a high-degree
+        system overshoots, and a point that would wander off converges (IBEX's I5, 512
+        points in ``[-10, 10]^10``: 3 converge in 30 full steps, 81 in 60 damped ones).
+        Convergence is judged on the full step ``s``, which is taken once it is that small.
+        No step starts past ``deadline`` (:func:`time.monotonic`).
         """
         x = x0.copy()
         conv = np.zeros(x.shape[0], dtype=bool)
