@@ -140,9 +140,9 @@ GRID = (
 
 def test_a_phase_draws_again_while_a_quarter_of_its_points_prove_new_solutions():
     """16 solutions on a grid, 32 points a draw: the first draw proves at least 8 new
-    ones, so with ``draws=4`` the phase draws again, each draw its own points, and stops
-    once a draw proves fewer than 8; with ``draws=1`` it does not.  Every proven point is
-    a grid point."""
+    ones, so with ``draws=4`` the next rounds draw again, one draw a round, each its own
+    points, until a draw proves fewer than 8; with ``draws=1`` they do not.  Every proven
+    point is a grid point."""
     system = parse_minibex(GRID)
     for draws in (1, 4):
         solver = Solver.default(system, starts=NewtonStarts(count=32, again=0.25, draws=draws))
@@ -150,7 +150,9 @@ def test_a_phase_draws_again_while_a_quarter_of_its_points_prove_new_solutions()
         state = solver.start()
         dom = solver.domain
         state.stack.push(dom[:, 0][None], dom[:, 1][None])
-        solver._newton_starts(state, 0)
+        solver._newton_starts(state, 0)  # the phase's first draw
+        for _ in range(5):  # rounds without a new bisection: the next draw if the last paid
+            solver._phase_if_due(state, state.stats.bisections)
         assert news[0] >= 8
         assert len(news) == 1 if draws == 1 else 2 <= len(news) <= 4
         assert all(k >= 8 for k in news[:-1]) and (len(news) == draws or news[-1] < 8)

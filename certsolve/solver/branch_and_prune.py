@@ -591,40 +591,46 @@ class Solver:
 
     def _phase_if_due(self, state: SearchState, before: int, deadline: float | None = None) -> None:
         """The phase of :class:`~.starts.NewtonStarts` the bisections since ``before``
-        reached, if any, on the search's own state (a worker task's runs none)."""
-        if self.starts is not None and state.starts:
-            phase = self.starts.due(before, state.stats.bisections, self.csys.n)
-            if phase is not None:
-                self._newton_starts(state, phase, deadline)
+        reached, if any, else the next draw of the last phase if its last draw paid, on the
+        search's own state (a worker task's runs none)."""
+        if self.starts is None or not state.starts:
+            return
+        phase = self.starts.due(before, state.stats.bisections, self.csys.n)
+        if phase is not None:
+            self._newton_starts(state, phase, 0, deadline)
+        elif state.redraw is not None:
+            self._newton_starts(state, *state.redraw, deadline)
 
-    def _newton_starts(self, state: SearchState, phase: int, deadline: float | None = None) -> None:
-        """A phase of :class:`~.starts.NewtonStarts`: float Newton from random points of the
-        pending boxes (of the domain when the workers hold them all), and the points it
-        converged to proven (inflated Krawczyk) and recorded as any solution the search
-        proves; another draw while the last proved ``again`` of its size as new solutions,
-        up to ``draws``.  Past ``deadline`` (:func:`time.monotonic`) Newton stops
-        iterating, and no draw starts."""
+    def _newton_starts(
+        self, state: SearchState, phase: int, draw: int = 0, deadline: float | None = None
+    ) -> None:
+        """A draw of a phase of :class:`~.starts.NewtonStarts`: float Newton from random
+        points of the pending boxes (of the domain when the workers hold them all), and the
+        points it converged to proven (inflated Krawczyk) and recorded as any solution the
+        search proves.  If it proved ``again`` of its size as new solutions, the next round
+        runs the next draw (``state.redraw``), up to ``draws``: one draw at a time, so the
+        search checks its limits, cancellation and progress between draws (on 3^8
+        solutions, eight draws in a row took 6-9 s).  Past ``deadline``
+        (:func:`time.monotonic`) Newton stops iterating."""
         starts = self.starts
         assert starts is not None
+        state.redraw = None
         lo, hi = state.stack.view()
         if lo.shape[0] == 0:  # all handed out to workers: start anywhere in the domain
             lo, hi = self.domain[:, 0][None], self.domain[:, 1][None]
-        for draw in range(starts.draws):
-            if draw and deadline is not None and time.monotonic() > deadline:
-                return
-            x = starts.points(self.certifier, self.domain, lo, hi, phase, draw, deadline=deadline)
-            w = 1e-9 * (1.0 + np.abs(x))
-            xlo, xhi = x - w, x + w
-            # a point in a known solution's unicity box is that solution: not proven again
-            keep, _, _ = state.solutions.prune(xlo, xhi)
-            new = 0
-            if np.any(keep):
-                idx, elo, ehi, ulo, uhi = self.certifier.inflate(xlo[keep], xhi[keep])
-                if idx.size:
-                    new = self._record(state, elo, ehi, ulo, uhi, tight=False)
-                    state.stats.started += new
-            if new < starts.again * starts.size(self.csys.n):
-                return
+        x = starts.points(self.certifier, self.domain, lo, hi, phase, draw, deadline=deadline)
+        w = 1e-9 * (1.0 + np.abs(x))
+        xlo, xhi = x - w, x + w
+        # a point in a known solution's unicity box is that solution: not proven again
+        keep, _, _ = state.solutions.prune(xlo, xhi)
+        if not np.any(keep):
+            return
+        idx, elo, ehi, ulo, uhi = self.certifier.inflate(xlo[keep], xhi[keep])
+        if idx.size:
+            new = self._record(state, elo, ehi, ulo, uhi, tight=False)
+            state.stats.started += new
+            if new >= starts.again * starts.size(self.csys.n) and draw + 1 < starts.draws:
+                state.redraw = (phase, draw + 1)
 
     def _split(self, batch: Batch, state: SearchState) -> None:
         """Report the rows narrower than ``eps`` as undecided, push the halves of the
@@ -768,6 +774,9 @@ class SearchState:
     acid: AdaptiveCount | None = None  # the learnt CID count (:class:`.shaving.Shave`)
     hull: HullShare | None = None  # the hull's learnt share (:class:`.relaxation.PolytopeHull`)
     starts: bool = False  # runs the phases of :class:`.starts.NewtonStarts` (not a task's)
+    #: the phase and draw the next round runs, after a draw that paid (not in checkpoints:
+    #: a restored search replays no phase)
+    redraw: tuple[int, int] | None = None
 
 
 def solve(

@@ -79,9 +79,9 @@ class NewtonStarts:
     steps, which jump between basins where a damped step settles in a local minimum of
     the residual (both kinds find solutions the other does not).  ``again``, ``draws``: a draw
     whose points prove at least the share ``again`` of its size as new solutions is
-    followed by another in the same phase, up to ``draws`` (IBEX's Brent-10 has ~1,000
-    solutions, and the first draw of 512 points proves 295 of them).  ``seed``: the draws
-    of phase ``k`` are seeded with ``(seed, k, draw)``.
+    followed by another of the same phase in the next round, up to ``draws`` (IBEX's
+    Brent-10 has ~1,000 solutions, and the first draw of 512 points proves 295 of them).
+    ``seed``: the draws of phase ``k`` are seeded with ``(seed, k, draw)``.
     """
 
     after: int = 64
