@@ -26,6 +26,7 @@ import numpy as np
 from ..expr.compiled import CompiledSystem
 from ..interval.core import is_subset
 from ..interval.reductions import all_last, any_last, count_last
+from .buffer import BoxStack
 from .newton import batched_solve, krawczyk, linearize
 
 __all__ = ["Certifier", "SolutionSet", "box_difference", "boxes_minus"]
@@ -97,8 +98,11 @@ class SolutionSet:
         self.U_lo: list[np.ndarray] = []
         self.U_hi: list[np.ndarray] = []
         self.kind: list[str] = []
-        self._ulo = np.empty((0, n))
-        self._uhi = np.empty((0, n))
+        # the same boxes as arrays, grown in place (a search proving thousands of solutions
+        # compares each new one with all: a list turned into an array for each took
+        # 12 of 16 s on 3^8 solutions)
+        self._u = BoxStack(n)
+        self._e = BoxStack(n)
 
     def __len__(self) -> int:
         return len(self.kind)
@@ -110,8 +114,8 @@ class SolutionSet:
         """Index of a known solution equal to ``(E, U)``, or -1."""
         if not self.kind:
             return -1
-        Elo, Ehi = np.array(self.E_lo), np.array(self.E_hi)
-        same = is_subset(elo, ehi, self._ulo, self._uhi).all(axis=1)
+        (Ulo, Uhi), (Elo, Ehi) = self._u.view(), self._e.view()
+        same = is_subset(elo, ehi, Ulo, Uhi).all(axis=1)
         same |= is_subset(Elo, Ehi, ulo, uhi).all(axis=1)
         idx = np.flatnonzero(same)
         return int(idx[0]) if idx.size else -1
@@ -124,22 +128,23 @@ class SolutionSet:
         k = self.find(elo, ehi, ulo, uhi)
         if k >= 0 or kind == "alias":
             # keep the larger unicity box for pruning
-            self._ulo = np.vstack([self._ulo, ulo[None]])
-            self._uhi = np.vstack([self._uhi, uhi[None]])
-            self.E_lo.append(self.E_lo[k] if k >= 0 else elo)
-            self.E_hi.append(self.E_hi[k] if k >= 0 else ehi)
-            self.U_lo.append(ulo)
-            self.U_hi.append(uhi)
-            self.kind.append("alias")
+            self._append(self.E_lo[k] if k >= 0 else elo, self.E_hi[k] if k >= 0 else ehi)
+            self._append_unicity(ulo, uhi, "alias")
             return False
+        self._append(elo, ehi)
+        self._append_unicity(ulo, uhi, kind)
+        return True
+
+    def _append(self, elo, ehi) -> None:
         self.E_lo.append(elo)
         self.E_hi.append(ehi)
+        self._e.push(np.asarray(elo, dtype=float)[None], np.asarray(ehi, dtype=float)[None])
+
+    def _append_unicity(self, ulo, uhi, kind: str) -> None:
         self.U_lo.append(ulo)
         self.U_hi.append(uhi)
         self.kind.append(kind)
-        self._ulo = np.vstack([self._ulo, ulo[None]])
-        self._uhi = np.vstack([self._uhi, uhi[None]])
-        return True
+        self._u.push(np.asarray(ulo, dtype=float)[None], np.asarray(uhi, dtype=float)[None])
 
     def prune(self, lo, hi):
         """Remove what known unicity boxes cover (nothing is left to find there).
@@ -155,10 +160,11 @@ class SolutionSet:
             return keep, none, none
         # only pairs whose closed boxes meet can be "inside" or overlap: most boxes meet
         # no unicity box, so the tests below run on those pairs only (row-major order kept)
-        rows, us = _meeting(lo, hi, self._ulo, self._uhi)
+        Ulo, Uhi = self._u.view()
+        rows, us = _meeting(lo, hi, Ulo, Uhi)
         if rows.size == 0:
             return keep, none, none
-        blo, bhi, ulo, uhi = lo[rows], hi[rows], self._ulo[us], self._uhi[us]
+        blo, bhi, ulo, uhi = lo[rows], hi[rows], Ulo[us], Uhi[us]
         cover = (blo >= ulo) & (bhi <= uhi)
         keep[rows[all_last(cover)]] = False
         overlap = all_last((blo < uhi) & (bhi > ulo))
@@ -173,7 +179,7 @@ class SolutionSet:
             if r in done:
                 continue
             done.add(r)
-            for a, b in box_difference(lo[r], hi[r], self._ulo[k], self._uhi[k]):
+            for a, b in box_difference(lo[r], hi[r], Ulo[k], Uhi[k]):
                 plo.append(a)
                 phi.append(b)
             keep[r] = False
