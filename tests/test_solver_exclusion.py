@@ -47,7 +47,8 @@ def test_unicity_boxes_grow_far_from_other_roots():
 def _prune_all_pairs(sols, lo, hi):
     """The pruning rule written out on every (box, unicity box) pair (the reference)."""
     n = lo.shape[1]
-    ulo, uhi = np.array(sols.U_lo), np.array(sols.U_hi)
+    entries = [sols.entry(i) for i in range(len(sols))]
+    ulo, uhi = np.array([e[2] for e in entries]), np.array([e[3] for e in entries])
     cover = (lo[:, None, :] >= ulo[None]) & (hi[:, None, :] <= uhi[None])
     keep = ~np.any(cover.all(axis=2), axis=1)
     meet = ((lo[:, None, :] < uhi[None]) & (hi[:, None, :] > ulo[None])).all(axis=2)

@@ -157,7 +157,8 @@ def test_a_phase_draws_again_while_a_quarter_of_its_points_prove_new_solutions()
         assert len(news) == 1 if draws == 1 else 2 <= len(news) <= 4
         assert all(k >= 8 for k in news[:-1]) and (len(news) == draws or news[-1] < 8)
         assert state.stats.started == sum(news) == len(state.solutions) <= 16
-        mid = (np.array(state.solutions.E_lo) + np.array(state.solutions.E_hi)) / 2
+        boxes = [state.solutions.entry(i) for i in range(len(state.solutions))]
+        mid = np.array([(elo + ehi) / 2 for elo, ehi, _, _ in boxes])
         assert np.allclose(mid, np.round(mid), atol=1e-9)
         assert np.all(np.isin(np.round(mid), [1, 2, 3, 4]))
 

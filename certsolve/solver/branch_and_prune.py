@@ -501,9 +501,7 @@ class Solver:
         states (the CID count, the hull's share)."""
         sols = state.solutions
         new = range(state.mark, len(sols))
-        entries = [
-            (sols.E_lo[i], sols.E_hi[i], sols.U_lo[i], sols.U_hi[i], sols.kind[i]) for i in new
-        ]
+        entries = [(*sols.entry(i), sols.kind[i]) for i in new]
         st = state.stats
         counters = (st.bisections, st.certified, st.duplicates, st.started)
         return entries, state.undecided, counters, copy.copy(state.acid), copy.copy(state.hull)
@@ -538,7 +536,7 @@ class Solver:
         sols = state.solutions
         end = len(sols)
         new = [
-            Solution(sols.E_lo[i], sols.E_hi[i], sols.U_lo[i], sols.U_hi[i], _PROVEN[sols.kind[i]])
+            Solution(*sols.entry(i), _PROVEN[sols.kind[i]])
             for i in range(start, end)
             if sols.kind[i] in _PROVEN
         ]

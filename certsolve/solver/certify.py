@@ -93,16 +93,17 @@ class SolutionSet:
 
     def __init__(self, n: int):
         self.n = n
-        self.E_lo: list[np.ndarray] = []
-        self.E_hi: list[np.ndarray] = []
-        self.U_lo: list[np.ndarray] = []
-        self.U_hi: list[np.ndarray] = []
         self.kind: list[str] = []
-        # the same boxes as arrays, grown in place (a search proving thousands of solutions
-        # compares each new one with all: a list turned into an array for each took
-        # 12 of 16 s on 3^8 solutions)
-        self._u = BoxStack(n)
+        # the existence boxes E and unicity boxes U, row i the i-th solution's, grown in place
+        # (each new solution is compared with all: arrays rebuilt from lists at each
+        # comparison took 12 of 16 s on 3^8 solutions)
         self._e = BoxStack(n)
+        self._u = BoxStack(n)
+
+    def entry(self, i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Copies of solution ``i``'s ``(E_lo, E_hi, U_lo, U_hi)``."""
+        (elo, ehi), (ulo, uhi) = self._e.view(), self._u.view()
+        return elo[i].copy(), ehi[i].copy(), ulo[i].copy(), uhi[i].copy()
 
     def __len__(self) -> int:
         return len(self.kind)
@@ -126,25 +127,13 @@ class SolutionSet:
         ``kind="alias"`` records only another unicity box of a known solution.
         """
         k = self.find(elo, ehi, ulo, uhi)
-        if k >= 0 or kind == "alias":
-            # keep the larger unicity box for pruning
-            self._append(self.E_lo[k] if k >= 0 else elo, self.E_hi[k] if k >= 0 else ehi)
-            self._append_unicity(ulo, uhi, "alias")
-            return False
-        self._append(elo, ehi)
-        self._append_unicity(ulo, uhi, kind)
-        return True
-
-    def _append(self, elo, ehi) -> None:
-        self.E_lo.append(elo)
-        self.E_hi.append(ehi)
+        if k >= 0:  # an alias of solution k: its existence box, this (larger) unicity box
+            elo, ehi = self.entry(k)[:2]
         self._e.push(np.asarray(elo, dtype=float)[None], np.asarray(ehi, dtype=float)[None])
-
-    def _append_unicity(self, ulo, uhi, kind: str) -> None:
-        self.U_lo.append(ulo)
-        self.U_hi.append(uhi)
-        self.kind.append(kind)
         self._u.push(np.asarray(ulo, dtype=float)[None], np.asarray(uhi, dtype=float)[None])
+        known = k >= 0 or kind == "alias"
+        self.kind.append("alias" if known else kind)
+        return not known
 
     def prune(self, lo, hi):
         """Remove what known unicity boxes cover (nothing is left to find there).
@@ -188,7 +177,7 @@ class SolutionSet:
     def items(self, kind: str):
         for i, k in enumerate(self.kind):
             if k == kind:
-                yield self.E_lo[i], self.E_hi[i], self.U_lo[i], self.U_hi[i]
+                yield self.entry(i)
 
 
 #: the most halvings of a damped Newton step (:meth:`Certifier.newton_point`): ``λ >= 2^-10``

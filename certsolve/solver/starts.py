@@ -71,14 +71,14 @@ class NewtonStarts:
     ``after * (16 / n)^2`` (at least 1) for ``n`` variables, whose bisections cost more (a
     box's Jacobian holds ``n^2`` entries: Yamamura1-0080sp made 21 bisections in 10 s);
     a search that ends sooner never runs one.  Phases follow at ``spacing``, ``spacing^2``
-    ... times that (``phases`` in all).  ``count``: points a phase draws for a system of at most 16
-    variables, fewer for larger ones (a Newton step costs ``n^3``):
-    ``max(32, count * 16 / n)``.  ``iterations``: Newton steps from a point at most;
+    ... times that (``phases`` in all).  ``count``: points a draw takes for a system of at
+    most 16 variables, fewer for larger ones (a Newton step costs ``n^3``):
+    ``max(32, count * 16 / n)`` (:meth:`size`).  ``iterations``: Newton steps from a point at most;
     ``damped``: the share of the points (every ``1/damped``-th) whose steps are halved
     until the residual falls (:meth:`.Certifier.newton_point`); the others take full
     steps, which jump between basins where a damped step settles in a local minimum of
-    the residual (both kinds find solutions the other does not).  ``again``, ``draws``: a draw
-    whose points prove at least the share ``again`` of its size as new solutions is
+    the residual (both kinds find solutions the other does not).  ``again``, ``draws``: a
+    draw whose points prove at least the share ``again`` of its size as new solutions is
     followed by another of the same phase in the next round, up to ``draws`` (IBEX's
     Brent-10 has ~1,000 solutions, and the first draw of 512 points proves 295 of them).
     ``seed``: the draws of phase ``k`` are seeded with ``(seed, k, draw)``.
